@@ -1,0 +1,42 @@
+// Plain host images: the type every public function takes and returns.
+#pragma once
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cs {
+
+struct Vec2f {
+  float x = 0.f, y = 0.f;
+};
+
+// Row-major, top row first, no padding. Pixel (x, y) is data[y * width + x].
+template <class T>
+struct Image {
+  int width = 0;
+  int height = 0;
+  std::vector<T> data;
+
+  Image() = default;
+  Image(int w, int h, T value = T()) : width(w), height(h), data(size_t(w) * size_t(h), value) {}
+
+  T& operator()(int x, int y) { return data[size_t(y) * size_t(width) + size_t(x)]; }
+  const T& operator()(int x, int y) const { return data[size_t(y) * size_t(width) + size_t(x)]; }
+  bool empty() const { return data.empty(); }
+  size_t size() const { return data.size(); }
+  bool inside(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
+};
+
+using ImageF = Image<float>;
+using ImageU8 = Image<uint8_t>;
+using FlowImage = Image<Vec2f>;
+
+// Every recoverable failure of the library (bad input, unreadable file, missing
+// backend) is reported as this exception; its what() is one line meant for users.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace cs

@@ -1,0 +1,41 @@
+// File formats without OpenCV: PNG, OpenEXR, Middlebury .flo, PLY, and colour maps.
+// Every reader throws cs::Error with a one-line message naming the file on failure.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "curvestereo/image.hpp"
+
+namespace cs {
+
+// 8- or 16-bit PNG, gray / gray+alpha / RGB / RGBA / palette; colour is converted to
+// luma (Rec. 601 weights), alpha dropped. Values scaled to [0, 1].
+ImageF readPngGray(const std::string& path);
+void writePngGray(const std::string& path, const ImageF& img);       // clamps to [0,1], 8-bit
+void writePngGray16(const std::string& path, const ImageF& img);     // clamps to [0,1], 16-bit
+void writePngRgb(const std::string& path, const Image<uint32_t>& rgb);  // 0x00RRGGBB per pixel
+
+// Single-channel float EXR. The reader takes channel "Y" if present, else the first
+// channel, else R; writes channel "Y", 32-bit float, ZIP compression.
+ImageF readExr(const std::string& path);
+void writeExr(const std::string& path, const ImageF& img);
+
+// Middlebury .flo ("PIEH", width, height, interleaved u v float32).
+// Components with |value| >= 1e9 mean unknown; the writer writes 1e10 for unknown.
+constexpr float kFloUnknown = 1e10f;
+FlowImage readFlo(const std::string& path);
+void writeFlo(const std::string& path, const FlowImage& flow);
+
+// Binary little-endian PLY with x y z (float) and optional gray (uchar) per vertex.
+struct PlyPoint {
+  float x, y, z;
+  uint8_t gray;
+};
+void writePly(const std::string& path, const std::vector<PlyPoint>& points);
+
+// Colour maps for people to look at. Values outside the valid mask (or non-finite)
+// become black.
+Image<uint32_t> colorizeScalar(const ImageF& values, float lo, float hi);  // turbo-like map
+Image<uint32_t> colorizeFlow(const FlowImage& flow, float maxMagnitude);   // Middlebury colour wheel
+
+}  // namespace cs

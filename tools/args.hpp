@@ -1,0 +1,33 @@
+// A minimal command-line parser shared by the sub-commands:
+//   --name value | --name=value | --flag | positional...
+#pragma once
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "curvestereo/image.hpp"
+
+namespace cs::cli {
+
+class Args {
+ public:
+  // flags: option names that take no value (e.g. {"help", "quiet"}).
+  Args(int argc, char** argv, const std::set<std::string>& flags);
+
+  bool has(const std::string& name) const { return options_.count(name) > 0 || flags_.count(name) > 0; }
+  std::string get(const std::string& name, const std::string& fallback) const;
+  std::string require(const std::string& name) const;  // throws cs::Error "missing --name"
+  double getDouble(const std::string& name, double fallback) const;
+  int getInt(const std::string& name, int fallback) const;
+  const std::vector<std::string>& positional() const { return positional_; }
+  // Throws cs::Error naming the first option not in `known` (catches typos).
+  void allowOnly(const std::set<std::string>& known) const;
+
+ private:
+  std::map<std::string, std::string> options_;
+  std::set<std::string> flags_;
+  std::vector<std::string> positional_;
+};
+
+}  // namespace cs::cli
