@@ -15,8 +15,8 @@ void writePngGray(const std::string& path, const ImageF& img);       // clamps t
 void writePngGray16(const std::string& path, const ImageF& img);     // clamps to [0,1], 16-bit
 void writePngRgb(const std::string& path, const Image<uint32_t>& rgb);  // 0x00RRGGBB per pixel
 
-// Single-channel float EXR. The reader takes channel "Y" if present, else the first
-// channel, else R; writes channel "Y", 32-bit float, ZIP compression.
+// Single-channel float EXR. The reader takes channel "Y" if present, else "R", else the
+// first channel; the writer writes channel "Y", 32-bit float, ZIP compression.
 ImageF readExr(const std::string& path);
 void writeExr(const std::string& path, const ImageF& img);
 

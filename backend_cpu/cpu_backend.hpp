@@ -1,0 +1,57 @@
+// The scalar CPU backend: the readable reference implementation (the oracle) that
+// every other backend is tested against. One file per stage (warp.cpp, resample.cpp,
+// structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp, accumulate.cpp).
+#pragma once
+#include <vector>
+
+#include "cpu_views.hpp"
+#include "curvestereo/backend.hpp"
+
+namespace cs::cpu {
+
+// Stage functions (each defined in the file named after its stage).
+void warp(const View& dst, const View& src, const View& flow);
+void downsample(const View& dst, const View& src, float scale);
+void upsample(const View& dst, const View& src, float scale, float valueScale);
+void structureTensor(const View& tensor, const View& steps, const View& image, const View& mask,
+                     const TensorParams& params);
+void warpDerivatives(const View& u0, const View& iu, const View& iz, const View& tangent, const View& i0,
+                     const View& i1, const View& trajectory, const View& w, const View& u, const View& mask);
+void primalDual(const View& u, const View& uBar, const View& v, const View& vBar, const View& p, const View& q,
+                const View& u0, const View& iu, const View& iz, const View& tensor, const View& steps,
+                const View& mask, const PrimalDualParams& params);
+void median(const View& dst, const View& src, const View& mask);
+void accumulate(const View& u, const View& w, const View& u0, const View& tangent, const View& mask, float duMax);
+
+class CpuBackend final : public Backend {
+ public:
+  std::string name() const override { return "cpu"; }
+  std::string device() const override;
+
+  Buffer create(int width, int height, int channels) override;
+  void upload(const Buffer& dst, const float* host) override;
+  void download(const Buffer& src, float* host) override;
+  void fill(const Buffer& dst, float value) override;
+  void copy(const Buffer& dst, const Buffer& src) override;
+
+  void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
+  void downsample(const Buffer& dst, const Buffer& src, float scale) override;
+  void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                       const TensorParams& params) override;
+  void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) override;
+  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                  const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) override;
+  void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
+  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                  float duMax) override;
+
+  // The view of a buffer (tests use it to drive stage functions directly).
+  View view(const Buffer& b);
+
+ private:
+  std::vector<std::vector<float>> storage_;
+};
+
+}  // namespace cs::cpu

@@ -1,0 +1,102 @@
+// The kernels every backend implements. The pipeline (core/src/pipeline.cpp) is the
+// only caller; it is written once against this interface.
+//
+// Buffers are 2-D arrays of `channels` interleaved floats owned by the backend.
+// Backends may enqueue work (GPU) or run it at once (CPU); download() and
+// synchronize() wait for completion.
+#pragma once
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace cs {
+
+struct Buffer {
+  int id = -1;
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  size_t count() const { return size_t(width) * size_t(height) * size_t(channels); }
+};
+
+struct TensorParams {
+  float beta, eta, wMin;  // w = max(exp(-beta |grad I|^eta), wMin)
+  float sigma;            // Gaussian pre-smoothing of the image, px
+  float alpha0, alpha1;   // needed for the step sizes
+};
+
+// The primal and dual variables of the anisotropic TGV-L1 problem at one level.
+struct PrimalDualBuffers {
+  Buffer u, uBar;  // 1 ch: disparity along the curve (px of the level)
+  Buffer v, vBar;  // 2 ch: the TGV auxiliary field
+  Buffer p;        // 2 ch: dual of alpha1 (D grad u - v)
+  Buffer q;        // 4 ch: dual of alpha0 grad v
+};
+
+// The linearised data term rho(u) = iz + (u - u0) * iu, valid where mask is set.
+struct DataTermBuffers {
+  Buffer u0;  // 1 ch: u at the start of the warp
+  Buffer iu;  // 1 ch: derivative of I1 along the curve
+  Buffer iz;  // 1 ch: I1(x + w) - I0(x)
+};
+
+struct PrimalDualStep {
+  float tauScale;    // multiplies the per-pixel primal steps
+  float sigmaScale;  // multiplies the per-pixel dual steps
+  float theta;       // over-relaxation
+};
+
+struct PrimalDualParams {
+  float lambda, alpha0, alpha1;
+  std::vector<PrimalDualStep> schedule;  // one entry per iteration
+};
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  virtual std::string name() const = 0;    // "cpu", "cuda", "vulkan"
+  virtual std::string device() const = 0;  // human-readable device description
+
+  // --- memory ---
+  virtual Buffer create(int width, int height, int channels) = 0;
+  virtual void upload(const Buffer& dst, const float* host) = 0;
+  virtual void download(const Buffer& src, float* host) = 0;
+  virtual void fill(const Buffer& dst, float value) = 0;
+  virtual void copy(const Buffer& dst, const Buffer& src) = 0;
+
+  // --- kernels (one file / shader per stage in each backend) ---
+  // dst(x) = src(x + flow(x)), bilinear, clamped to the image edge.
+  virtual void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) = 0;
+  // dst = src smoothed and decimated by `scale` (pixel-centre aware).
+  virtual void downsample(const Buffer& dst, const Buffer& src, float scale) = 0;
+  // dst = valueScale * src resampled bilinearly to dst's (finer) grid.
+  virtual void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) = 0;
+  // tensor (4 ch: d11 d12 d22, unused) and preconditioned steps (4 ch: tau_u tau_v sigma_p1
+  // sigma_p2) from the image and mask.
+  virtual void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image,
+                               const Buffer& mask, const TensorParams& params) = 0;
+  // tangent g = normalize(T(x + w)) (2 ch) and the data term at x + w.
+  virtual void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
+                               const Buffer& i1, const Buffer& trajectory, const Buffer& w,
+                               const Buffer& u, const Buffer& mask) = 0;
+  // schedule.size() primal-dual iterations (Jacobi-parallel over pixels).
+  virtual void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                          const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) = 0;
+  // dst = 3x3 median of src over masked neighbours (dst != src).
+  virtual void median(const Buffer& dst, const Buffer& src, const Buffer& mask) = 0;
+  // du = clamp(u - u0, +-duMax); u = u0 + du; w += du * tangent (masked pixels only).
+  virtual void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
+                          const Buffer& mask, float duMax) = 0;
+
+  virtual void synchronize() {}
+};
+
+// Backends compiled into this build, in order of preference for "auto".
+std::vector<std::string> availableBackends();
+// "auto" picks the first available; an explicit name that is not available throws
+// cs::Error naming it and listing the available ones. `why` (optional) receives one line
+// saying which backend was taken and why.
+std::unique_ptr<Backend> createBackend(const std::string& name, std::string* why = nullptr);
+
+}  // namespace cs

@@ -1,0 +1,453 @@
+// The camera models as small value types (one struct per model, templated on the
+// scalar), and visitModel(), which hands a Camera's model to a generic callable.
+//
+// Each model is built from the Camera parameter layout [fx fy cx cy extra...] and has
+//   bool project(p, px, J*)   p in the camera frame -> pixel, optional 2x3 d(px)/d(p)
+//   bool unproject(px, ray)   pixel -> unit ray
+//   bool validPoint(p)        p inside the region the model projects one-to-one
+//   double maxAngle()         largest angle to the optical axis of that region
+// Hot loops should build the model once (visitModel) instead of calling Camera::project
+// per pixel: the constructors precompute what every call needs (e.g. the
+// Kannala-Brandt turning angle).
+//
+// Written from the published model equations: Kannala & Brandt (2006), Geyer &
+// Daniilidis / Mei & Rives (unified), Khomenko et al. (2016, extended unified),
+// Usenko, Demmel & Cremers (2018, double sphere, incl. the valid regions used here).
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "curvestereo/camera.hpp"
+
+namespace cs::models {
+
+constexpr double kPi = 3.14159265358979323846;
+
+template <class S>
+constexpr S kEps = std::numeric_limits<S>::epsilon();
+
+// Focal lengths and principal point: pixel = f * m + c for the model's normalised point m.
+template <class S>
+struct Intrinsics {
+  S fx, fy, cx, cy;
+  explicit Intrinsics(const double* p) : fx(S(p[0])), fy(S(p[1])), cx(S(p[2])), cy(S(p[3])) {}
+  Vec2<S> toPixel(S mx, S my) const { return Vec2<S>(fx * mx + cx, fy * my + cy); }
+  Vec2<S> toNormalized(const Vec2<S>& px) const { return Vec2<S>((px.x() - cx) / fx, (px.y() - cy) / fy); }
+};
+
+// Models of the form px = f * (x, y) / den(p) + c share their Jacobian:
+// d(x/den)/dp = e_x/den - x * grad(den)/den^2.
+template <class S>
+void projectRational(const Intrinsics<S>& in, const Vec3<S>& p, S den, const Vec3<S>& gradDen, Vec2<S>& px,
+                     Mat23<S>* J) {
+  const S inv = S(1) / den;
+  px = in.toPixel(p.x() * inv, p.y() * inv);
+  if (!J) return;
+  const S inv2 = inv * inv;
+  J->row(0) = (-in.fx * p.x() * inv2) * gradDen.transpose();
+  J->row(1) = (-in.fy * p.y() * inv2) * gradDen.transpose();
+  (*J)(0, 0) += in.fx * inv;
+  (*J)(1, 1) += in.fy * inv;
+}
+
+// The unified-family valid region is z > -w * d; w from the mirror parameter alpha
+// (Usenko et al. 2018, eq. for UCM/EUCM/DS).
+inline double unifiedW(double alpha) { return alpha > 0.5 ? (1.0 - alpha) / alpha : alpha / (1.0 - alpha); }
+
+// Angle where the region z > -w * sqrt(beta (x^2+y^2) + z^2) ends: on the boundary
+// cos(theta) = -w * sqrt(beta sin^2 + cos^2), i.e. tan(theta) = -sqrt(1-w^2) / (w sqrt(beta)).
+inline double unifiedBoundaryAngle(double w, double beta) {
+  const double wc = std::min(std::max(w, 0.0), 1.0);
+  return std::atan2(std::sqrt(1.0 - wc * wc), -wc * std::sqrt(beta));
+}
+
+// ---------------------------------------------------------------------------------------
+// Kannala-Brandt 4 (Kalibr pinhole + equidistant, OpenCV fisheye):
+//   theta = atan2(r, z), theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8),
+//   px = f * theta_d * (x, y) / r + c.   Works beyond 180 deg while theta < thetaMax.
+template <class S>
+struct KannalaBrandt4 {
+  static constexpr int kNumParams = 8;
+  Intrinsics<S> in;
+  S k1, k2, k3, k4;
+  S thetaMax;   // first angle where theta_d stops increasing (or pi)
+  S radiusMax;  // theta_d(thetaMax): the image of the valid region is rd < radiusMax
+
+  explicit KannalaBrandt4(const double* p)
+      : in(p), k1(S(p[4])), k2(S(p[5])), k3(S(p[6])), k4(S(p[7])) {
+    const double tm = turningAngle(p[4], p[5], p[6], p[7]);
+    thetaMax = S(tm);
+    radiusMax = S(tm * (1 + tm * tm * (p[4] + tm * tm * (p[5] + tm * tm * (p[6] + tm * tm * p[7])))));
+  }
+
+  S distort(S th) const {
+    const S t2 = th * th;
+    return th * (S(1) + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4))));
+  }
+  S distortDerivative(S th) const {
+    const S t2 = th * th;
+    return S(1) + t2 * (S(3) * k1 + t2 * (S(5) * k2 + t2 * (S(7) * k3 + t2 * S(9) * k4)));
+  }
+
+  // First theta in (0, pi] with d theta_d / d theta <= 0, else pi. The derivative is a
+  // quartic in theta^2; sampling finely and bisecting the first sign change is exact
+  // enough and needs no polynomial root finder.
+  static double turningAngle(double c1, double c2, double c3, double c4) {
+    // Camera::project builds the model per call: remember the last few lenses per thread
+    // so that the scan below runs once per lens, not once per pixel.
+    struct Entry {
+      double c[4];
+      double angle;
+    };
+    constexpr int kCacheSize = 4;
+    thread_local Entry cache[kCacheSize] = {};
+    thread_local int next = 0;
+    thread_local int used = 0;
+    for (int i = 0; i < used; ++i) {
+      const Entry& e = cache[i];
+      if (e.c[0] == c1 && e.c[1] == c2 && e.c[2] == c3 && e.c[3] == c4) return e.angle;
+    }
+    const double angle = scanTurningAngle(c1, c2, c3, c4);
+    cache[next] = Entry{{c1, c2, c3, c4}, angle};
+    next = (next + 1) % kCacheSize;
+    used = std::min(used + 1, kCacheSize);
+    return angle;
+  }
+
+  static double scanTurningAngle(double c1, double c2, double c3, double c4) {
+    auto slope = [&](double th) {
+      const double t2 = th * th;
+      return 1 + t2 * (3 * c1 + t2 * (5 * c2 + t2 * (7 * c3 + t2 * 9 * c4)));
+    };
+    constexpr int kSamples = 128;
+    double prev = 0;
+    for (int i = 1; i <= kSamples; ++i) {
+      const double th = kPi * i / kSamples;
+      if (slope(th) > 0) {
+        prev = th;
+        continue;
+      }
+      double lo = prev, hi = th;
+      for (int it = 0; it < 60; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (slope(mid) > 0 ? lo : hi) = mid;
+      }
+      return lo;
+    }
+    return kPi;
+  }
+
+  double maxAngle() const { return double(thetaMax); }
+
+  bool validPoint(const Vec3<S>& p) const {
+    const S r = std::sqrt(p.x() * p.x() + p.y() * p.y());
+    return (r > 0 || p.z() > 0) && std::atan2(r, p.z()) < thetaMax;
+  }
+
+  bool project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J = nullptr) const {
+    const S x = p.x(), y = p.y(), z = p.z();
+    const S r2 = x * x + y * y;
+    const S rho2 = r2 + z * z;
+    if (!(rho2 > 0)) return false;
+    const S r = std::sqrt(r2);
+    const S th = std::atan2(r, z);
+    if (!(th < thetaMax)) return false;
+    // s = theta_d / r; on the axis its limit is 1/z (theta ~ r/z, theta_d ~ theta).
+    const S s = r > 0 ? distort(th) / r : S(1) / z;
+    px = in.toPixel(s * x, s * y);
+    if (!J) return true;
+    // ds/dr = r * A and ds/dz = B with A = (theta_d' z / rho^2 - s) / r^2, B = -theta_d' / rho^2.
+    // Near the axis A loses all digits to cancellation; its limit 2 (k1 - 1/3) / z^3
+    // (from the series of s in r/z) is then exact to rounding.
+    const S dd = distortDerivative(th);
+    const bool nearAxis = z > 0 && r2 < kEps<S> * rho2;
+    const S A = nearAxis ? S(2) * (k1 - S(1) / S(3)) / (z * z * z) : (dd * z / rho2 - s) / r2;
+    const S B = -dd / rho2;
+    *J << in.fx * (s + x * x * A), in.fx * x * y * A, in.fx * x * B,  //
+        in.fy * x * y * A, in.fy * (s + y * y * A), in.fy * y * B;
+    return true;
+  }
+
+  bool unproject(const Vec2<S>& px, Vec3<S>& ray) const {
+    const Vec2<S> m = in.toNormalized(px);
+    const S rd = m.norm();
+    if (!(rd < radiusMax)) return false;  // also rejects NaN
+    if (rd == 0) {
+      ray = Vec3<S>(0, 0, 1);
+      return true;
+    }
+    const S th = solveTheta(rd);
+    const S sinOverRd = std::sin(th) / rd;
+    ray = Vec3<S>(m.x() * sinOverRd, m.y() * sinOverRd, std::cos(th));
+    return true;
+  }
+
+  // theta with theta_d(theta) = rd, 0 < rd < radiusMax. Newton from theta = rd (exact
+  // without distortion), kept inside the bracket [lo, hi] that the monotone theta_d
+  // gives; a step leaving the bracket is replaced by bisection, so it always converges.
+  S solveTheta(S rd) const {
+    S lo = 0, hi = thetaMax;
+    S th = rd < hi ? rd : S(0.5) * hi;
+    for (int it = 0; it < 60; ++it) {
+      const S f = distort(th) - rd;
+      if (f == 0) break;
+      (f < 0 ? lo : hi) = th;
+      S next = th - f / distortDerivative(th);
+      if (!(next > lo && next < hi)) next = S(0.5) * (lo + hi);
+      const S step = std::abs(next - th);
+      th = next;
+      if (step <= S(4) * kEps<S> * th) break;
+    }
+    return th;
+  }
+};
+
+// ---------------------------------------------------------------------------------------
+// Unified camera model (Kalibr omni without distortion): px = f * (x, y) / (z + xi |p|) + c.
+// Valid region z > -w |p| with w = xi (xi <= 1) or 1/xi (xi > 1).
+template <class S>
+struct Unified {
+  static constexpr int kNumParams = 5;
+  Intrinsics<S> in;
+  S xi;
+  S w;
+
+  explicit Unified(const double* p) : in(p), xi(S(p[4])), w(S(p[4] <= 1 ? p[4] : 1.0 / p[4])) {}
+
+  double maxAngle() const { return unifiedBoundaryAngle(double(w), 1.0); }
+
+  bool validPoint(const Vec3<S>& p) const { return p.z() > -w * p.norm(); }
+
+  bool project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J = nullptr) const {
+    const S d = p.norm();
+    if (!(p.z() > -w * d)) return false;
+    const S den = p.z() + xi * d;
+    if (!(den > 0)) return false;
+    const Vec3<S> gradDen = (xi / d) * p + Vec3<S>(0, 0, 1);
+    projectRational(in, p, den, gradDen, px, J);
+    return true;
+  }
+
+  // Closed form: the ray is factor * (mx, my, 1) - (0, 0, xi) with
+  // factor = (xi + sqrt(1 + (1 - xi^2) r^2)) / (1 + r^2).
+  bool unproject(const Vec2<S>& px, Vec3<S>& ray) const {
+    const Vec2<S> m = in.toNormalized(px);
+    const S r2 = m.squaredNorm();
+    const S disc = S(1) + (S(1) - xi * xi) * r2;
+    if (!(disc >= 0)) return false;
+    const S factor = (xi + std::sqrt(disc)) / (S(1) + r2);
+    ray = Vec3<S>(factor * m.x(), factor * m.y(), factor - xi).normalized();
+    return validPoint(ray);
+  }
+};
+
+// ---------------------------------------------------------------------------------------
+// Extended unified camera model: d = sqrt(beta (x^2 + y^2) + z^2),
+// px = f * (x, y) / (alpha d + (1 - alpha) z) + c. Valid region z > -w d.
+template <class S>
+struct ExtendedUnified {
+  static constexpr int kNumParams = 6;
+  Intrinsics<S> in;
+  S alpha, beta;
+  S w;
+
+  explicit ExtendedUnified(const double* p) : in(p), alpha(S(p[4])), beta(S(p[5])), w(S(unifiedW(p[4]))) {}
+
+  double maxAngle() const { return unifiedBoundaryAngle(double(w), double(beta)); }
+
+  S distance(const Vec3<S>& p) const { return std::sqrt(beta * (p.x() * p.x() + p.y() * p.y()) + p.z() * p.z()); }
+
+  bool validPoint(const Vec3<S>& p) const { return p.z() > -w * distance(p); }
+
+  bool project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J = nullptr) const {
+    const S d = distance(p);
+    if (!(p.z() > -w * d)) return false;
+    const S den = alpha * d + (S(1) - alpha) * p.z();
+    if (!(den > 0)) return false;
+    const Vec3<S> gradD = Vec3<S>(beta * p.x(), beta * p.y(), p.z()) / d;
+    const Vec3<S> gradDen = alpha * gradD + Vec3<S>(0, 0, S(1) - alpha);
+    projectRational(in, p, den, gradDen, px, J);
+    return true;
+  }
+
+  // Closed form (Usenko et al. 2018): mz = (1 - beta alpha^2 r^2) /
+  // (alpha sqrt(1 - (2 alpha - 1) beta r^2) + 1 - alpha); ray = normalize(mx, my, mz).
+  bool unproject(const Vec2<S>& px, Vec3<S>& ray) const {
+    const Vec2<S> m = in.toNormalized(px);
+    const S r2 = m.squaredNorm();
+    const S disc = S(1) - (S(2) * alpha - S(1)) * beta * r2;
+    if (!(disc >= 0)) return false;
+    const S mz = (S(1) - beta * alpha * alpha * r2) / (alpha * std::sqrt(disc) + S(1) - alpha);
+    ray = Vec3<S>(m.x(), m.y(), mz).normalized();
+    return validPoint(ray);
+  }
+};
+
+// ---------------------------------------------------------------------------------------
+// Double sphere model: d1 = |p|, k = xi d1 + z, d2 = sqrt(x^2 + y^2 + k^2),
+// px = f * (x, y) / (alpha d2 + (1 - alpha) k) + c. Valid region z > -w2 d1.
+template <class S>
+struct DoubleSphere {
+  static constexpr int kNumParams = 6;
+  Intrinsics<S> in;
+  S xi, alpha;
+  S w2;
+
+  explicit DoubleSphere(const double* p) : in(p), xi(S(p[4])), alpha(S(p[5])), w2(S(boundaryW(p[4], p[5]))) {}
+
+  // w2 = (w1 + xi) / sqrt(2 w1 xi + xi^2 + 1) (Usenko et al. 2018).
+  static double boundaryW(double xi, double alpha) {
+    const double w1 = unifiedW(alpha);
+    return (w1 + xi) / std::sqrt(2 * w1 * xi + xi * xi + 1);
+  }
+
+  double maxAngle() const { return unifiedBoundaryAngle(double(w2), 1.0); }
+
+  bool validPoint(const Vec3<S>& p) const { return p.z() > -w2 * p.norm(); }
+
+  bool project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J = nullptr) const {
+    const S d1 = p.norm();
+    if (!(p.z() > -w2 * d1)) return false;
+    const S k = xi * d1 + p.z();
+    const S d2 = std::sqrt(p.x() * p.x() + p.y() * p.y() + k * k);
+    const S den = alpha * d2 + (S(1) - alpha) * k;
+    if (!(den > 0)) return false;
+    const Vec3<S> gradK = (xi / d1) * p + Vec3<S>(0, 0, 1);
+    const Vec3<S> gradD2 = (Vec3<S>(p.x(), p.y(), 0) + k * gradK) / d2;
+    const Vec3<S> gradDen = alpha * gradD2 + (S(1) - alpha) * gradK;
+    projectRational(in, p, den, gradDen, px, J);
+    return true;
+  }
+
+  // Closed form (Usenko et al. 2018): mz = (1 - alpha^2 r^2) / (alpha sqrt(1 - (2 alpha - 1) r^2)
+  // + 1 - alpha); ray = (mz xi + sqrt(mz^2 + (1 - xi^2) r^2)) / (mz^2 + r^2) * (mx, my, mz) - (0, 0, xi).
+  bool unproject(const Vec2<S>& px, Vec3<S>& ray) const {
+    const Vec2<S> m = in.toNormalized(px);
+    const S r2 = m.squaredNorm();
+    const S disc1 = S(1) - (S(2) * alpha - S(1)) * r2;
+    if (!(disc1 >= 0)) return false;
+    const S mz = (S(1) - alpha * alpha * r2) / (alpha * std::sqrt(disc1) + S(1) - alpha);
+    const S disc2 = mz * mz + (S(1) - xi * xi) * r2;
+    if (!(disc2 >= 0)) return false;
+    const S factor = (mz * xi + std::sqrt(disc2)) / (mz * mz + r2);
+    ray = Vec3<S>(factor * m.x(), factor * m.y(), factor * mz - xi).normalized();
+    return validPoint(ray);
+  }
+};
+
+// ---------------------------------------------------------------------------------------
+// Pinhole with radial-tangential distortion (Kalibr radtan, OpenCV k1 k2 p1 p2) on the
+// normalised point n = (x, y) / z. Valid for z > 1e-6 |p| (in front of the camera).
+template <class S>
+struct PinholeRadtan {
+  static constexpr int kNumParams = 8;
+  static constexpr int kNewtonIterations = 20;
+  Intrinsics<S> in;
+  S k1, k2, p1, p2;
+  int width, height;  // maxAngle() is the angle of the widest image corner
+
+  PinholeRadtan(const double* p, int w, int h)
+      : in(p), k1(S(p[4])), k2(S(p[5])), p1(S(p[6])), p2(S(p[7])), width(w), height(h) {}
+
+  bool validPoint(const Vec3<S>& p) const { return p.z() > S(1e-6) * p.norm(); }
+
+  // Distorted normalised point and, optionally, its 2x2 Jacobian d(distorted)/d(n).
+  Vec2<S> distort(const Vec2<S>& n, Eigen::Matrix<S, 2, 2>* Jd = nullptr) const {
+    const S x = n.x(), y = n.y();
+    const S r2 = x * x + y * y;
+    const S radial = S(1) + r2 * (k1 + r2 * k2);
+    const Vec2<S> out(x * radial + S(2) * p1 * x * y + p2 * (r2 + S(2) * x * x),
+                      y * radial + p1 * (r2 + S(2) * y * y) + S(2) * p2 * x * y);
+    if (Jd) {
+      const S dRadial = S(2) * (k1 + S(2) * k2 * r2);  // d(radial)/d(x) = dRadial * x
+      *Jd << radial + x * x * dRadial + S(2) * p1 * y + S(6) * p2 * x,  //
+          x * y * dRadial + S(2) * p1 * x + S(2) * p2 * y,              //
+          x * y * dRadial + S(2) * p1 * x + S(2) * p2 * y,              //
+          radial + y * y * dRadial + S(6) * p1 * y + S(2) * p2 * x;
+    }
+    return out;
+  }
+
+  bool project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J = nullptr) const {
+    if (!validPoint(p)) return false;
+    const S iz = S(1) / p.z();
+    const Vec2<S> n(p.x() * iz, p.y() * iz);
+    Eigen::Matrix<S, 2, 2> Jd;
+    const Vec2<S> md = distort(n, J ? &Jd : nullptr);
+    px = in.toPixel(md.x(), md.y());
+    if (!J) return true;
+    Mat23<S> Jn;  // d(n)/d(p)
+    Jn << iz, 0, -n.x() * iz, 0, iz, -n.y() * iz;
+    *J = Eigen::DiagonalMatrix<S, 2>(in.fx, in.fy) * Jd * Jn;
+    return true;
+  }
+
+  // Newton on distort(n) = m from n = m; converges in a few steps for real lenses.
+  // The pixel is rejected when the iteration ends without reaching the target
+  // (outside the region where the distortion is invertible).
+  bool unproject(const Vec2<S>& px, Vec3<S>& ray) const {
+    const Vec2<S> m = in.toNormalized(px);
+    if (!m.allFinite()) return false;
+    Vec2<S> n = m;
+    Eigen::Matrix<S, 2, 2> Jd;
+    for (int it = 0; it < kNewtonIterations; ++it) {
+      const Vec2<S> residual = distort(n, &Jd) - m;
+      const S det = Jd(0, 0) * Jd(1, 1) - Jd(0, 1) * Jd(1, 0);
+      if (!(std::abs(det) > kEps<S>)) return false;
+      // 2x2 solve by the adjugate (Eigen/Core has no inverse()).
+      const Vec2<S> step((Jd(1, 1) * residual.x() - Jd(0, 1) * residual.y()) / det,
+                         (Jd(0, 0) * residual.y() - Jd(1, 0) * residual.x()) / det);
+      n -= step;
+      if (step.norm() <= S(16) * kEps<S> * (S(1) + n.norm())) break;
+    }
+    const S accepted = std::sqrt(kEps<S>) * (S(1) + m.norm());
+    if (!((distort(n) - m).norm() <= accepted)) return false;
+    ray = Vec3<S>(n.x(), n.y(), S(1)).normalized();
+    return true;
+  }
+
+  // The widest ray through an image corner; pi/2 when a corner does not unproject.
+  double maxAngle() const {
+    const double xs[2] = {-0.5, width - 0.5}, ys[2] = {-0.5, height - 0.5};
+    double widest = 0;
+    for (double cx : xs) {
+      for (double cy : ys) {
+        Vec3<S> ray;
+        if (!unproject(Vec2<S>(S(cx), S(cy)), ray)) return kPi / 2;
+        widest = std::max(widest, std::acos(std::min(1.0, double(ray.z()))));
+      }
+    }
+    return widest;
+  }
+};
+
+// Number of entries of Camera::params for a model.
+inline int paramCount(CameraModel model) {
+  switch (model) {
+    case CameraModel::KannalaBrandt4: return KannalaBrandt4<double>::kNumParams;
+    case CameraModel::Unified: return Unified<double>::kNumParams;
+    case CameraModel::ExtendedUnified: return ExtendedUnified<double>::kNumParams;
+    case CameraModel::DoubleSphere: return DoubleSphere<double>::kNumParams;
+    case CameraModel::PinholeRadtan: return PinholeRadtan<double>::kNumParams;
+  }
+  return -1;
+}
+
+// Calls fn(model) with the value type of cam's model in scalar S. The caller must make
+// sure cam.params has paramCount(cam.model) entries (Camera::validate checks it).
+template <class S, class Fn>
+decltype(auto) visitModel(const Camera& cam, Fn&& fn) {
+  const double* p = cam.params.data();
+  switch (cam.model) {
+    case CameraModel::Unified: return std::forward<Fn>(fn)(Unified<S>(p));
+    case CameraModel::ExtendedUnified: return std::forward<Fn>(fn)(ExtendedUnified<S>(p));
+    case CameraModel::DoubleSphere: return std::forward<Fn>(fn)(DoubleSphere<S>(p));
+    case CameraModel::PinholeRadtan: return std::forward<Fn>(fn)(PinholeRadtan<S>(p, cam.width, cam.height));
+    case CameraModel::KannalaBrandt4: break;
+  }
+  return std::forward<Fn>(fn)(KannalaBrandt4<S>(p));
+}
+
+}  // namespace cs::models

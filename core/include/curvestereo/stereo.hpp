@@ -1,0 +1,73 @@
+// The public entry point: construct with a rig and parameters, then compute(left, right).
+//
+//   cs::Stereo stereo(cs::loadKalibr("camchain.yaml"), cs::preset("default"));
+//   cs::DepthResult r = stereo.compute(left, right);   // r.depth: radial metres
+//
+// A Stereo object is not thread-safe; use one per thread (they share nothing).
+#pragma once
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "curvestereo/fields.hpp"
+#include "curvestereo/image.hpp"
+#include "curvestereo/params.hpp"
+#include "curvestereo/rig.hpp"
+#include "curvestereo/triangulate.hpp"
+
+namespace cs {
+
+class Backend;
+class Pipeline;
+
+struct StageTime {
+  std::string name;
+  double ms = 0;
+};
+
+struct DepthResult {
+  ImageU8 valid;          // 1 where the pixel was solved
+  ImageF disparity;       // u: px along the epipolar curve (NaN where invalid)
+  FlowImage warp;         // w: 2-D displacement into the calibrated image 1 (NaN where invalid)
+  DepthMaps depth;        // radial / z depth and 3-D points
+  std::vector<StageTime> stages;  // wall time of each stage of this frame
+  double totalMs = 0;
+};
+
+class Stereo {
+ public:
+  // backend: "auto", "cpu", ... (see availableBackends()). Throws cs::Error on a bad
+  // rig, bad parameters, or an unavailable backend.
+  Stereo(const Rig& rig, const Params& params, const std::string& backend = "auto");
+  ~Stereo();
+  Stereo(const Stereo&) = delete;
+  Stereo& operator=(const Stereo&) = delete;
+
+  // Restrict the solve to mask != 0 (e.g. a lens-shading mask); same size as the images.
+  void setMask(const ImageU8& mask);
+  // Called during compute() with the fraction of the solve done (0..1), for progress bars.
+  void setProgress(std::function<void(double)> progress);
+  // Images: float gray in [0,1], both of the rig's resolution. Throws cs::Error on
+  // mismatched sizes or non-finite pixels.
+  DepthResult compute(const ImageF& left, const ImageF& right);
+
+  const std::string& backendName() const;
+  std::string deviceName() const;
+  // Which backend "auto" took, and why (one line).
+  const std::string& backendChoice() const { return backendWhy_; }
+  const RigFields& fields() const { return fields_; }
+  const Rig& rig() const { return rig_; }
+  const Params& params() const { return params_; }
+
+ private:
+  Rig rig_;
+  Params params_;
+  RigFields fields_;
+  std::string backendName_, backendWhy_;
+  std::unique_ptr<Backend> backend_;
+  std::unique_ptr<Pipeline> pipeline_;
+  std::function<void(double)> progress_;
+};
+
+}  // namespace cs

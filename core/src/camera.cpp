@@ -1,0 +1,175 @@
+// Camera: the run-time choice among the model value types of camera_models.hpp.
+#include "curvestereo/camera.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "curvestereo/camera_models.hpp"
+#include "curvestereo/image.hpp"
+
+namespace cs {
+
+namespace {
+
+Camera makeCamera(CameraModel model, int w, int h, std::vector<double> params) {
+  Camera cam;
+  cam.model = model;
+  cam.width = w;
+  cam.height = h;
+  cam.params = std::move(params);
+  return cam;
+}
+
+bool hasModelParams(const Camera& cam) { return int(cam.params.size()) == models::paramCount(cam.model); }
+
+}  // namespace
+
+Camera Camera::kannalaBrandt4(int w, int h, double fx, double fy, double cx, double cy, double k1, double k2,
+                              double k3, double k4) {
+  return makeCamera(CameraModel::KannalaBrandt4, w, h, {fx, fy, cx, cy, k1, k2, k3, k4});
+}
+
+Camera Camera::unified(int w, int h, double fx, double fy, double cx, double cy, double xi) {
+  return makeCamera(CameraModel::Unified, w, h, {fx, fy, cx, cy, xi});
+}
+
+Camera Camera::extendedUnified(int w, int h, double fx, double fy, double cx, double cy, double alpha,
+                               double beta) {
+  return makeCamera(CameraModel::ExtendedUnified, w, h, {fx, fy, cx, cy, alpha, beta});
+}
+
+Camera Camera::doubleSphere(int w, int h, double fx, double fy, double cx, double cy, double xi, double alpha) {
+  return makeCamera(CameraModel::DoubleSphere, w, h, {fx, fy, cx, cy, xi, alpha});
+}
+
+Camera Camera::pinholeRadtan(int w, int h, double fx, double fy, double cx, double cy, double k1, double k2,
+                             double p1, double p2) {
+  return makeCamera(CameraModel::PinholeRadtan, w, h, {fx, fy, cx, cy, k1, k2, p1, p2});
+}
+
+template <class S>
+bool Camera::project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J) const {
+  if (!hasModelParams(*this)) return false;
+  return models::visitModel<S>(*this, [&](const auto& m) { return m.project(p, px, J); });
+}
+
+template <class S>
+bool Camera::unproject(const Vec2<S>& px, Vec3<S>& ray) const {
+  if (!hasModelParams(*this)) return false;
+  return models::visitModel<S>(*this, [&](const auto& m) { return m.unproject(px, ray); });
+}
+
+template bool Camera::project<float>(const Vec3<float>&, Vec2<float>&, Mat23<float>*) const;
+template bool Camera::project<double>(const Vec3<double>&, Vec2<double>&, Mat23<double>*) const;
+template bool Camera::unproject<float>(const Vec2<float>&, Vec3<float>&) const;
+template bool Camera::unproject<double>(const Vec2<double>&, Vec3<double>&) const;
+
+double Camera::maxAngle() const {
+  if (!hasModelParams(*this)) return 0.0;
+  return models::visitModel<double>(*this, [](const auto& m) { return m.maxAngle(); });
+}
+
+bool Camera::inImage(const Vec2<double>& px, double margin) const {
+  return px.x() >= -0.5 + margin && px.y() >= -0.5 + margin && px.x() <= width - 0.5 - margin &&
+         px.y() <= height - 0.5 - margin;
+}
+
+// Pixel centres sit at integers, so the image edge -0.5 is what scales: c' + 0.5 = s (c + 0.5).
+// Distortion acts on normalised coordinates and is unchanged.
+Camera Camera::scaled(double s) const {
+  Camera out = *this;
+  out.width = int(std::lround(s * width));
+  out.height = int(std::lround(s * height));
+  if (out.params.size() >= 4) {
+    out.params[0] = s * params[0];
+    out.params[1] = s * params[1];
+    out.params[2] = s * (params[2] + 0.5) - 0.5;
+    out.params[3] = s * (params[3] + 0.5) - 0.5;
+  }
+  return out;
+}
+
+std::string Camera::modelName() const {
+  switch (model) {
+    case CameraModel::KannalaBrandt4: return "kannala-brandt4";
+    case CameraModel::Unified: return "unified";
+    case CameraModel::ExtendedUnified: return "extended-unified";
+    case CameraModel::DoubleSphere: return "double-sphere";
+    case CameraModel::PinholeRadtan: return "pinhole-radtan";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// Builds "<model> camera WxH: <problem>" and throws it.
+[[noreturn]] void fail(const Camera& cam, const std::string& problem) {
+  std::ostringstream os;
+  os.precision(10);
+  os << cam.modelName() << " camera " << cam.width << "x" << cam.height << ": " << problem;
+  throw Error(os.str());
+}
+
+std::string str(double v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << v;
+  return os.str();
+}
+
+const char* paramName(CameraModel model, size_t i) {
+  static const char* const common[] = {"fx", "fy", "cx", "cy"};
+  static const char* const kb4[] = {"k1", "k2", "k3", "k4"};
+  static const char* const radtan[] = {"k1", "k2", "p1", "p2"};
+  if (i < 4) return common[i];
+  switch (model) {
+    case CameraModel::KannalaBrandt4: return kb4[i - 4];
+    case CameraModel::Unified: return "xi";
+    case CameraModel::ExtendedUnified: return i == 4 ? "alpha" : "beta";
+    case CameraModel::DoubleSphere: return i == 4 ? "xi" : "alpha";
+    case CameraModel::PinholeRadtan: return radtan[i - 4];
+  }
+  return "?";
+}
+
+void checkModelParameters(const Camera& cam) {
+  const auto& p = cam.params;
+  switch (cam.model) {
+    case CameraModel::Unified:
+      if (p[4] < 0) fail(cam, "xi = " + str(p[4]) + " is negative");
+      break;
+    case CameraModel::ExtendedUnified:
+      if (p[4] < 0 || p[4] > 1) fail(cam, "alpha = " + str(p[4]) + " is outside [0, 1]");
+      if (p[5] <= 0) fail(cam, "beta = " + str(p[5]) + " is not positive");
+      break;
+    case CameraModel::DoubleSphere:
+      // Calibrations commonly have slightly negative xi; at xi <= -1 the second sphere
+      // degenerates (the valid-region bound divides by zero).
+      if (p[4] <= -1) fail(cam, "xi = " + str(p[4]) + " is not greater than -1");
+      if (p[5] < 0 || p[5] > 1) fail(cam, "alpha = " + str(p[5]) + " is outside [0, 1]");
+      break;
+    case CameraModel::KannalaBrandt4:
+    case CameraModel::PinholeRadtan: break;
+  }
+}
+
+}  // namespace
+
+void Camera::validate() const {
+  if (width <= 0 || height <= 0) fail(*this, "image size must be positive");
+  const int expected = models::paramCount(model);
+  if (int(params.size()) != expected)
+    fail(*this, "expected " + std::to_string(expected) + " parameters, got " + std::to_string(params.size()));
+  for (size_t i = 0; i < params.size(); ++i)
+    if (!std::isfinite(params[i])) fail(*this, std::string(paramName(model, i)) + " is not finite");
+  if (params[0] <= 0 || params[1] <= 0)
+    fail(*this, "focal length (fx, fy) = (" + str(params[0]) + ", " + str(params[1]) + ") is not positive");
+  // A principal point more than an image size away from the centre is a units or
+  // ordering mistake (e.g. intrinsics in the wrong order), not a real lens.
+  const double cxCentre = 0.5 * (width - 1), cyCentre = 0.5 * (height - 1);
+  if (std::abs(params[2] - cxCentre) > width || std::abs(params[3] - cyCentre) > height)
+    fail(*this, "principal point (" + str(params[2]) + ", " + str(params[3]) + ") is far outside the image");
+  checkModelParameters(*this);
+}
+
+}  // namespace cs

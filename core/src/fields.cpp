@@ -1,0 +1,73 @@
+#include "curvestereo/fields.hpp"
+
+#include <cmath>
+
+namespace cs {
+
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// Angle between the ray and the optical axis (z).
+double offAxisAngle(const Vec3<double>& ray) { return std::atan2(ray.head<2>().norm(), ray.z()); }
+
+// Angle between the ray and the baseline line (either direction): depth along rays near
+// the epipoles is unobservable.
+double angleToBaseline(const Vec3<double>& ray, const Eigen::Vector3d& baselineDir) {
+  double c = std::abs(ray.dot(baselineDir));
+  return std::acos(std::min(1.0, c));
+}
+
+struct PixelFields {
+  bool valid = false;
+  Vec2f calibration, trajectory;
+};
+
+PixelFields fieldsAt(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R,
+                     const Eigen::Vector3d& tPrime, const FieldOptions& opt, int x, int y) {
+  PixelFields f;
+  Vec2<double> px(x, y);
+  Vec3<double> ray;
+  if (!cam0.unproject(px, ray)) return f;
+  if (opt.maxFovDeg > 0 && offAxisAngle(ray) > 0.5 * opt.maxFovDeg * kDegToRad) return f;
+  if (angleToBaseline(ray, tPrime.normalized()) < opt.epipoleDeg * kDegToRad) return f;
+
+  // Calibration: where the same ray lands in image 1 (rotation and intrinsics only).
+  Vec2<double> px1;
+  if (!cam1.project(Vec3<double>(R * ray), px1) || !cam1.inImage(px1)) return f;
+
+  // Trajectory: image motion of the point as its inverse depth grows, d(pi0)/dX . t'.
+  Vec2<double> proj;
+  Mat23<double> J;
+  if (!cam0.project(ray, proj, &J)) return f;
+  Vec2<double> tangent = J * tPrime;
+  double n = tangent.norm();
+  if (!(n > 1e-12)) return f;
+  tangent /= n;
+
+  f.valid = true;
+  f.calibration = {float(px1.x() - x), float(px1.y() - y)};
+  f.trajectory = {float(tangent.x()), float(tangent.y())};
+  return f;
+}
+
+}  // namespace
+
+RigFields computeFields(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R,
+                        const Eigen::Vector3d& t, const FieldOptions& options) {
+  const Eigen::Vector3d tPrime = R.transpose() * t;
+  RigFields out;
+  out.mask = ImageU8(cam0.width, cam0.height, 0);
+  out.calibration = FlowImage(cam0.width, cam0.height);
+  out.trajectory = FlowImage(cam0.width, cam0.height);
+  for (int y = 0; y < cam0.height; ++y)
+    for (int x = 0; x < cam0.width; ++x) {
+      PixelFields f = fieldsAt(cam0, cam1, R, tPrime, options, x, y);
+      out.mask(x, y) = f.valid ? 1 : 0;
+      out.calibration(x, y) = f.calibration;
+      out.trajectory(x, y) = f.trajectory;
+    }
+  return out;
+}
+
+}  // namespace cs

@@ -1,0 +1,120 @@
+#include "curvestereo/metrics.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "curvestereo/triangulate.hpp"
+
+namespace cs {
+
+namespace {
+
+const float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+bool hasGroundTruth(float depth) { return std::isfinite(depth) && depth > 0; }
+
+// Camera 1 sees the point when one of the depth pixels around its projection holds the
+// same surface (2 % relative): robust to the interpolation at depth edges.
+bool agreesWithSecondView(const ImageF& depthRight, const Vec2<double>& px1, double range) {
+  int x0 = int(std::floor(px1.x())), y0 = int(std::floor(px1.y()));
+  for (int dy = 0; dy <= 1; ++dy)
+    for (int dx = 0; dx <= 1; ++dx) {
+      int x = x0 + dx, y = y0 + dy;
+      if (!depthRight.inside(x, y)) continue;
+      float d = depthRight(x, y);
+      if (hasGroundTruth(d) && std::abs(d - range) <= 0.02 * range) return true;
+    }
+  return false;
+}
+
+}  // namespace
+
+FlowImage groundTruthWarp(const Rig& rig, const ImageF& depthLeft) {
+  const Eigen::Vector3d tPrime = rig.tPrime();
+  FlowImage w(depthLeft.width, depthLeft.height, Vec2f{kNaN, kNaN});
+  for (int y = 0; y < depthLeft.height; ++y)
+    for (int x = 0; x < depthLeft.width; ++x) {
+      float d = depthLeft(x, y);
+      Vec2<double> wx;
+      if (hasGroundTruth(d) && warpFromDepth(rig.cam0, tPrime, Vec2<double>(x, y), d, wx))
+        w(x, y) = {float(wx.x()), float(wx.y())};
+    }
+  return w;
+}
+
+ImageU8 nonOccludedMask(const Rig& rig, const ImageF& depthLeft, const ImageF* depthRight) {
+  ImageU8 noc(depthLeft.width, depthLeft.height, 0);
+  for (int y = 0; y < depthLeft.height; ++y)
+    for (int x = 0; x < depthLeft.width; ++x) {
+      float d = depthLeft(x, y);
+      Vec3<double> ray;
+      if (!hasGroundTruth(d) || !rig.cam0.unproject(Vec2<double>(x, y), ray)) continue;
+      Vec3<double> X1 = rig.R * (double(d) * ray) + rig.t;
+      Vec2<double> px1;
+      if (!rig.cam1.project(X1, px1) || !rig.cam1.inImage(px1)) continue;
+      if (depthRight && !agreesWithSecondView(*depthRight, px1, X1.norm())) continue;
+      noc(x, y) = 1;
+    }
+  return noc;
+}
+
+Metrics evaluate(const Rig& rig, const FlowImage& est, const ImageF& estDepth, const ImageF& depthLeft,
+                 const ImageF* depthRight, ImageF* errorMap) {
+  if (est.width != depthLeft.width || est.height != depthLeft.height)
+    throw Error("evaluation: estimate and ground truth differ in size");
+  const FlowImage gt = groundTruthWarp(rig, depthLeft);
+  const ImageU8 noc = nonOccludedMask(rig, depthLeft, depthRight);
+  if (errorMap) *errorMap = ImageF(est.width, est.height, kNaN);
+
+  struct Acc {
+    long long n = 0, over1 = 0, over3 = 0;
+    double sum = 0;
+    void add(double e) {
+      ++n;
+      over1 += e > 1.0;
+      over3 += e > 3.0;
+      sum += std::isfinite(e) ? e : 0.0;
+    }
+  } all, nonOcc;
+  long long estimated = 0, depthCount = 0;
+  double absRelSum = 0;
+
+  for (int y = 0; y < est.height; ++y)
+    for (int x = 0; x < est.width; ++x) {
+      Vec2f g = gt(x, y), e = est(x, y);
+      if (std::isnan(g.x)) continue;
+      bool has = std::isfinite(e.x) && std::isfinite(e.y);
+      // A missing estimate is an error of infinite size: it counts in tau, not in the mean.
+      double err = has ? std::hypot(double(e.x) - g.x, double(e.y) - g.y) : INFINITY;
+      all.add(err);
+      if (noc(x, y)) nonOcc.add(err);
+      if (errorMap) (*errorMap)(x, y) = float(err);
+      if (!has) continue;
+      ++estimated;
+      float de = estDepth(x, y), dg = depthLeft(x, y);
+      if (!std::isnan(de)) {
+        ++depthCount;
+        absRelSum += std::isfinite(de) ? std::min(1.0, std::abs(double(de) - dg) / dg) : 1.0;
+      }
+    }
+
+  Metrics m;
+  auto pct = [](long long k, long long n) { return n ? 100.0 * double(k) / double(n) : 0.0; };
+  m.evaluated = all.n;
+  m.nonOccluded = nonOcc.n;
+  m.tau1 = pct(all.over1, all.n);
+  m.tau3 = pct(all.over3, all.n);
+  m.epe = estimated ? all.sum / double(estimated) : 0.0;
+  m.tau1Noc = pct(nonOcc.over1, nonOcc.n);
+  m.tau3Noc = pct(nonOcc.over3, nonOcc.n);
+  long long nocEstimated = 0;
+  for (int y = 0; y < est.height; ++y)
+    for (int x = 0; x < est.width; ++x)
+      if (noc(x, y) && !std::isnan(gt(x, y).x) && std::isfinite(est(x, y).x)) ++nocEstimated;
+  m.epeNoc = nocEstimated ? nonOcc.sum / double(nocEstimated) : 0.0;
+  m.absRel = depthCount ? absRelSum / double(depthCount) : 0.0;
+  m.density = pct(estimated, all.n);
+  return m;
+}
+
+}  // namespace cs

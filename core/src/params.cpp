@@ -1,0 +1,77 @@
+#include "curvestereo/params.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "curvestereo/image.hpp"
+
+namespace cs {
+
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw Error("invalid parameter: " + what);
+}
+
+}  // namespace
+
+void Params::validate() const {
+  require(levels >= 1 && levels <= 12, "levels must be in [1, 12]");
+  require(std::isfinite(scale) && scale > 1.0 && scale <= 4.0, "scale must be in (1, 4]");
+  require(minWidth >= 8, "minWidth must be >= 8");
+  require(warps >= 1 && warps <= 1000, "warps must be in [1, 1000]");
+  require(iterations >= 1 && iterations <= 1000, "iterations must be in [1, 1000]");
+  require(std::isfinite(duMax) && duMax > 0, "duMax must be > 0");
+  require(std::isfinite(lambda) && lambda > 0, "lambda must be > 0");
+  require(std::isfinite(alpha0) && alpha0 > 0, "alpha0 must be > 0");
+  require(std::isfinite(alpha1) && alpha1 > 0, "alpha1 must be > 0");
+  require(std::isfinite(beta) && beta >= 0, "beta must be >= 0");
+  require(std::isfinite(eta) && eta > 0, "eta must be > 0");
+  require(std::isfinite(wMin) && wMin > 0 && wMin <= 1, "wMin must be in (0, 1]");
+  require(std::isfinite(tensorSigma) && tensorSigma >= 0 && tensorSigma <= 10, "tensorSigma must be in [0, 10]");
+  require(std::isfinite(gamma) && gamma >= 0, "gamma must be >= 0");
+  require(std::isfinite(maxFovDeg) && maxFovDeg >= 0 && maxFovDeg <= 360, "maxFovDeg must be in [0, 360]");
+  require(std::isfinite(epipoleDeg) && epipoleDeg >= 0 && epipoleDeg < 90, "epipoleDeg must be in [0, 90)");
+}
+
+Params preset(const std::string& name) {
+  Params p;  // the struct's defaults are the "default" preset
+  if (name == "default") return p;
+  if (name == "realtime") {
+    // The paper's configuration (Roxas & Oishi, Sec. IV): 5 levels x2, N=5, K=10, du_max 0.2.
+    p.warps = 5;
+    return p;
+  }
+  if (name == "quality") {
+    p.warps = 60;
+    p.iterations = 15;
+    return p;
+  }
+  std::string known;
+  for (auto& n : presetNames()) known += (known.empty() ? "" : ", ") + n;
+  throw Error("unknown preset '" + name + "' (known: " + known + ")");
+}
+
+std::vector<std::string> presetNames() { return {"realtime", "default", "quality"}; }
+
+std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p) {
+  std::vector<LevelSize> plan{{width, height, 1.0}};
+  for (int l = 1; l < p.levels; ++l) {
+    double s = std::pow(p.scale, -l);
+    int w = int(std::ceil(width * s)), h = int(std::ceil(height * s));
+    if (w < p.minWidth || h < p.minWidth) break;
+    plan.push_back({w, h, s});
+  }
+  return plan;
+}
+
+std::string describe(const Params& p) {
+  std::ostringstream s;
+  s << "levels=" << p.levels << " scale=" << p.scale << " warps=" << p.warps << " iterations=" << p.iterations
+    << " du_max=" << p.duMax << " lambda=" << p.lambda << " alpha0=" << p.alpha0 << " alpha1=" << p.alpha1
+    << " beta=" << p.beta << " eta=" << p.eta << " median=" << (p.medianFilter ? "on" : "off")
+    << " gamma=" << p.gamma;
+  return s.str();
+}
+
+}  // namespace cs

@@ -1,0 +1,302 @@
+// Rig validation and Kalibr camchain.yaml I/O.
+#include "curvestereo/rig.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+#include <Eigen/LU>  // determinant()
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <locale>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "curvestereo/camera_models.hpp"
+#include "curvestereo/image.hpp"
+
+namespace cs {
+
+namespace {
+
+std::string formatNumber(double v, int precision = 6) {
+  std::ostringstream os;
+  os.imbue(std::locale::classic());
+  os.precision(precision);
+  os << v;
+  return os.str();
+}
+
+// Shortest decimal text that reads back as exactly v (at most 17 significant digits).
+std::string exactNumber(double v) {
+  for (int precision = 1; precision < 17; ++precision) {
+    const std::string text = formatNumber(v, precision);
+    std::istringstream is(text);
+    is.imbue(std::locale::classic());
+    double back = 0;
+    if (is >> back && back == v) return text;
+  }
+  return formatNumber(v, 17);
+}
+
+void validateCamera(const Camera& cam, const char* name) {
+  try {
+    cam.validate();
+  } catch (const Error& e) {
+    throw Error(std::string(name) + ": " + e.what());
+  }
+}
+
+}  // namespace
+
+void Rig::validate() const {
+  validateCamera(cam0, "cam0");
+  validateCamera(cam1, "cam1");
+  if (!R.allFinite() || !t.allFinite()) throw Error("T_cn_cnm1 has non-finite entries");
+  const double det = R.determinant();
+  const double orthoError = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (std::abs(det - 1.0) > 1e-6 || orthoError > 1e-6)
+    throw Error("T_cn_cnm1 rotation is not a rotation (det=" + formatNumber(det, 10) +
+                ", |R^T R - I|=" + formatNumber(orthoError, 3) + ")");
+  // Depth from stereo needs a baseline; a zero t is usually a missing or mis-read pose.
+  if (t.norm() < 1e-6)
+    throw Error("zero baseline (|t| = " + formatNumber(t.norm(), 3) + " m in T_cn_cnm1)");
+}
+
+// ------------------------------------------------------------------------------------------
+// Reading. Every failure is one line "<path>: <problem>".
+
+namespace {
+
+class KalibrReader {
+ public:
+  explicit KalibrReader(std::string path) : path_(std::move(path)) {}
+
+  Rig read() {
+    const YAML::Node root = loadRoot();
+    Rig rig;
+    rig.cam0 = readCamera(root, "cam0");
+    rig.cam1 = readCamera(root, "cam1");
+    readPose(require(root, "cam1", "")["T_cn_cnm1"], rig);
+    try {
+      rig.validate();
+    } catch (const Error& e) {
+      fail(e.what());
+    }
+    return rig;
+  }
+
+ private:
+  std::string path_;
+
+  [[noreturn]] void fail(const std::string& problem) const { throw Error(path_ + ": " + problem); }
+
+  static std::string lineOf(const YAML::Node& node) {
+    const YAML::Mark mark = node.Mark();
+    return mark.is_null() ? std::string() : " (line " + std::to_string(mark.line + 1) + ")";
+  }
+
+  YAML::Node loadRoot() const {
+    if (!std::filesystem::exists(path_)) fail("cannot open file (it does not exist)");
+    YAML::Node root;
+    try {
+      root = YAML::LoadFile(path_);
+    } catch (const YAML::BadFile&) {
+      fail("cannot open file");
+    } catch (const YAML::ParserException& e) {
+      fail("YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+    }
+    if (!root.IsMap()) fail("not a Kalibr camchain (expected a mapping with keys cam0 and cam1)");
+    return root;
+  }
+
+  // parent[key], failing with the dotted key name ("cam1.T_cn_cnm1") when it is missing.
+  const YAML::Node require(const YAML::Node& parent, const std::string& key, const std::string& prefix) const {
+    const std::string full = prefix.empty() ? key : prefix + "." + key;
+    if (!parent.IsMap() || !parent[key]) fail("missing key \"" + full + "\"");
+    return parent[key];
+  }
+
+  double number(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar()) fail(key + " is not a number" + lineOf(node));
+    try {
+      return node.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(key + " is not a number ('" + node.Scalar() + "')" + lineOf(node));
+    }
+  }
+
+  std::vector<double> numbers(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsSequence()) fail(key + " must be a list of numbers" + lineOf(node));
+    std::vector<double> out;
+    for (size_t i = 0; i < node.size(); ++i) out.push_back(number(node[i], key + "[" + std::to_string(i) + "]"));
+    return out;
+  }
+
+  std::string text(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar()) fail(key + " must be a string" + lineOf(node));
+    return node.Scalar();
+  }
+
+  Camera readCamera(const YAML::Node& root, const std::string& name) const {
+    const YAML::Node node = require(root, name, "");
+    const std::string cameraModel = text(require(node, "camera_model", name), name + ".camera_model");
+    // Kalibr always writes distortion_model; other tools omit it for omni/eucm/ds.
+    const std::string distortion =
+        node["distortion_model"] ? text(node["distortion_model"], name + ".distortion_model") : "none";
+    const std::vector<double> coeffs =
+        node["distortion_coeffs"] ? numbers(node["distortion_coeffs"], name + ".distortion_coeffs")
+                                  : std::vector<double>();
+    const std::vector<double> intrinsics = numbers(require(node, "intrinsics", name), name + ".intrinsics");
+    const std::vector<double> resolution = numbers(require(node, "resolution", name), name + ".resolution");
+    if (resolution.size() != 2) fail(name + ".resolution must be [width, height]");
+    for (double v : resolution)
+      if (v != std::floor(v) || v < 1 || v > 1e6) fail(name + ".resolution must hold two positive integers");
+
+    Camera cam;
+    cam.model = modelFor(name, cameraModel, distortion);
+    cam.width = int(resolution[0]);
+    cam.height = int(resolution[1]);
+    cam.params = intrinsicsInCameraOrder(name, cameraModel, intrinsics);
+    appendDistortion(name, distortion, coeffs, cam.params);
+    return cam;
+  }
+
+  CameraModel modelFor(const std::string& name, const std::string& cameraModel,
+                       const std::string& distortion) const {
+    static const char* supported =
+        "supported: pinhole+equidistant, pinhole+radtan, pinhole+none, omni+none, eucm+none, ds+none";
+    const bool none = distortion == "none";
+    if (cameraModel == "pinhole" && distortion == "equidistant") return CameraModel::KannalaBrandt4;
+    if (cameraModel == "pinhole" && (distortion == "radtan" || none)) return CameraModel::PinholeRadtan;
+    if (cameraModel == "omni" && none) return CameraModel::Unified;
+    if (cameraModel == "eucm" && none) return CameraModel::ExtendedUnified;
+    if (cameraModel == "ds" && none) return CameraModel::DoubleSphere;
+    const bool knownCamera =
+        cameraModel == "pinhole" || cameraModel == "omni" || cameraModel == "eucm" || cameraModel == "ds";
+    if (!knownCamera) fail(name + ": unknown camera_model '" + cameraModel + "' (" + supported + ")");
+    fail(name + ": unsupported camera model " + cameraModel + "+" + distortion + " (" + supported + ")");
+  }
+
+  // Kalibr lists the model parameters first ([xi fu fv pu pv]); Camera puts them last.
+  std::vector<double> intrinsicsInCameraOrder(const std::string& name, const std::string& cameraModel,
+                                              const std::vector<double>& v) const {
+    const char* layout = cameraModel == "pinhole" ? "[fu fv pu pv]"
+                         : cameraModel == "omni"  ? "[xi fu fv pu pv]"
+                         : cameraModel == "eucm"  ? "[alpha beta fu fv pu pv]"
+                                                  : "[xi alpha fu fv pu pv]";
+    const size_t extra = cameraModel == "pinhole" ? 0 : cameraModel == "omni" ? 1 : 2;
+    if (v.size() != 4 + extra)
+      fail(name + ".intrinsics has " + std::to_string(v.size()) + " values but camera_model " + cameraModel +
+           " needs " + std::to_string(4 + extra) + " " + layout);
+    std::vector<double> out(v.begin() + long(extra), v.end());
+    out.insert(out.end(), v.begin(), v.begin() + long(extra));
+    return out;
+  }
+
+  void appendDistortion(const std::string& name, const std::string& distortion, const std::vector<double>& coeffs,
+                        std::vector<double>& params) const {
+    const std::string key = name + ".distortion_coeffs";
+    if (distortion == "none") {
+      for (double c : coeffs)
+        if (c != 0) fail(key + " must be empty or zero for distortion_model none");
+      if (params.size() == 4) params.insert(params.end(), 4, 0.0);  // pinhole+none = radtan with zeros
+      return;
+    }
+    if (coeffs.size() != 4)
+      fail(key + " has " + std::to_string(coeffs.size()) + " values but distortion_model " + distortion +
+           " needs 4");
+    params.insert(params.end(), coeffs.begin(), coeffs.end());
+  }
+
+  void readPose(const YAML::Node& node, Rig& rig) const {
+    const std::string key = "cam1.T_cn_cnm1";
+    if (!node) fail("missing key \"" + key + "\"");
+    if (!node.IsSequence() || node.size() != 4) fail(key + " must be a 4x4 matrix (4 rows of 4 numbers)");
+    Eigen::Matrix4d T;
+    for (int r = 0; r < 4; ++r) {
+      const std::vector<double> row = numbers(node[r], key + "[" + std::to_string(r) + "]");
+      if (row.size() != 4) fail(key + " must be a 4x4 matrix (4 rows of 4 numbers)");
+      for (int c = 0; c < 4; ++c) T(r, c) = row[size_t(c)];
+    }
+    if ((T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9)
+      fail(key + " last row must be [0, 0, 0, 1], got [" + formatNumber(T(3, 0)) + ", " + formatNumber(T(3, 1)) +
+           ", " + formatNumber(T(3, 2)) + ", " + formatNumber(T(3, 3)) + "]");
+    rig.R = T.topLeftCorner<3, 3>();
+    rig.t = T.topRightCorner<3, 1>();
+  }
+};
+
+// ------------------------------------------------------------------------------------------
+// Writing.
+
+std::string list(const std::vector<double>& v) {
+  std::string out = "[";
+  for (size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + exactNumber(v[i]);
+  return out + "]";
+}
+
+struct KalibrCamera {
+  const char* cameraModel;
+  const char* distortionModel;
+  std::vector<double> intrinsics;
+  std::vector<double> coeffs;
+};
+
+KalibrCamera toKalibr(const Camera& cam) {
+  const std::vector<double>& p = cam.params;
+  const std::vector<double> pinhole(p.begin(), p.begin() + 4);
+  std::vector<double> extra(p.begin() + 4, p.end());
+  auto modelFirst = [&]() {
+    std::vector<double> v = extra;
+    v.insert(v.end(), pinhole.begin(), pinhole.end());
+    return v;
+  };
+  switch (cam.model) {
+    case CameraModel::KannalaBrandt4: return {"pinhole", "equidistant", pinhole, extra};
+    case CameraModel::PinholeRadtan: return {"pinhole", "radtan", pinhole, extra};
+    case CameraModel::Unified: return {"omni", "none", modelFirst(), {}};
+    case CameraModel::ExtendedUnified: return {"eucm", "none", modelFirst(), {}};
+    case CameraModel::DoubleSphere: return {"ds", "none", modelFirst(), {}};
+  }
+  throw Error("saveKalibr: unknown camera model");
+}
+
+void writeCamera(std::ostream& os, const Camera& cam) {
+  const KalibrCamera k = toKalibr(cam);
+  os << "  camera_model: " << k.cameraModel << "\n"
+     << "  distortion_coeffs: " << list(k.coeffs) << "\n"
+     << "  distortion_model: " << k.distortionModel << "\n"
+     << "  intrinsics: " << list(k.intrinsics) << "\n"
+     << "  resolution: [" << cam.width << ", " << cam.height << "]\n";
+}
+
+}  // namespace
+
+Rig loadKalibr(const std::string& path) { return KalibrReader(path).read(); }
+
+void saveKalibr(const Rig& rig, const std::string& path) {
+  // Never write a file that loadKalibr would refuse.
+  try {
+    rig.validate();
+  } catch (const Error& e) {
+    throw Error(path + ": not saving an invalid rig: " + e.what());
+  }
+  std::ostringstream os;
+  os << "# Kalibr camchain written by curvestereo. T_cn_cnm1 maps cam0 to cam1: X1 = R*X0 + t.\n";
+  os << "cam0:\n";
+  writeCamera(os, rig.cam0);
+  os << "cam1:\n  T_cn_cnm1:\n";
+  for (int r = 0; r < 3; ++r)
+    os << "  - " << list({rig.R(r, 0), rig.R(r, 1), rig.R(r, 2), rig.t(r)}) << "\n";
+  os << "  - [0.0, 0.0, 0.0, 1.0]\n";
+  writeCamera(os, rig.cam1);
+
+  std::ofstream file(path, std::ios::binary);
+  if (!file) throw Error(path + ": cannot open file for writing");
+  file << os.str();
+  if (!file.flush()) throw Error(path + ": error while writing");
+}
+
+}  // namespace cs

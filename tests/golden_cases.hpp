@@ -1,0 +1,51 @@
+// The golden cases: every kernel of the Backend interface on deterministic inputs of odd
+// sizes with masked discs, and one whole solve. The same cases drive the oracle-vs-golden
+// test and (as backends arrive) every-backend-vs-oracle tests; tests/make_golden.cpp
+// regenerates tests/golden/ from the CPU oracle.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "curvestereo/backend.hpp"
+#include "curvestereo/image.hpp"
+#include "curvestereo/rig.hpp"
+
+namespace cs::golden {
+
+// One output buffer of one case: channels stacked vertically (height * channels rows) so
+// it fits a single-channel EXR.
+struct Output {
+  std::string name;  // "<kernel>_<buffer>", also the file name without .exr
+  ImageF planes;
+};
+
+struct KernelCase {
+  std::string kernel;
+  std::vector<Output> (*run)(Backend& backend);
+};
+
+// All kernel cases, in a fixed order.
+const std::vector<KernelCase>& kernelCases();
+
+// The whole-solve case: a small rendered pair (inputs stored in the golden folder, so
+// renderer changes do not move the goldens) solved with a short schedule.
+struct SolveInputs {
+  Rig rig;
+  ImageF left, right;
+};
+SolveInputs renderSolveInputs();                             // used by the generator only
+SolveInputs loadSolveInputs(const std::string& dir);         // from the golden folder
+void saveSolveInputs(const SolveInputs& in, const std::string& dir);
+std::vector<Output> runSolve(const SolveInputs& in, const std::string& backend);
+
+// Comparison with an explicit metric: max abs error and normalised mean square error
+// (sum (a-b)^2 / sum b^2) over finite reference values; non-finite values must match.
+struct Difference {
+  double maxAbs = 0, nmse = 0;
+  long long mismatchedNonFinite = 0;
+  double fractionWithin() const { return withinCount / double(std::max(1LL, count)); }
+  long long withinCount = 0, count = 0;
+};
+Difference compare(const ImageF& actual, const ImageF& expected, double tol);
+
+}  // namespace cs::golden

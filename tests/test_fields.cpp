@@ -1,0 +1,94 @@
+// The per-rig fields against direct projections.
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "curvestereo/fields.hpp"
+#include "curvestereo/rig.hpp"
+#include "test_util.hpp"
+
+using namespace cs;
+
+namespace {
+
+Camera t265Like() {
+  return Camera::kannalaBrandt4(212, 200, 71.43, 71.69, 105.03, 100.85, -0.0066, 0.0473, -0.0458, 0.0090);
+}
+
+Eigen::Matrix3d smallRotation() {
+  return Eigen::AngleAxisd(0.02, Eigen::Vector3d(0.3, 1.0, -0.2).normalized()).toRotationMatrix();
+}
+
+}  // namespace
+
+TEST_CASE("calibration field is zero for identical unrotated cameras") {
+  Camera cam = t265Like();
+  RigFields f = computeFields(cam, cam, Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.064, 0, 0), {160.0, 3.0});
+  long long valid = 0;
+  for (size_t i = 0; i < f.mask.size(); ++i) {
+    if (!f.mask.data[i]) continue;
+    ++valid;
+    CHECK(std::abs(f.calibration.data[i].x) < 1e-4f);
+    CHECK(std::abs(f.calibration.data[i].y) < 1e-4f);
+  }
+  CHECK(valid > 20000);
+}
+
+TEST_CASE("calibration field maps each pixel to where its ray lands in camera 1") {
+  Camera cam0 = t265Like();
+  Camera cam1 = Camera::kannalaBrandt4(212, 200, 71.2, 71.5, 107.0, 99.7, -0.005, 0.039, -0.035, 0.005);
+  Eigen::Matrix3d R = smallRotation();
+  RigFields f = computeFields(cam0, cam1, R, Eigen::Vector3d(-0.064, 0, 0), {160.0, 3.0});
+  for (int y = 5; y < 200; y += 17)
+    for (int x = 3; x < 212; x += 13) {
+      if (!f.mask(x, y)) continue;
+      Vec3<double> ray;
+      Vec2<double> px1;
+      REQUIRE(cam0.unproject(Vec2<double>(x, y), ray));
+      REQUIRE(cam1.project(Vec3<double>(R * ray), px1));
+      CHECK(f.calibration(x, y).x == doctest::Approx(px1.x() - x).epsilon(1e-5));
+      CHECK(f.calibration(x, y).y == doctest::Approx(px1.y() - y).epsilon(1e-5));
+    }
+}
+
+TEST_CASE("trajectory field is the direction in which a point's image moves as its depth decreases") {
+  Camera cam = t265Like();
+  const Eigen::Vector3d t(-0.064, 0.002, 0.01);
+  const Eigen::Matrix3d R = smallRotation();
+  RigFields f = computeFields(cam, cam, R, t, {160.0, 3.0});
+  const Eigen::Vector3d tPrime = R.transpose() * t;
+  int checked = 0;
+  for (int y = 4; y < 200; y += 11)
+    for (int x = 4; x < 212; x += 11) {
+      if (!f.mask(x, y)) continue;
+      Vec3<double> ray;
+      REQUIRE(cam.unproject(Vec2<double>(x, y), ray));
+      // A far point (1 km) moved towards the camera: finite-difference image motion.
+      Vec2<double> far, nearer;
+      REQUIRE(cam.project(Vec3<double>(1000.0 * ray + tPrime), far));
+      REQUIRE(cam.project(Vec3<double>(999.0 * ray + tPrime), nearer));
+      Vec2<double> motion = (nearer - far).normalized();
+      Vec2<double> field(f.trajectory(x, y).x, f.trajectory(x, y).y);
+      CHECK(field.norm() == doctest::Approx(1.0).epsilon(1e-5));
+      CHECK(motion.dot(field) > std::cos(1e-3));
+      ++checked;
+    }
+  CHECK(checked > 100);
+}
+
+TEST_CASE("forward motion: the epipole region is masked, the rest is valid") {
+  Camera cam = Camera::kannalaBrandt4(101, 101, 101 / M_PI, 101 / M_PI, 50, 50);
+  RigFields f = computeFields(cam, cam, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, -0.5), {180.0, 3.0});
+  CHECK(f.mask(50, 50) == 0);  // the focus of expansion
+  CHECK(f.mask(51, 50) == 0);  // within 3 degrees of it (1 px = 1.8 deg here)
+  CHECK(f.mask(50, 30) == 1);
+  CHECK(f.mask(0, 0) == 0);    // outside the 180 degree circle
+}
+
+TEST_CASE("field of view limit masks rays beyond half the angle") {
+  Camera cam = Camera::kannalaBrandt4(101, 101, 101 / M_PI, 101 / M_PI, 50, 50);
+  RigFields wide = computeFields(cam, cam, Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.1, 0, 0), {180.0, 3.0});
+  RigFields narrow = computeFields(cam, cam, Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.1, 0, 0), {90.0, 3.0});
+  CHECK(wide.mask(50, 5) == 1);    // 81 degrees off axis
+  CHECK(narrow.mask(50, 5) == 0);
+  CHECK(narrow.mask(50, 30) == 1);  // 36 degrees off axis
+}

@@ -1,0 +1,384 @@
+// The synthetic renderer: determinism, exact ground-truth depth, consistency of the two
+// views with the camera models and the pose, sky / outside-the-disc conventions, other
+// camera models and fields of view beyond 180 degrees.
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "curvestereo/camera.hpp"
+#include "synth/random.hpp"
+#include "synth/scene.hpp"
+#include "test_util.hpp"
+
+using cs::Camera;
+using cs::ImageF;
+using cs::Vec2;
+using cs::Vec3;
+using Eigen::Vector3d;
+using namespace cs::synth;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+SynthConfig smallConfig(int size, int samples) {
+  SynthConfig cfg;
+  cfg.camera = defaultFisheye(size);
+  cfg.samplesPerAxis = samples;
+  cfg.nearest = 1.0;
+  return cfg;
+}
+
+// A wider-than-180 lens: equidistant, 220 deg across the image width.
+Camera fisheye220(int size) {
+  const double f = 0.5 * size / (110.0 * kPi / 180.0);
+  return Camera::kannalaBrandt4(size, size, f, f, 0.5 * (size - 1), 0.5 * (size - 1));
+}
+
+// TUM-VI-like double sphere lens (about 195 deg), scaled to `size`.
+Camera doubleSphere195(int size) {
+  return Camera::doubleSphere(512, 512, 158.3, 158.2, 254.9, 256.9, -0.18, 0.59).scaled(size / 512.0);
+}
+
+Vector3d pixelRay(const Camera& cam, double x, double y) {
+  Vec3<double> ray;
+  REQUIRE(cam.unproject(Vec2<double>(x, y), ray));
+  return ray.normalized();
+}
+
+double bilinear(const ImageF& img, double x, double y) {
+  const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+  const double fx = x - x0, fy = y - y0;
+  auto at = [&](int xi, int yi) { return double(img(std::clamp(xi, 0, img.width - 1), std::clamp(yi, 0, img.height - 1))); };
+  return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) + fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+}
+
+// Distance along the ray to the first surface found by sphere tracing the scene's
+// distance field: independent of the ray-intersection code. +inf if nothing is met.
+double sphereTrace(const Scene& scene, const Vector3d& origin, const Vector3d& dir, double limit) {
+  double t = 0.0;
+  for (int step = 0; step < 20000 && t < limit; ++step) {
+    const double d = scene.signedDistance(origin + t * dir);
+    if (d < 1e-7 * (1.0 + t)) return t;
+    t += d;
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+// Share of sampled surface pixels whose depth agrees with sphere tracing, and the
+// largest distance-field value at the ground-truth points (should be ~0).
+struct DepthCheck {
+  int checked = 0, agreeing = 0;
+  double worstOffSurface = 0.0;
+};
+
+DepthCheck checkDepth(const Scene& scene, const Camera& cam, const Pose& pose, const ImageF& depth, int stride) {
+  DepthCheck c;
+  for (int y = 0; y < depth.height; y += stride)
+    for (int x = 0; x < depth.width; x += stride) {
+      const double d = depth(x, y);
+      if (!(d > 0.0) || std::isinf(d)) continue;
+      const Vector3d dir = pose.rotation * pixelRay(cam, x, y);
+      const Vector3d point = pose.centre + d * dir;
+      c.worstOffSurface = std::max(c.worstOffSurface, std::abs(scene.signedDistance(point)) / d);
+      const double traced = sphereTrace(scene, pose.centre, dir, 2.0 * d);
+      ++c.checked;
+      if (std::abs(traced - d) < 1e-4 * d) ++c.agreeing;
+    }
+  return c;
+}
+
+// Pixels near the rim of a fisheye disc are darkened by the anti-aliasing filter (a
+// property of the image, not of the scene), so the comparisons stay inside 170 deg.
+constexpr double kRimCosine = 0.087;
+
+// No depth edge in the 3x3 neighbourhood: anti-aliased pixels mix two surfaces.
+bool smoothDepthAround(const ImageF& depth, int x, int y) {
+  const float centre = depth(x, y);
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      if (!depth.inside(x + dx, y + dy)) return false;
+      const float d = depth(x + dx, y + dy);
+      if (std::isinf(centre) != std::isinf(d)) return false;
+      if (!std::isinf(d) && !(std::abs(d - centre) < 0.05f * centre)) return false;
+    }
+  return true;
+}
+
+// Mean |I0(x) - I1(x')| over ground-truth correspondences x -> x' seen by both cameras
+// (depth_right agrees), and the same for random pairs, as a scale. shift: the image
+// displacement (px) that best explains the residuals I0(x) - I1(x') by the gradient
+// of I1 (least squares); a renderer off by a fraction of a pixel shows up here.
+struct Consistency {
+  double matched = 0.0, random = 0.0;
+  int count = 0;
+  Eigen::Vector2d shift = Eigen::Vector2d::Zero();
+};
+
+Consistency viewConsistency(const SynthPair& p) {
+  Consistency c;
+  cs::synth::Random pick(99);
+  Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+  const Camera& cam1 = p.rig.cam1;
+  for (int y = 0; y < p.left.height; ++y)
+    for (int x = 0; x < p.left.width; ++x) {
+      const double d = p.depthLeft(x, y);
+      if (!(d > 0.0) || !smoothDepthAround(p.depthLeft, x, y)) continue;
+      const Vector3d ray0 = pixelRay(p.rig.cam0, x, y);
+      if (ray0.z() < kRimCosine) continue;
+      // A sky point is a direction: only the rotation moves it.
+      const Vector3d x1 = std::isinf(d) ? Vector3d(p.rig.R * ray0) : Vector3d(p.rig.R * (d * ray0) + p.rig.t);
+      Vec2<double> px;
+      if (x1.normalized().z() < kRimCosine) continue;
+      if (!cam1.project(Vec3<double>(x1), px) || !cam1.inImage(px, 2.0)) continue;
+      const double d1 = p.depthRight(int(std::lround(px.x())), int(std::lround(px.y())));
+      if (!(d1 > 0.0)) continue;
+      const bool visible = std::isinf(d) ? std::isinf(d1) : std::abs(d1 - x1.norm()) < 0.02 * x1.norm();
+      if (!visible) continue;
+      const double residual = p.left(x, y) - bilinear(p.right, px.x(), px.y());
+      c.matched += std::abs(residual);
+      const Eigen::Vector2d gradient(0.5 * (bilinear(p.right, px.x() + 1, px.y()) - bilinear(p.right, px.x() - 1, px.y())),
+                                     0.5 * (bilinear(p.right, px.x(), px.y() + 1) - bilinear(p.right, px.x(), px.y() - 1)));
+      normal += gradient * gradient.transpose();
+      rhs += gradient * residual;
+      const int rx = pick.integer(0, p.right.width - 1), ry = pick.integer(0, p.right.height - 1);
+      c.random += std::abs(p.left(x, y) - p.right(rx, ry));
+      ++c.count;
+    }
+  if (c.count > 0) {
+    c.matched /= c.count;
+    c.random /= c.count;
+    c.shift = normal.ldlt().solve(rhs);
+  }
+  return c;
+}
+
+// Sky at (x, y) and its 8 neighbours: no anti-aliased object edge mixes into the pixel.
+bool skyAround(const ImageF& depth, int x, int y) {
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx)
+      if (!depth.inside(x + dx, y + dy) || !std::isinf(depth(x + dx, y + dy))) return false;
+  return true;
+}
+
+int countValid(const ImageF& depth) {
+  int n = 0;
+  for (float d : depth.data) n += d > 0.f;
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("synth: rig conventions of the motions") {
+  SynthConfig cfg = smallConfig(64, 1);
+  cfg.baseline = 0.3;
+  cfg.rotationDeg = 3.0;
+  for (const char* motion : {"binocular", "forward", "sideways"}) {
+    cfg.motion = motion;
+    const cs::Rig rig = makeRig(cfg);
+    const Vector3d centre1 = -rig.R.transpose() * rig.t;
+    const Vector3d expected = cfg.motion == "binocular" ? Vector3d(0.3, 0, 0)
+                              : cfg.motion == "forward" ? Vector3d(0.06, 0, 0.3)
+                                                        : Vector3d(0.3, 0, 0.09);
+    CHECK((centre1 - expected).norm() < 1e-12);
+    // Camera 1's optical axis (in camera 0) is turned by +3 deg about y: towards +x.
+    const Vector3d axis1 = rig.R.transpose() * Vector3d::UnitZ();
+    CHECK(axis1.x() == doctest::Approx(std::sin(3.0 * kPi / 180.0)).epsilon(1e-12));
+    CHECK((rig.R * rig.R.transpose() - Eigen::Matrix3d::Identity()).norm() < 1e-12);
+  }
+  cfg.motion = "diagonal";
+  CHECK_THROWS_AS(makeRig(cfg), cs::Error);
+  cfg.motion = "binocular";
+  cfg.scene = "forest";
+  CHECK_THROWS_AS(renderPair(cfg), cs::Error);
+}
+
+TEST_CASE("synth: deterministic for a seed, different across seeds") {
+  for (const char* kind : {"urban", "indoor"}) {
+    SynthConfig cfg = smallConfig(80, 2);
+    cfg.scene = kind;
+    cfg.seed = 5;
+    const SynthPair a = renderPair(cfg), b = renderPair(cfg);
+    CHECK(a.left.data == b.left.data);
+    CHECK(a.right.data == b.right.data);
+    CHECK(a.depthLeft.data == b.depthLeft.data);
+    CHECK(a.depthRight.data == b.depthRight.data);
+    cfg.seed = 6;
+    const SynthPair c = renderPair(cfg);
+    CHECK(c.left.data != a.left.data);
+  }
+}
+
+TEST_CASE("synth: depth of a single analytic plane is exact") {
+  Scene scene;
+  scene.add(makePlane(Vector3d(0, 0, 4.0), Vector3d(0, 0, -1), Material(), "wall"));  // z = 4, facing the camera
+  scene.setDetail(Vector3d::Zero(), kPi / 96);
+  const Camera cam = defaultFisheye(96);
+  Pose pose;  // camera frame = world frame: the wall is fronto-parallel at z = 4
+  RenderOptions options;
+  options.samplesPerAxis = 2;
+  ImageF image, depth;
+  renderView(scene, cam, pose, options, image, depth);
+  int checked = 0;
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x) {
+      if (!(depth(x, y) > 0.f)) continue;
+      const Vector3d ray = pixelRay(cam, x, y);
+      if (ray.z() <= 1e-9) {
+        CHECK(std::isinf(depth(x, y)));  // rays at or beyond 90 deg never meet the wall
+        continue;
+      }
+      CHECK(depth(x, y) == doctest::Approx(4.0 / ray.z()).epsilon(2e-7));
+      if (ray.z() > 0.1) {  // away from the rim, which the filter darkens
+        CHECK(image(x, y) >= 0.15f);
+        CHECK(image(x, y) <= 0.9f);
+      }
+      ++checked;
+    }
+  CHECK(checked > 6000);
+}
+
+TEST_CASE("synth: ground-truth points lie on the first surface along the ray") {
+  for (const char* kind : {"urban", "indoor"}) {
+    SynthConfig cfg = smallConfig(96, 1);
+    cfg.scene = kind;
+    cfg.seed = 11;
+    cfg.nearest = 0.8;
+    const SynthPair p = renderPair(cfg);
+    const DepthCheck left = checkDepth(p.scene, p.rig.cam0, p.pose0, p.depthLeft, 3);
+    const DepthCheck right = checkDepth(p.scene, p.rig.cam1, p.pose1, p.depthRight, 3);
+    INFO(kind);
+    CHECK(left.checked > 500);
+    CHECK(left.worstOffSurface < 1e-6);
+    CHECK(right.worstOffSurface < 1e-6);
+    // Sphere tracing may stall on rays that graze an edge; almost all must agree.
+    CHECK(left.agreeing >= 0.99 * left.checked);
+    CHECK(right.agreeing >= 0.99 * right.checked);
+
+    // The nearest object sits at the requested distance and nothing is nearer.
+    float nearestDepth = std::numeric_limits<float>::infinity();
+    for (float d : p.depthLeft.data)
+      if (d > 0.f) nearestDepth = std::min(nearestDepth, d);
+    CHECK(nearestDepth >= 0.8f * (1 - 1e-6f));
+    bool foundNear = false;
+    for (const Shape& s : p.scene.shapes())
+      if (s.name == "near0") {
+        foundNear = true;
+        CHECK(signedDistance(s, p.pose0.centre) == doctest::Approx(0.8).epsilon(1e-9));
+      }
+    CHECK(foundNear);
+  }
+}
+
+TEST_CASE("synth: sky is +inf and bright, outside the image circle is 0") {
+  SynthConfig cfg = smallConfig(96, 2);
+  cfg.seed = 3;
+  const SynthPair p = renderPair(cfg);
+  const double c = 0.5 * (96 - 1), radius = 48.0;
+  int sky = 0, surface = 0;
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x) {
+      const float d = p.depthLeft(x, y), v = p.left(x, y);
+      REQUIRE(!std::isnan(d));
+      const double r = std::hypot(x - c, y - c);
+      if (r > radius + 1e-9) {
+        CHECK(d == 0.f);
+        CHECK(v == 0.f);
+        continue;
+      }
+      if (r < radius - 1.0) CHECK(d > 0.f);
+      if (std::isinf(d)) {
+        ++sky;
+        // The ground plane is infinite, so every sky ray points upwards.
+        CHECK((p.pose0.rotation * pixelRay(p.rig.cam0, x, y)).z() > 0.0);
+        if (r < radius - 1.5 && skyAround(p.depthLeft, x, y)) CHECK(std::abs(v - 0.93) < 0.08);
+      } else if (d > 0.f) {
+        ++surface;
+      }
+    }
+  CHECK(sky > 50);
+  CHECK(surface > 3000);
+}
+
+TEST_CASE("synth: the right view agrees with the left through depth, pose and models") {
+  SUBCASE("binocular equidistant") {
+    SynthConfig cfg = smallConfig(128, 2);
+    cfg.rotationDeg = 2.0;
+    const Consistency c = viewConsistency(renderPair(cfg));
+    CHECK(c.count > 5000);
+    CHECK(c.matched < 0.25 * c.random);
+    MESSAGE("matched " << c.matched << " random " << c.random << " n " << c.count << " shift " << c.shift.transpose());
+  }
+  SUBCASE("forward motion, indoor") {
+    SynthConfig cfg = smallConfig(128, 2);
+    cfg.scene = "indoor";
+    cfg.motion = "forward";
+    cfg.baseline = 0.4;
+    const Consistency c = viewConsistency(renderPair(cfg));
+    CHECK(c.count > 5000);
+    CHECK(c.matched < 0.25 * c.random);
+    MESSAGE("matched " << c.matched << " random " << c.random << " n " << c.count << " shift " << c.shift.transpose());
+  }
+  SUBCASE("double sphere, model's own field of view (> 180 deg)") {
+    SynthConfig cfg = smallConfig(128, 2);
+    cfg.camera = doubleSphere195(128);
+    cfg.maxFovDeg = 0;
+    const SynthPair p = renderPair(cfg);
+    const Consistency c = viewConsistency(p);
+    CHECK(c.count > 5000);
+    CHECK(c.matched < 0.25 * c.random);
+    MESSAGE("matched " << c.matched << " random " << c.random << " n " << c.count << " shift " << c.shift.transpose());
+    const DepthCheck d = checkDepth(p.scene, p.rig.cam0, p.pose0, p.depthLeft, 3);
+    CHECK(d.worstOffSurface < 1e-6);
+    CHECK(d.agreeing >= 0.99 * d.checked);
+  }
+}
+
+TEST_CASE("synth: fields of view beyond 180 degrees render behind the image plane") {
+  SynthConfig cfg = smallConfig(96, 1);
+  cfg.camera = fisheye220(96);
+  cfg.maxFovDeg = 220;
+  const SynthPair wide = renderPair(cfg);
+  int behind = 0;
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x) {
+      if (!(wide.depthLeft(x, y) > 0.f)) continue;
+      if (pixelRay(wide.rig.cam0, x, y).z() < -0.1) ++behind;
+    }
+  CHECK(behind > 200);
+  const DepthCheck d = checkDepth(wide.scene, wide.rig.cam0, wide.pose0, wide.depthLeft, 2);
+  CHECK(d.agreeing >= 0.99 * d.checked);
+
+  // The same lens cut to 180 deg keeps only the front hemisphere.
+  cfg.maxFovDeg = 180;
+  const SynthPair cut = renderPair(cfg);
+  CHECK(countValid(cut.depthLeft) < countValid(wide.depthLeft));
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x)
+      if (cut.depthLeft(x, y) > 0.f) CHECK(pixelRay(cut.rig.cam0, x, y).z() >= -1e-9);
+}
+
+TEST_CASE("synth: supersampling keeps the image centred on the model's pixel centres") {
+  // More samples change the image only by anti-aliasing, never by a shift: the mean
+  // difference between 1 and 4 samples per axis is small next to the texture contrast.
+  SynthConfig cfg = smallConfig(96, 1);
+  const SynthPair one = renderPair(cfg);
+  cfg.samplesPerAxis = 4;
+  const SynthPair four = renderPair(cfg);
+  CHECK(one.depthLeft.data == four.depthLeft.data);  // depth always from the centre ray
+  double diff = 0.0, contrast = 0.0;
+  int n = 0;
+  for (int y = 1; y < 95; ++y)
+    for (int x = 1; x < 95; ++x) {
+      if (!(one.depthLeft(x, y) > 0.f) || !(one.depthLeft(x + 1, y) > 0.f)) continue;
+      diff += std::abs(one.left(x, y) - four.left(x, y));
+      contrast += std::abs(one.left(x + 1, y) - one.left(x, y));
+      ++n;
+    }
+  CHECK(n > 4000);
+  CHECK(diff < 0.5 * contrast);
+}

@@ -1,0 +1,47 @@
+// Pieces the sub-commands share: parameters from options, inputs, outputs, progress.
+#pragma once
+#include <set>
+#include <string>
+
+#include "args.hpp"
+#include "curvestereo/params.hpp"
+#include "curvestereo/rig.hpp"
+#include "curvestereo/stereo.hpp"
+
+namespace cs::cli {
+
+// Options every solving command accepts (for allowOnly()).
+extern const std::set<std::string> kSolverOptions;
+
+// --preset NAME plus explicit overrides (--warps, --iterations, --levels, --lambda,
+// --du-max, --alpha0, --alpha1, --max-fov, --gamma, --median on|off).
+Params paramsFromArgs(const Args& args);
+
+// A gray image checked against the rig's resolution (one-line error otherwise).
+ImageF loadImageFor(const std::string& path, const Camera& cam, const char* which);
+
+// Writes depth.exr, depth.png, disparity.exr, flow.flo, points.ply (and valid.png) into
+// dir; the left image colours the point cloud.
+void writeOutputs(const std::string& dir, const DepthResult& result, const ImageF& left);
+
+// A colour picture of radial depth: inverse depth on a perceptual map, invalid black.
+void writeDepthPng(const std::string& path, const ImageF& radialDepth);
+
+// A one-line progress display on stderr ("label  42%"), quiet when stderr is not a
+// terminal unless forced.
+class Progress {
+ public:
+  explicit Progress(std::string label);
+  void operator()(double fraction);
+  void done();
+
+ private:
+  std::string label_;
+  int lastPercent_ = -1;
+  bool tty_;
+};
+
+// "upload 0.4 | pyramid 3.1 | ..." for the stage times of one frame.
+std::string formatStages(const std::vector<StageTime>& stages);
+
+}  // namespace cs::cli

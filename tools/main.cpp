@@ -1,0 +1,64 @@
+// curvestereo: dense depth from a calibrated fisheye stereo pair, without rectification.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "commands.hpp"
+
+namespace {
+
+const char* kUsage = R"(usage: curvestereo <command> [options]
+
+commands:
+  demo                          render a synthetic fisheye pair, solve it, report accuracy
+  run --calib CAMCHAIN LEFT RIGHT -o OUTDIR
+                                depth.exr depth.png disparity.exr flow.flo points.ply
+  eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR]
+                                accuracy against ground truth (tau>1, tau>3, EPE, abs-rel)
+  bench [--calib CAMCHAIN LEFT RIGHT | --size WxH] [--runs N]
+                                time per frame and per stage
+  fields --calib CAMCHAIN -o OUTDIR
+                                valid mask, calibration and trajectory fields
+  synth -o OUTDIR [--scene urban|indoor] [--motion binocular|forward|sideways]
+                                render a synthetic pair with exact ground truth
+
+solver options (run, demo, eval, bench):
+  --backend auto|cpu   --preset realtime|default|quality   --warps N  --iterations K
+  --levels L  --lambda X  --du-max PX  --max-fov DEG  --median on|off  --mask PNG (run)
+
+'curvestereo <command> --help' repeats this text.
+)";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
+    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string command = argv[1];
+  for (int i = 2; i < argc; ++i)
+    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+  try {
+    // "-o DIR" is accepted as a short form of --o / --output.
+    std::vector<char*> rest;
+    std::string dashO = "--o";
+    for (int i = 2; i < argc; ++i) rest.push_back(!std::strcmp(argv[i], "-o") ? dashO.data() : argv[i]);
+    const cs::cli::Args args(int(rest.size()), rest.data(), {"quiet"});
+    if (command == "run") return cs::cli::cmdRun(args);
+    if (command == "demo") return cs::cli::cmdDemo(args);
+    if (command == "synth") return cs::cli::cmdSynth(args);
+    if (command == "eval") return cs::cli::cmdEval(args);
+    if (command == "fields") return cs::cli::cmdFields(args);
+    if (command == "bench") return cs::cli::cmdBench(args);
+    std::fprintf(stderr, "curvestereo: error: unknown command '%s' (try --help)\n", command.c_str());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "curvestereo: error: %s\n", e.what());
+    return 1;
+  }
+}
