@@ -1,6 +1,7 @@
 // The scalar CPU backend: the readable reference implementation (the oracle) that
-// every other backend is tested against. One file per stage (warp.cpp, resample.cpp,
-// structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp, accumulate.cpp).
+// every other backend is tested against. One file per stage (fields.cpp, warp.cpp, resample.cpp,
+// structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp, accumulate.cpp,
+// triangulate.cpp).
 #pragma once
 #include <vector>
 
@@ -10,6 +11,9 @@
 namespace cs::cpu {
 
 // Stage functions (each defined in the file named after its stage).
+void fields(const View& mask, const View& calibration, const View& trajectory, const FieldsParams& params);
+void triangulate(const View& radial, const View& points, const View& w, const View& mask, const CameraParams& cam0,
+                 const double tPrime[3]);
 void warp(const View& dst, const View& src, const View& flow);
 void downsample(const View& dst, const View& src, float scale);
 void upsample(const View& dst, const View& src, float scale, float valueScale);
@@ -34,6 +38,8 @@ class CpuBackend final : public Backend {
   void fill(const Buffer& dst, float value) override;
   void copy(const Buffer& dst, const Buffer& src) override;
 
+  void fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+              const FieldsParams& params) override;
   void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
   void downsample(const Buffer& dst, const Buffer& src, float scale) override;
   void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
@@ -46,6 +52,8 @@ class CpuBackend final : public Backend {
   void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;
+  void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                   const CameraParams& cam0, const double tPrime[3]) override;
 
   // The view of a buffer (tests use it to drive stage functions directly).
   View view(const Buffer& b);

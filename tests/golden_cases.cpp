@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "cpu_backend.hpp"
+#include "curvestereo/camera.hpp"
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/stereo.hpp"
 #include "synth/scene.hpp"
@@ -186,10 +187,49 @@ std::vector<Output> accumulateCase(Backend& b) {
   return {s.get("accumulate_u", ub), s.get("accumulate_w", wb)};
 }
 
+// A T265-like Kannala-Brandt lens at the odd golden size, and a pose with rotation.
+FieldsParams fieldsParams() {
+  FieldsParams p{};
+  p.cam0 = toCameraParams(Camera::kannalaBrandt4(kW, kH, 15.2, 15.3, 22.4, 18.1, -0.0066, 0.0473, -0.0458, 0.009));
+  p.cam1 = toCameraParams(Camera::kannalaBrandt4(kW, kH, 15.1, 15.2, 22.8, 17.9, -0.005, 0.039, -0.035, 0.005));
+  const double c = std::cos(0.01), sn = std::sin(0.01);
+  const double R[9] = {c, 0, sn, 0, 1, 0, -sn, 0, c};
+  std::copy(R, R + 9, p.R);
+  p.t[0] = -0.064, p.t[1] = 0.001, p.t[2] = 0.002;
+  p.maxFovDeg = 160;
+  p.epipoleDeg = 3;
+  return p;
+}
+
+std::vector<Output> fieldsCase(Backend& b) {
+  Session s{b};
+  Host allowed = discMask(kW, kH);
+  Buffer mask = s.put(allowed), calibration = s.make(kW, kH, 2), trajectory = s.make(kW, kH, 2);
+  b.fields(mask, calibration, trajectory, fieldsParams());
+  return {s.get("fields_mask", mask), s.get("fields_calibration", calibration), s.get("fields_trajectory", trajectory)};
+}
+
+std::vector<Output> triangulateCase(Backend& b) {
+  Session s{b};
+  Host w = noise(kW, kH, 2, 22, 1.5f), mask = discMask(kW, kH);
+  // Mostly positive disparities along -x (the direction of a rig with t = (-B, 0, 0)),
+  // some of them pointing away (infinitely far), some exactly zero.
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      w.at(x, y, 0) -= 1.2f;
+      if ((x + y) % 11 == 0) w.at(x, y, 0) = w.at(x, y, 1) = 0.f;
+    }
+  Buffer radial = s.make(kW, kH, 1), points = s.make(kW, kH, 3);
+  const double tPrime[3] = {-0.064, 0.001, 0.002};
+  b.triangulate(radial, points, s.put(w), s.put(mask), fieldsParams().cam0, tPrime);
+  return {s.get("triangulate_radial", radial), s.get("triangulate_points", points)};
+}
+
 }  // namespace
 
 const std::vector<KernelCase>& kernelCases() {
   static const std::vector<KernelCase> cases = {
+      {"fields", fieldsCase},   {"triangulate", triangulateCase},
       {"warp", warpCase},       {"downsample", downsampleCase},         {"upsample", upsampleCase},
       {"structureTensor", structureTensorCase}, {"warpDerivatives", warpDerivativesCase},
       {"primalDual", primalDualCase}, {"median", medianCase},           {"accumulate", accumulateCase}};

@@ -112,3 +112,20 @@ TEST_CASE("a black image and a constant image give marked, finite output") {
     checkFiniteWhereValid(r);
   }
 }
+
+TEST_CASE("setPose: a moving camera's new pose recomputes the fields; bad poses are refused") {
+  synth::SynthPair pair = renderSmall("binocular", 0.12, 3);
+  Stereo stereo(pair.rig, preset("realtime"), "cpu");
+  DepthResult before = stereo.compute(pair.left, pair.right);
+  stereo.setPose(pair.rig.R, pair.rig.t);  // the same pose: the same answer
+  DepthResult same = stereo.compute(pair.left, pair.right);
+  CHECK(same.valid.data == before.valid.data);
+  for (size_t i = 0; i < same.valid.size(); ++i)
+    if (before.valid.data[i]) CHECK(same.disparity.data[i] == before.disparity.data[i]);
+  CHECK_THROWS_WITH_AS(stereo.setPose(pair.rig.R, Eigen::Vector3d::Zero()), doctest::Contains("baseline"), Error);
+  // Forward motion moves the masked epipole to the image centre.
+  stereo.setPose(Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, -0.3));
+  DepthResult forward = stereo.compute(pair.left, pair.right);
+  CHECK(forward.valid(112, 112) == 0);
+  CHECK(before.valid(112, 112) == 1);
+}

@@ -41,6 +41,7 @@ int cmdDemo(const Args& args) {
   Stereo stereo(pair.rig, params, args.get("backend", "auto"));
   std::printf("backend: %s - %s\nsettings: %s\n", stereo.deviceName().c_str(), stereo.backendChoice().c_str(),
               describe(params).c_str());
+  stereo.setProfiling(true);  // one frame: the stage breakdown is worth a synchronisation
   Progress progress("solving");
   stereo.setProgress([&](double f) { progress(f); });
   DepthResult r = stereo.compute(pair.left, pair.right);

@@ -35,6 +35,7 @@ int cmdRun(const Args& args) {
   std::printf("backend: %s (%s) - %s\n", stereo.backendName().c_str(), stereo.deviceName().c_str(),
               stereo.backendChoice().c_str());
   std::printf("settings: %s\n", describe(params).c_str());
+  stereo.setProfiling(true);  // one frame: the stage breakdown is worth a synchronisation
   Progress progress("solving");
   stereo.setProgress([&](double f) { progress(f); });
   DepthResult r = stereo.compute(left, right);

@@ -18,13 +18,11 @@ double angleToBaseline(const Vec3<double>& ray, const Eigen::Vector3d& baselineD
   return std::acos(std::min(1.0, c));
 }
 
-struct PixelFields {
-  bool valid = false;
-  Vec2f calibration, trajectory;
-};
+}  // namespace
 
-PixelFields fieldsAt(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R,
-                     const Eigen::Vector3d& tPrime, const FieldOptions& opt, int x, int y) {
+PixelFields fieldsAtPixel(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R,
+                          const Eigen::Vector3d& t, const FieldOptions& opt, int x, int y) {
+  const Eigen::Vector3d tPrime = R.transpose() * t;
   PixelFields f;
   Vec2<double> px(x, y);
   Vec3<double> ray;
@@ -51,18 +49,15 @@ PixelFields fieldsAt(const Camera& cam0, const Camera& cam1, const Eigen::Matrix
   return f;
 }
 
-}  // namespace
-
 RigFields computeFields(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R,
                         const Eigen::Vector3d& t, const FieldOptions& options) {
-  const Eigen::Vector3d tPrime = R.transpose() * t;
   RigFields out;
   out.mask = ImageU8(cam0.width, cam0.height, 0);
   out.calibration = FlowImage(cam0.width, cam0.height);
   out.trajectory = FlowImage(cam0.width, cam0.height);
   for (int y = 0; y < cam0.height; ++y)
     for (int x = 0; x < cam0.width; ++x) {
-      PixelFields f = fieldsAt(cam0, cam1, R, tPrime, options, x, y);
+      PixelFields f = fieldsAtPixel(cam0, cam1, R, t, options, x, y);
       out.mask(x, y) = f.valid ? 1 : 0;
       out.calibration(x, y) = f.calibration;
       out.trajectory(x, y) = f.trajectory;

@@ -7,22 +7,6 @@ namespace cs {
 
 namespace {
 
-double nowMs() {
-  using namespace std::chrono;
-  return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
-}
-
-std::vector<float> toFloats(const ImageU8& mask) { return std::vector<float>(mask.data.begin(), mask.data.end()); }
-
-std::vector<float> toFloats(const FlowImage& flow) {
-  std::vector<float> out(flow.size() * 2);
-  for (size_t i = 0; i < flow.size(); ++i) {
-    out[2 * i] = flow.data[i].x;
-    out[2 * i + 1] = flow.data[i].y;
-  }
-  return out;
-}
-
 // The level's camera: the same lens imaged at the level's resolution.
 Camera levelCamera(const Camera& cam, const LevelSize& size) {
   Camera c = cam.scaled(size.scale);
@@ -31,76 +15,78 @@ Camera levelCamera(const Camera& cam, const LevelSize& size) {
   return c;
 }
 
-// The user's mask (full resolution) seen from a level: nearest pixel.
-ImageU8 combineMasks(const ImageU8& levelMask, const ImageU8& userMask, double scale) {
-  if (userMask.empty()) return levelMask;
-  ImageU8 out = levelMask;
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x) {
-      int ux = std::min(userMask.width - 1, int(std::lround((x + 0.5) / scale - 0.5)));
-      int uy = std::min(userMask.height - 1, int(std::lround((y + 0.5) / scale - 0.5)));
-      if (!userMask(ux, uy)) out(x, y) = 0;
+// The user's mask (full resolution) seen from a level: nearest pixel; all ones if none.
+std::vector<float> levelMask(const ImageU8& userMask, const LevelSize& size) {
+  std::vector<float> out(size_t(size.width) * size.height, 1.f);
+  if (userMask.empty()) return out;
+  for (int y = 0; y < size.height; ++y)
+    for (int x = 0; x < size.width; ++x) {
+      int ux = std::min(userMask.width - 1, int(std::lround((x + 0.5) / size.scale - 0.5)));
+      int uy = std::min(userMask.height - 1, int(std::lround((y + 0.5) / size.scale - 0.5)));
+      out[size_t(y) * size.width + x] = userMask(ux, uy) ? 1.f : 0.f;
     }
   return out;
 }
 
 }  // namespace
 
-void StageClock::start(const std::string& name) {
-  backend_.synchronize();
-  double t = nowMs();
-  if (!current_.empty()) {
-    bool found = false;
-    for (auto& s : stages_)
-      if (s.name == current_) s.ms += t - startedMs_, found = true;
-    if (!found) stages_.push_back({current_, t - startedMs_});
-  }
-  current_ = name;
-  startedMs_ = t;
-}
-
-std::vector<StageTime> StageClock::finish() {
-  start("");
-  current_.clear();
-  return std::move(stages_);
-}
-
-Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const RigFields& fields,
-                   const ImageU8& userMask)
-    : backend_(backend), params_(params), clock_(backend) {
-  const Camera& cam0 = rig.cam0;
-  const FieldOptions fieldOptions{params.maxFovDeg, params.epipoleDeg};
-  for (const LevelSize& size : pyramidPlan(cam0.width, cam0.height, params)) {
-    // Fields are computed exactly at each level from the scaled cameras rather than
-    // resampled from level 0: the same cost (once per rig) and no averaging of tangents.
-    RigFields f = size.scale == 1.0 ? fields
-                                    : computeFields(levelCamera(cam0, size), levelCamera(rig.cam1, size), rig.R,
-                                                    rig.t, fieldOptions);
-    f.mask = combineMasks(f.mask, userMask, size.scale);
-
+Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask)
+    : backend_(backend), params_(params) {
+  for (const LevelSize& size : pyramidPlan(rig.cam0.width, rig.cam0.height, params)) {
     Level L;
     L.size = size;
+    // Fields are computed exactly at each level from the scaled cameras rather than
+    // resampled from level 0: the same cost (once per pose) and no averaging of tangents.
+    L.cam0 = levelCamera(rig.cam0, size);
+    L.cam1 = levelCamera(rig.cam1, size);
     auto make = [&](int channels) { return backend_.create(size.width, size.height, channels); };
-    L.i0 = make(1), L.i1 = make(1), L.mask = make(1), L.trajectory = make(2);
+    L.userMask = make(1), L.i0 = make(1), L.i1 = make(1), L.mask = make(1), L.trajectory = make(2);
     L.tensor = make(4), L.steps = make(4), L.w = make(2), L.tangent = make(2), L.scratch = make(1);
     L.pd = {make(1), make(1), make(2), make(2), make(2), make(4)};
     L.data = {make(1), make(1), make(1)};
-    backend_.upload(L.mask, toFloats(f.mask).data());
-    backend_.upload(L.trajectory, toFloats(f.trajectory).data());
+    backend_.upload(L.userMask, levelMask(userMask, size).data());
     levels_.push_back(L);
   }
-  rawRight_ = backend_.create(cam0.width, cam0.height, 1);
-  calibration_ = backend_.create(cam0.width, cam0.height, 2);
-  backend_.upload(calibration_, toFloats(fields.calibration).data());
+  const int w = rig.cam0.width, h = rig.cam0.height;
+  rawRight_ = backend_.create(w, h, 1);
+  calibration_ = backend_.create(w, h, 2);
+  radial_ = backend_.create(w, h, 1);
+  points_ = backend_.create(w, h, 3);
 }
 
-void Pipeline::buildPyramid(const ImageF& left, const ImageF& right) {
-  clock_.start("upload");
+void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  tPrime_ = R.transpose() * t;
+  FieldsParams fp{};
+  Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(fp.R) = R;
+  std::copy(t.data(), t.data() + 3, fp.t);
+  fp.maxFovDeg = params_.maxFovDeg;
+  fp.epipoleDeg = params_.epipoleDeg;
+  for (size_t l = 0; l < levels_.size(); ++l) {
+    Level& L = levels_[l];
+    fp.cam0 = toCameraParams(L.cam0);
+    fp.cam1 = toCameraParams(L.cam1);
+    backend_.copy(L.mask, L.userMask);
+    // Only level 0 warps image 1 by the calibration field; coarser levels borrow the
+    // tangent buffer (overwritten by every warp) to receive theirs.
+    backend_.fields(L.mask, l == 0 ? calibration_ : L.tangent, L.trajectory, fp);
+  }
+  backend_.synchronize();
+}
+
+void Pipeline::stage(const char* name) {
+  if (profiling_) backend_.beginStage(name);
+}
+
+void Pipeline::upload(const ImageF& left, const ImageF& right) {
+  stage("upload");
   backend_.upload(levels_[0].i0, left.data.data());
   backend_.upload(rawRight_, right.data.data());
-  clock_.start("calibration warp");
+}
+
+void Pipeline::buildPyramid() {
+  stage("calibration warp");
   backend_.warp(levels_[0].i1, rawRight_, calibration_);
-  clock_.start("pyramid");
+  stage("pyramid");
   for (size_t l = 1; l < levels_.size(); ++l) {
     backend_.downsample(levels_[l].i0, levels_[l - 1].i0, float(params_.scale));
     backend_.downsample(levels_[l].i1, levels_[l - 1].i1, float(params_.scale));
@@ -109,10 +95,10 @@ void Pipeline::buildPyramid(const ImageF& left, const ImageF& right) {
 
 void Pipeline::initialiseLevel(size_t l) {
   Level& L = levels_[l];
-  clock_.start("structure tensor");
+  stage("structure tensor");
   const TensorParams tp{params_.beta, params_.eta, params_.wMin, params_.tensorSigma, params_.alpha0, params_.alpha1};
   backend_.structureTensor(L.tensor, L.steps, L.i0, L.mask, tp);
-  clock_.start("upsample");
+  stage("upsample");
   if (l + 1 == levels_.size()) {
     backend_.fill(L.pd.u, 0.f);
     backend_.fill(L.w, 0.f);
@@ -141,29 +127,28 @@ PrimalDualParams Pipeline::primalDualParams() const {
 void Pipeline::solveLevel(Level& L, const std::function<void(int)>& warpDone) {
   const PrimalDualParams pdParams = primalDualParams();
   for (int n = 0; n < params_.warps; ++n) {
-    clock_.start("warp derivatives");
+    stage("warp derivatives");
     backend_.warpDerivatives(L.data, L.tangent, L.i0, L.i1, L.trajectory, L.w, L.pd.u, L.mask);
-    clock_.start("primal-dual");
+    stage("primal-dual");
     backend_.copy(L.pd.uBar, L.pd.u);
     backend_.copy(L.pd.vBar, L.pd.v);
     backend_.primalDual(L.pd, L.data, L.tensor, L.steps, L.mask, pdParams);
     if (params_.medianFilter) {
-      clock_.start("median");
+      stage("median");
       backend_.median(L.scratch, L.pd.u, L.mask);
       backend_.copy(L.pd.u, L.scratch);
     }
-    clock_.start("accumulate");
+    stage("accumulate");
     backend_.accumulate(L.pd.u, L.w, L.data.u0, L.tangent, L.mask, params_.duMax);
     warpDone(n);
   }
 }
 
-Pipeline::Output Pipeline::run(const ImageF& left, const ImageF& right,
-                               const std::function<void(double)>& progress) {
+void Pipeline::issueFrame(const std::function<void(double)>& progress) {
   // Work per level is proportional to its pixel count: report progress in those units.
   double total = 0, done = 0;
   for (const Level& L : levels_) total += double(L.size.width) * L.size.height;
-  buildPyramid(left, right);
+  buildPyramid();
   for (size_t l = levels_.size(); l-- > 0;) {
     initialiseLevel(l);
     const double share = double(levels_[l].size.width) * levels_[l].size.height / params_.warps;
@@ -172,16 +157,48 @@ Pipeline::Output Pipeline::run(const ImageF& left, const ImageF& right,
       if (progress) progress(done / total);
     });
   }
-  clock_.start("download");
+  stage("triangulate");
+  const double tp[3] = {tPrime_.x(), tPrime_.y(), tPrime_.z()};
+  backend_.triangulate(radial_, points_, levels_[0].w, levels_[0].mask, toCameraParams(levels_[0].cam0), tp);
+}
+
+Pipeline::Output Pipeline::download() {
+  stage("download");
   const Level& L0 = levels_[0];
+  const int w = L0.size.width, h = L0.size.height;
   Output out;
-  out.disparity = ImageF(L0.size.width, L0.size.height);
-  std::vector<float> w(L0.w.count());
+  std::vector<float> mask(size_t(w) * h), warp(2 * size_t(w) * h), points(3 * size_t(w) * h);
+  out.disparity = ImageF(w, h);
+  out.radial = ImageF(w, h);
+  backend_.download(L0.mask, mask.data());
   backend_.download(L0.pd.u, out.disparity.data.data());
-  backend_.download(L0.w, w.data());
-  out.warp = FlowImage(L0.size.width, L0.size.height);
-  for (size_t i = 0; i < out.warp.size(); ++i) out.warp.data[i] = {w[2 * i], w[2 * i + 1]};
-  out.stages = clock_.finish();
+  backend_.download(L0.w, warp.data());
+  backend_.download(radial_, out.radial.data.data());
+  backend_.download(points_, points.data());
+  out.valid = ImageU8(w, h);
+  out.warp = FlowImage(w, h);
+  out.points = Image<Point3f>(w, h);
+  for (size_t i = 0; i < out.warp.size(); ++i) {
+    out.valid.data[i] = mask[i] != 0.f;
+    out.warp.data[i] = {warp[2 * i], warp[2 * i + 1]};
+    out.points.data[i] = {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
+  }
+  return out;
+}
+
+Pipeline::Output Pipeline::run(const ImageF& left, const ImageF& right, bool profile,
+                               const std::function<void(double)>& progress) {
+  profiling_ = profile;
+  upload(left, right);
+  if (!profiling_ && backend_.canReplayFrame()) {
+    backend_.replayFrame();
+  } else {
+    backend_.beginFrame();
+    issueFrame(progress);
+    backend_.endFrame();
+  }
+  Output out = download();
+  if (profiling_) out.stages = backend_.takeStageTimes();
   return out;
 }
 

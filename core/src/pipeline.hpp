@@ -4,58 +4,58 @@
 #include <vector>
 
 #include "curvestereo/backend.hpp"
-#include "curvestereo/fields.hpp"
 #include "curvestereo/params.hpp"
 #include "curvestereo/rig.hpp"
 #include "curvestereo/stereo.hpp"
 
 namespace cs {
 
-// Wall time per named stage. A stage ends when the next starts; the backend is
-// synchronised at each boundary so queued GPU work is charged to its own stage.
-class StageClock {
- public:
-  explicit StageClock(Backend& backend) : backend_(backend) {}
-  void start(const std::string& name);
-  std::vector<StageTime> finish();
-
- private:
-  Backend& backend_;
-  std::vector<StageTime> stages_;
-  std::string current_;
-  double startedMs_ = 0;
-};
-
 class Pipeline {
  public:
-  // Allocates every buffer of every level once; uploads the per-rig fields.
-  Pipeline(Backend& backend, const Rig& rig, const Params& params, const RigFields& fields, const ImageU8& mask);
+  // Allocates every buffer of every level once. userMask (optional, full resolution)
+  // restricts the solve; setPose() must be called before run().
+  Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask);
+
+  // Recomputes the per-rig fields of every level on the backend (a moving camera calls
+  // this whenever the relative pose changes).
+  void setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
 
   struct Output {
+    ImageU8 valid;
     ImageF disparity;
     FlowImage warp;
+    ImageF radial;
+    Image<Point3f> points;
     std::vector<StageTime> stages;
   };
-  Output run(const ImageF& left, const ImageF& right, const std::function<void(double)>& progress);
+  // profile: time each stage (synchronising at each boundary) instead of replaying.
+  Output run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress);
 
  private:
   struct Level {
     LevelSize size;
+    Camera cam0, cam1;
+    Buffer userMask;  // the user's mask at this level (or all ones)
     Buffer i0, i1, mask, trajectory, tensor, steps, w, tangent, scratch;
     PrimalDualBuffers pd;
     DataTermBuffers data;
   };
 
-  void buildPyramid(const ImageF& left, const ImageF& right);
+  void upload(const ImageF& left, const ImageF& right);
+  void issueFrame(const std::function<void(double)>& progress);
+  void buildPyramid();
+  void stage(const char* name);
   void initialiseLevel(size_t l);
   void solveLevel(Level& level, const std::function<void(int)>& warpDone);
   PrimalDualParams primalDualParams() const;
+  Output download();
 
   Backend& backend_;
   Params params_;
+  Eigen::Vector3d tPrime_ = Eigen::Vector3d::Zero();
   std::vector<Level> levels_;
-  Buffer rawRight_, calibration_;
-  StageClock clock_;
+  Buffer rawRight_, calibration_, radial_, points_;
+  bool profiling_ = false;
 };
 
 }  // namespace cs

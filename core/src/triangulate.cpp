@@ -1,5 +1,7 @@
 #include "curvestereo/triangulate.hpp"
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <limits>
 
@@ -14,15 +16,17 @@ double triangulateRadial(const Camera& cam0, const Eigen::Vector3d& tPrime, cons
                          const Vec2<double>& w) {
   Vec3<double> d0, d1;
   if (!cam0.unproject(x, d0) || !cam0.unproject(Vec2<double>(x + w), d1)) return kNaN;
-  // Closest points of the rays r0(a) = a d0 and r1(b) = c1 + b d1, c1 = -t'. Solve the
-  // 2x2 normal equations; parallel or diverging rays mean the point is at infinity.
+  // The point a d0 = c1 + b d1 with c1 = -t'. Crossing with d1 gives
+  // a (d0 x d1) = c1 x d1, solved in least squares. Cross products keep the small
+  // parallax angles of distant points accurate, where 1 - (d0 . d1)^2 would cancel.
   const Eigen::Vector3d c1 = -tPrime;
-  double k = d0.dot(d1);
-  double det = 1.0 - k * k;
-  if (det < 1e-14) return kInf;
-  double e0 = d0.dot(c1), e1 = d1.dot(c1);
-  double a = (e0 - k * e1) / det;
-  double b = (k * e0 - e1) / det;
+  const Eigen::Vector3d n = d0.cross(d1);
+  const double n2 = n.squaredNorm();
+  if (n2 < 1e-24) return kInf;
+  const double a = c1.cross(d1).dot(n) / n2;
+  const double b = c1.cross(d0).dot(n) / n2;  // crossing with d0: b (d0 x d1) = c1 x d0
+  // Both rays must point forward to the point: a > 0 along ray 0, and the point seen
+  // from camera 1 in front of it (b > 0 along ray 1).
   if (!(a > 0) || !(b > 0)) return kInf;
   return a;
 }

@@ -108,7 +108,7 @@ void checkConfig(const SynthConfig& cfg) {
 }  // namespace
 
 void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options,
-                ImageF& image, ImageF& depth, const Progress& progress) {
+                ImageF& image, ImageF& depth, const ProgressCallback& progress) {
   if (camera.width <= 0 || camera.height <= 0) throw Error("synth: the camera has no image size");
   const int samples = std::max(1, options.samplesPerAxis);
   image = ImageF(camera.width, camera.height, 0.f);
@@ -152,7 +152,7 @@ Rig makeRig(const SynthConfig& cfg) {
   return rig;
 }
 
-SynthPair renderPair(const SynthConfig& cfg, const Progress& progress) {
+SynthPair renderPair(const SynthConfig& cfg, const ProgressCallback& progress) {
   checkConfig(cfg);
   SynthPair pair;
   pair.rig = makeRig(cfg);

@@ -27,6 +27,8 @@ bool intersectPlane(const Shape& s, const Ray& ray, double tMax, double& t, Vect
   if (std::abs(facing) < 1e-15) return false;
   const double tHit = s.normal.dot(s.centre - ray.origin) / facing;
   if (!(tHit > 0.0 && tHit < tMax)) return false;
+  if (std::isfinite(s.extent) && (ray.origin + tHit * ray.dir - s.centre).squaredNorm() > s.extent * s.extent)
+    return false;
   t = tHit;
   normal = s.normal;
   return true;
@@ -120,7 +122,13 @@ bool intersectShape(const Shape& s, const Ray& ray, double tMax, double& t, Vect
 
 double signedDistance(const Shape& s, const Vector3d& p) {
   switch (s.kind) {
-    case ShapeKind::Plane: return s.normal.dot(p - s.centre);
+    case ShapeKind::Plane: {
+      const Vector3d offset = p - s.centre;
+      const double height = s.normal.dot(offset);
+      const double beyondRim = (offset - height * s.normal).norm() - s.extent;  // in the plane
+      if (!(beyondRim > 0.0)) return height;
+      return std::copysign(std::hypot(beyondRim, height), height);
+    }
     case ShapeKind::Sphere: return (p - s.centre).norm() - s.halfSize.x();
     case ShapeKind::Box: {
       const Vector3d q = toBoxFrame(s, p - s.centre).cwiseAbs() - s.halfSize;
@@ -135,12 +143,14 @@ double signedDistance(const Shape& s, const Vector3d& p) {
   return std::numeric_limits<double>::infinity();
 }
 
-Shape makePlane(const Vector3d& point, const Vector3d& normal, const Material& m, const std::string& name) {
+Shape makePlane(const Vector3d& point, const Vector3d& normal, const Material& m, const std::string& name,
+                double extent) {
   Shape s;
   s.kind = ShapeKind::Plane;
   s.name = name;
   s.centre = point;
   s.normal = normal.normalized();
+  s.extent = extent;
   s.material = m;
   return s;
 }

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +31,7 @@ struct Shape {
   // of its axis.
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // plane only (unit)
+  double extent = std::numeric_limits<double>::infinity();  // plane only: a disc of this radius around centre
   // Box: half extents in its own frame. Sphere: x = radius. Cylinder: x = radius,
   // z = half height.
   Eigen::Vector3d halfSize = Eigen::Vector3d::Ones();
@@ -54,8 +56,10 @@ struct Pose {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();        // camera centre in world
 };
 
+// A plane through point; with a finite extent, only the disc of that radius around point.
 Shape makePlane(const Eigen::Vector3d& point, const Eigen::Vector3d& normal, const Material& m,
-                const std::string& name = "plane");
+                const std::string& name = "plane",
+                double extent = std::numeric_limits<double>::infinity());
 Shape makeBox(const Eigen::Vector3d& centre, const Eigen::Vector3d& halfSize, double yawRad, const Material& m,
               const std::string& name = "box");
 Shape makeSphere(const Eigen::Vector3d& centre, double radius, const Material& m, const std::string& name = "sphere");
@@ -109,7 +113,7 @@ Scene buildScene(const SceneSpec& spec);
 
 // ---------------------------------------------------------------- rendering
 
-using Progress = std::function<void(double)>;  // fraction done in [0, 1]
+using ProgressCallback = std::function<void(double)>;  // fraction done in [0, 1]
 
 struct RenderOptions {
   int samplesPerAxis = 3;  // supersampling: n x n rays per pixel, box filter over the pixel
@@ -120,7 +124,7 @@ struct RenderOptions {
 // as black), 0 where the pixel centre is invalid. depth: radial distance of the surface
 // hit by the ray through the pixel centre; +inf for sky; 0 where the centre is invalid.
 void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options,
-                ImageF& image, ImageF& depth, const Progress& progress = {});
+                ImageF& image, ImageF& depth, const ProgressCallback& progress = {});
 
 // Equidistant Kannala-Brandt (k = 0), size x size, f = size / pi, c = (size - 1) / 2:
 // a 180 deg image circle touching the borders, like the dev data set.
@@ -152,6 +156,6 @@ struct SynthPair {
 Rig makeRig(const SynthConfig& cfg);
 
 // Builds the scene and renders both views. progress: left in [0, 0.5], right in [0.5, 1].
-SynthPair renderPair(const SynthConfig& cfg, const Progress& progress = {});
+SynthPair renderPair(const SynthConfig& cfg, const ProgressCallback& progress = {});
 
 }  // namespace cs::synth

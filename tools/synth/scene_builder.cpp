@@ -1,7 +1,9 @@
 // Procedural scene generation: a street between rows of buildings ("urban") or a
 // furnished room with windows ("indoor"), plus a few objects close to camera 0.
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "synth/random.hpp"
 #include "synth/scene.hpp"
@@ -12,6 +14,8 @@ namespace {
 using Eigen::Vector3d;
 
 double degrees(double deg) { return deg * M_PI / 180.0; }
+
+constexpr double kGroundRadius = 100.0;  // metres
 
 // Camera axes (x right, y down, z forward) for a camera looking along world +y, level,
 // turned by yaw about world z and tilted up by pitch.
@@ -55,6 +59,13 @@ class Builder {
     scene_.viewpoint.rotation = cameraRotation(yaw, pitch);
     cameras_ = {centre0};
     for (const Vector3d& c : spec_.otherCentresInCam0) cameras_.push_back(centre0 + scene_.viewpoint.rotation * c);
+  }
+
+  // z = 0 out to a finite horizon around camera 0: beyond it the sky, as in the dev
+  // data (whose ground ends ~90 m away), instead of depths of kilometres.
+  Shape groundPlane(const std::string& name) {
+    const Vector3d foot(scene_.viewpoint.centre.x(), scene_.viewpoint.centre.y(), 0.0);
+    return makePlane(foot, Vector3d::UnitZ(), material(0.2), name, kGroundRadius);
   }
 
   void chooseLight(double minElevationDeg, double maxElevationDeg) {
@@ -176,11 +187,11 @@ class Builder {
 void Builder::buildUrban() {
   const double half = random_.uniform(4.0, 6.5);  // half width of the street
   const Vector3d centre0{random_.uniform(-0.4, 0.4) * half, 0.0, random_.uniform(1.3, 1.7)};
-  const double yaw = degrees(random_.uniform(-12.0, 12.0)), pitch = degrees(random_.uniform(-6.0, 4.0));
-  placeCameras(centre0, yaw, pitch);
+  const double cameraYaw = degrees(random_.uniform(-12.0, 12.0)), cameraPitch = degrees(random_.uniform(-6.0, 4.0));
+  placeCameras(centre0, cameraYaw, cameraPitch);
   chooseLight(40.0, 70.0);
 
-  scene_.add(makePlane(Vector3d::Zero(), Vector3d::UnitZ(), material(0.2), "ground"));
+  scene_.add(groundPlane("ground"));
   for (int side : {-1, 1}) {
     const std::string tag = side < 0 ? "-" : "+";
     scene_.add(makeBox(Vector3d(side * (half - 1.0), 35.0, 0.075), Vector3d(1.0, 65.0, 0.075), 0.0, material(0.15),
@@ -229,26 +240,26 @@ void Builder::buildUrban() {
 
 void Builder::buildIndoor() {
   const double width = random_.uniform(6.0, 9.0), length = random_.uniform(9.0, 14.0),
-               height = random_.uniform(2.6, 3.2);
+               roomHeight = random_.uniform(2.6, 3.2);
   const double x0 = -0.5 * width, x1 = 0.5 * width, y0 = -3.0, y1 = length - 3.0;
   const Vector3d centre0{random_.uniform(-0.25, 0.25) * width, random_.uniform(-1.0, 1.0), random_.uniform(1.2, 1.6)};
-  const double yaw = degrees(random_.uniform(-20.0, 20.0)), pitch = degrees(random_.uniform(-8.0, 8.0));
-  placeCameras(centre0, yaw, pitch);
+  const double cameraYaw = degrees(random_.uniform(-20.0, 20.0)), cameraPitch = degrees(random_.uniform(-8.0, 8.0));
+  placeCameras(centre0, cameraYaw, cameraPitch);
   chooseLight(30.0, 70.0);
 
   // The floor is an infinite ground plane: through the windows it continues outside.
-  scene_.add(makePlane(Vector3d::Zero(), Vector3d::UnitZ(), material(0.2), "floor"));
+  scene_.add(groundPlane("floor"));
   const double t = 0.2;
-  scene_.add(makeBox(Vector3d(0.0, 0.5 * (y0 + y1), height + 0.5 * t),
+  scene_.add(makeBox(Vector3d(0.0, 0.5 * (y0 + y1), roomHeight + 0.5 * t),
                      Vector3d(0.5 * width + t, 0.5 * length + t, 0.5 * t), 0.0, material(0.35), "ceiling"));
   const int windowWall = random_.integer(0, 1);
   const Material wallMaterial = material(0.3);
-  addWall(x0 - 0.5 * t, y0 - t, x0 - 0.5 * t, y1 + t, height, t, windowWall == 0, wallMaterial, "wall_left");
+  addWall(x0 - 0.5 * t, y0 - t, x0 - 0.5 * t, y1 + t, roomHeight, t, windowWall == 0, wallMaterial, "wall_left");
   const Material rightMaterial = material(0.3), backMaterial = material(0.3), frontMaterial = material(0.3);
-  addWall(x1 + 0.5 * t, y0 - t, x1 + 0.5 * t, y1 + t, height, t, windowWall == 1, rightMaterial, "wall_right");
-  addWall(x0, y0 - 0.5 * t, x1, y0 - 0.5 * t, height, t, false, backMaterial, "wall_back");
+  addWall(x1 + 0.5 * t, y0 - t, x1 + 0.5 * t, y1 + t, roomHeight, t, windowWall == 1, rightMaterial, "wall_right");
+  addWall(x0, y0 - 0.5 * t, x1, y0 - 0.5 * t, roomHeight, t, false, backMaterial, "wall_back");
   const bool frontWindow = random_.chance(0.5);
-  addWall(x0, y1 + 0.5 * t, x1, y1 + 0.5 * t, height, t, frontWindow, frontMaterial, "wall_front");
+  addWall(x0, y1 + 0.5 * t, x1, y1 + 0.5 * t, roomHeight, t, frontWindow, frontMaterial, "wall_front");
   // Outside, seen through the windows.
   for (int i = 0; i < 4; ++i) {
     const double side = (i % 2 == 0) ? -1.0 : 1.0, h = random_.uniform(4.0, 15.0);
@@ -274,7 +285,7 @@ void Builder::buildIndoor() {
   addClutter(random_.integer(1, 3), [&](int i) {
     const Vector3d base = floorPoint(0.5);
     const double radius = random_.uniform(0.12, 0.3);
-    return makeCylinder(base, radius, height, material(0.1), "column" + std::to_string(i));
+    return makeCylinder(base, radius, roomHeight, material(0.1), "column" + std::to_string(i));
   });
   addClutter(random_.integer(1, 3), [&](int i) {
     const double r = random_.uniform(0.15, 0.4), lift = random_.uniform(0.0, 1.0);

@@ -12,12 +12,33 @@
 
 namespace cs {
 
+struct StageTime {
+  std::string name;
+  double ms = 0;
+};
+
 struct Buffer {
   int id = -1;
   int width = 0;
   int height = 0;
   int channels = 0;
   size_t count() const { return size_t(width) * size_t(height) * size_t(channels); }
+};
+
+// A camera in the flat form kernels take: model as in CameraModel, params as in
+// Camera::params ([fx fy cx cy extra...], unused entries zero).
+struct CameraParams {
+  int model = 0;
+  int width = 0, height = 0;
+  double params[8] = {};
+};
+
+// The relative pose and options of the per-rig fields (DESIGN.md "Per rig").
+struct FieldsParams {
+  CameraParams cam0, cam1;  // cam0 defines the grid
+  double R[9];              // row-major, X1 = R X0 + t
+  double t[3];
+  double maxFovDeg, epipoleDeg;
 };
 
 struct TensorParams {
@@ -66,6 +87,10 @@ class Backend {
   virtual void copy(const Buffer& dst, const Buffer& src) = 0;
 
   // --- kernels (one file / shader per stage in each backend) ---
+  // Per rig (or per pose): mask (1 ch; in: non-zero where allowed, out: 1 where allowed
+  // and valid, else 0), calibration field (2 ch) and trajectory field (2 ch).
+  virtual void fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                      const FieldsParams& params) = 0;
   // dst(x) = src(x + flow(x)), bilinear, clamped to the image edge.
   virtual void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) = 0;
   // dst = src smoothed and decimated by `scale` (pixel-centre aware).
@@ -89,8 +114,42 @@ class Backend {
   virtual void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
                           const Buffer& mask, float duMax) = 0;
 
+  // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w where mask
+  // is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.
+  virtual void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                           const CameraParams& cam0, const double tPrime[3]) = 0;
+
+  // Waits until all enqueued work is done.
   virtual void synchronize() {}
+
+  // --- frame replay ---
+  // The pipeline issues the same kernel sequence every frame (uploads and downloads stay
+  // outside it). It brackets that sequence with beginFrame()/endFrame(); a backend that
+  // can record it (a CUDA graph, a Vulkan command buffer) returns true from
+  // canReplayFrame() afterwards, and the pipeline then calls replayFrame() instead of
+  // issuing the kernels again. Never used while stage timing is on.
+  virtual void beginFrame() {}
+  virtual void endFrame() {}
+  virtual bool canReplayFrame() const { return false; }
+  virtual void replayFrame() {}
+
+  // --- stage timing ---
+  // beginStage() ends the current stage and starts the named one; takeStageTimes() ends
+  // the last and returns the time per stage name (summed, first-seen order) since the
+  // previous call. The default synchronises and reads the host clock; GPU backends may
+  // use device timestamps instead.
+  virtual void beginStage(const std::string& name);
+  virtual std::vector<StageTime> takeStageTimes();
+
+ private:
+  std::vector<StageTime> stages_;
+  std::string currentStage_;
+  double stageStartMs_ = 0;
 };
+
+class Camera;
+CameraParams toCameraParams(const Camera& camera);
+Camera toCamera(const CameraParams& params);
 
 // Backends compiled into this build, in order of preference for "auto".
 std::vector<std::string> availableBackends();

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "curvestereo/fields.hpp"
+#include "curvestereo/backend.hpp"
 #include "curvestereo/image.hpp"
 #include "curvestereo/params.hpp"
 #include "curvestereo/rig.hpp"
@@ -18,20 +18,14 @@
 
 namespace cs {
 
-class Backend;
 class Pipeline;
-
-struct StageTime {
-  std::string name;
-  double ms = 0;
-};
 
 struct DepthResult {
   ImageU8 valid;          // 1 where the pixel was solved
   ImageF disparity;       // u: px along the epipolar curve (NaN where invalid)
   FlowImage warp;         // w: 2-D displacement into the calibrated image 1 (NaN where invalid)
   DepthMaps depth;        // radial / z depth and 3-D points
-  std::vector<StageTime> stages;  // wall time of each stage of this frame
+  std::vector<StageTime> stages;  // time of each stage of this frame (when profiling)
   double totalMs = 0;
 };
 
@@ -44,8 +38,15 @@ class Stereo {
   Stereo(const Stereo&) = delete;
   Stereo& operator=(const Stereo&) = delete;
 
+  // For a moving camera: the pose of the second view relative to the first (X1 = R X0 + t)
+  // changed. Recomputes the fields on the backend; throws cs::Error for a zero baseline
+  // or a non-rotation.
+  void setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
   // Restrict the solve to mask != 0 (e.g. a lens-shading mask); same size as the images.
   void setMask(const ImageU8& mask);
+  // Per-stage timing (DepthResult::stages). It costs a synchronisation at every stage
+  // boundary and disables frame replay on GPU backends; off by default, on in bench.
+  void setProfiling(bool on) { profiling_ = on; }
   // Called during compute() with the fraction of the solve done (0..1), for progress bars.
   void setProgress(std::function<void(double)> progress);
   // Images: float gray in [0,1], both of the rig's resolution. Throws cs::Error on
@@ -56,18 +57,18 @@ class Stereo {
   std::string deviceName() const;
   // Which backend "auto" took, and why (one line).
   const std::string& backendChoice() const { return backendWhy_; }
-  const RigFields& fields() const { return fields_; }
   const Rig& rig() const { return rig_; }
   const Params& params() const { return params_; }
 
  private:
   Rig rig_;
   Params params_;
-  RigFields fields_;
+  ImageU8 userMask_;
   std::string backendName_, backendWhy_;
   std::unique_ptr<Backend> backend_;
   std::unique_ptr<Pipeline> pipeline_;
   std::function<void(double)> progress_;
+  bool profiling_ = false;
 };
 
 }  // namespace cs

@@ -1,0 +1,61 @@
+// The Backend interface's default stage clock (host wall time between boundaries).
+#include "curvestereo/backend.hpp"
+
+#include "curvestereo/camera.hpp"
+#include "curvestereo/camera_models.hpp"
+#include "curvestereo/image.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+namespace cs {
+
+namespace {
+
+double nowMs() {
+  using namespace std::chrono;
+  return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+CameraParams toCameraParams(const Camera& camera) {
+  CameraParams p;
+  p.model = int(camera.model);
+  p.width = camera.width;
+  p.height = camera.height;
+  if (camera.params.size() > 8) throw Error("camera has more parameters than kernels take");
+  std::copy(camera.params.begin(), camera.params.end(), p.params);
+  return p;
+}
+
+Camera toCamera(const CameraParams& p) {
+  Camera c;
+  c.model = CameraModel(p.model);
+  c.width = p.width;
+  c.height = p.height;
+  c.params.assign(p.params, p.params + std::max(0, models::paramCount(c.model)));
+  return c;
+}
+
+void Backend::beginStage(const std::string& name) {
+  synchronize();
+  const double t = nowMs();
+  if (!currentStage_.empty()) {
+    auto it = std::find_if(stages_.begin(), stages_.end(), [&](const StageTime& s) { return s.name == currentStage_; });
+    if (it == stages_.end()) stages_.push_back({currentStage_, t - stageStartMs_});
+    else it->ms += t - stageStartMs_;
+  }
+  currentStage_ = name;
+  stageStartMs_ = t;
+}
+
+std::vector<StageTime> Backend::takeStageTimes() {
+  beginStage("");
+  currentStage_.clear();
+  std::vector<StageTime> out;
+  out.swap(stages_);
+  return out;
+}
+
+}  // namespace cs
