@@ -1,0 +1,106 @@
+// Every kernel on every backend present at run time, against the CPU oracle, with an
+// explicit error metric per kernel (in the manner of ggml's test-backend-ops); then whole
+// solves end to end. A backend that is absent or unusable is reported as skipped.
+#include <cmath>
+
+#include "curvestereo/metrics.hpp"
+#include "curvestereo/stereo.hpp"
+#include "golden_cases.hpp"
+#include "synth/scene.hpp"
+#include "test_util.hpp"
+
+using namespace cs;
+
+namespace {
+
+struct Tolerance {
+  double maxAbs, nmse;
+};
+
+// Float kernels on GPUs differ from the oracle by rounding (fused multiply-adds,
+// reordered sums, device exp/pow): a few ulps of values of order 1.
+Tolerance toleranceFor(const std::string& output) {
+  if (output.rfind("fields_", 0) == 0) return {2e-3, 1e-9};   // float camera models vs double
+  if (output.rfind("triangulate_", 0) == 0) return {1e-2, 1e-8};  // metres; far points amplify rounding
+  if (output.rfind("tensor_", 0) == 0) return {2e-4, 1e-9};
+  return {1e-4, 1e-9};
+}
+
+std::vector<std::string> otherBackends() {
+  std::vector<std::string> names;
+  for (const std::string& n : availableBackends())
+    if (n != "cpu") names.push_back(n);
+  return names;
+}
+
+// The backend, or null (with the reason reported) when it cannot run here.
+std::unique_ptr<Backend> tryBackend(const std::string& name) {
+  try {
+    return createBackend(name);
+  } catch (const Error& e) {
+    MESSAGE("SKIPPED backend " << name << ": " << e.what());
+    return nullptr;
+  }
+}
+
+}  // namespace
+
+TEST_CASE("every kernel on every backend matches the CPU oracle") {
+  if (otherBackends().empty()) MESSAGE("SKIPPED: no backend besides cpu is compiled into this build");
+  auto cpu = createBackend("cpu");
+  for (const std::string& name : otherBackends()) {
+    auto backend = tryBackend(name);
+    if (!backend) continue;
+    for (const auto& c : golden::kernelCases()) {
+      const auto expected = c.run(*cpu);
+      const auto actual = c.run(*backend);
+      REQUIRE(actual.size() == expected.size());
+      for (size_t i = 0; i < actual.size(); ++i) {
+        INFO("backend " << name << ", kernel " << c.kernel << ", output " << actual[i].name);
+        const Tolerance tol = toleranceFor(actual[i].name);
+        golden::Difference d = golden::compare(actual[i].planes, expected[i].planes, tol.maxAbs);
+        MESSAGE(name << " " << actual[i].name << ": max abs " << d.maxAbs << ", NMSE " << d.nmse);
+        CHECK(d.mismatchedNonFinite == 0);
+        CHECK(d.maxAbs <= tol.maxAbs);
+        CHECK(d.nmse <= tol.nmse);
+      }
+    }
+  }
+}
+
+TEST_CASE("whole solves on every backend agree with the CPU oracle") {
+  if (otherBackends().empty()) MESSAGE("SKIPPED: no backend besides cpu is compiled into this build");
+  synth::SynthConfig cfg;
+  cfg.camera = synth::defaultFisheye(161);
+  cfg.baseline = 0.12;
+  cfg.seed = 9;
+  cfg.samplesPerAxis = 2;
+  const synth::SynthPair pair = synth::renderPair(cfg);
+  Params params = preset("default");
+  params.minWidth = 20;
+  params.warps = 12;
+  Stereo oracle(pair.rig, params, "cpu");
+  const DepthResult ref = oracle.compute(pair.left, pair.right);
+  const Metrics refMetrics = evaluate(pair.rig, ref.warp, ref.depth.radial, pair.depthLeft, &pair.depthRight);
+  for (const std::string& name : otherBackends()) {
+    if (!tryBackend(name)) continue;
+    Stereo stereo(pair.rig, params, name);
+    // Twice: the second frame may be a replay of a recorded one.
+    for (int frame = 0; frame < 2; ++frame) {
+      const DepthResult r = stereo.compute(pair.left, pair.right);
+      CHECK(r.valid.data == ref.valid.data);
+      long long valid = 0, close = 0;
+      for (size_t i = 0; i < r.valid.size(); ++i) {
+        if (!ref.valid.data[i]) continue;
+        ++valid;
+        close += std::abs(r.disparity.data[i] - ref.disparity.data[i]) <= 0.05f;
+      }
+      const Metrics m = evaluate(pair.rig, r.warp, r.depth.radial, pair.depthLeft, &pair.depthRight);
+      MESSAGE(name << " frame " << frame << ": " << 100.0 * close / valid << " % within 0.05 px; tau>1 " << m.tau1
+                   << " vs " << refMetrics.tau1 << ", tau>3 " << m.tau3 << " vs " << refMetrics.tau3);
+      CHECK(double(close) >= 0.99 * double(valid));
+      CHECK(std::abs(m.tau1 - refMetrics.tau1) <= 0.2);
+      CHECK(std::abs(m.tau3 - refMetrics.tau3) <= 0.2);
+    }
+  }
+}
