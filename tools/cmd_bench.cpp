@@ -63,7 +63,7 @@ int cmdBench(const Args& args) {
   if (runs < 1) throw Error("option --runs must be >= 1");
   const Params params = paramsFromArgs(args);
   const Inputs in = benchInputs(args);
-  Stereo stereo(in.rig, params, args.get("backend", "auto"));
+  Stereo stereo(in.rig, params, backendFromArgs(args));
 
   std::printf("device:   %s (backend %s)\n", stereo.deviceName().c_str(), stereo.backendName().c_str());
   std::printf("input:    %s, %dx%d\n", in.what.c_str(), in.left.width, in.left.height);

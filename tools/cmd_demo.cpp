@@ -38,7 +38,7 @@ int cmdDemo(const Args& args) {
   saveKalibr(pair.rig, path("camchain.yaml"));
 
   const Params params = paramsFromArgs(args);
-  Stereo stereo(pair.rig, params, args.get("backend", "auto"));
+  Stereo stereo(pair.rig, params, backendFromArgs(args));
   std::printf("backend: %s - %s\nsettings: %s\n", stereo.deviceName().c_str(), stereo.backendChoice().c_str(),
               describe(params).c_str());
   stereo.setProfiling(true);  // one frame: the stage breakdown is worth a synchronisation

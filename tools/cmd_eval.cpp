@@ -107,7 +107,7 @@ int cmdEval(const Args& args) {
   const Params params = paramsFromArgs(args);
   std::vector<Row> rows;
   for (const std::string& dir : args.positional()) {
-    rows.push_back(evaluatePair(dir, params, args.get("backend", "auto"), args.get("maps", "")));
+    rows.push_back(evaluatePair(dir, params, backendFromArgs(args), args.get("maps", "")));
     const Row& r = rows.back();
     std::printf("%-24s tau>1 %6.2f %%  tau>3 %6.2f %%  EPE %.3f px  (noc: %.2f / %.2f %%)  %.0f ms\n", r.pair.c_str(),
                 r.m.tau1, r.m.tau3, r.m.epe, r.m.tau1Noc, r.m.tau3Noc, r.ms);

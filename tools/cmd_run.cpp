@@ -30,7 +30,7 @@ int cmdRun(const Args& args) {
   const ImageF left = loadImageFor(args.positional()[0], rig.cam0, "left");
   const ImageF right = loadImageFor(args.positional()[1], rig.cam1, "right");
 
-  Stereo stereo(rig, params, args.get("backend", "auto"));
+  Stereo stereo(rig, params, backendFromArgs(args));
   if (args.has("mask")) stereo.setMask(loadMask(args.get("mask", "")));
   std::printf("backend: %s (%s) - %s\n", stereo.backendName().c_str(), stereo.deviceName().c_str(),
               stereo.backendChoice().c_str());

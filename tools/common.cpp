@@ -14,7 +14,13 @@ namespace cs::cli {
 
 const std::set<std::string> kSolverOptions = {"preset", "warps",   "iterations", "levels",  "lambda", "du-max",
                                               "alpha0", "alpha1",  "max-fov",    "gamma",   "median", "backend",
-                                              "mask",   "epipole", "beta",       "eta"};
+                                              "mask",   "epipole", "beta",       "eta",    "device"};
+
+std::string backendFromArgs(const Args& args) {
+  std::string backend = args.get("backend", "auto");
+  if (args.has("device")) backend += ":" + args.get("device", "");
+  return backend;
+}
 
 Params paramsFromArgs(const Args& args) {
   Params p = preset(args.get("preset", "default"));

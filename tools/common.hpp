@@ -17,6 +17,10 @@ extern const std::set<std::string> kSolverOptions;
 // --du-max, --alpha0, --alpha1, --max-fov, --gamma, --median on|off).
 Params paramsFromArgs(const Args& args);
 
+// The backend spec for Stereo: --backend NAME plus --device INDEX|NAME-SUBSTRING
+// ("vulkan" + "1" -> "vulkan:1").
+std::string backendFromArgs(const Args& args);
+
 // A gray image checked against the rig's resolution (one-line error otherwise).
 ImageF loadImageFor(const std::string& path, const Camera& cam, const char* which);
 

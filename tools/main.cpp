@@ -24,7 +24,7 @@ commands:
                                 render a synthetic pair with exact ground truth
 
 solver options (run, demo, eval, bench):
-  --backend auto|cpu   --preset realtime|default|quality   --warps N  --iterations K
+  --backend auto|cpu|...  --device INDEX|NAME  --preset realtime|default|quality   --warps N  --iterations K
   --levels L  --lambda X  --du-max PX  --max-fov DEG  --median on|off  --mask PNG (run)
 
 'curvestereo <command> --help' repeats this text.
