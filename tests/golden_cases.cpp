@@ -16,14 +16,7 @@ namespace {
 // Odd sizes on purpose: no kernel may assume even or aligned dimensions.
 constexpr int kW = 45, kH = 37;
 
-float hashNoise(uint32_t i) {
-  i ^= i >> 16;
-  i *= 0x7feb352dU;
-  i ^= i >> 15;
-  i *= 0x846ca68bU;
-  i ^= i >> 16;
-  return float(i & 0xffffff) / float(0xffffff);  // [0, 1]
-}
+float hashNoise(uint32_t i) { return hash01(i); }
 
 // Interleaved host data for one buffer.
 struct Host {

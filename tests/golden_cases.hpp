@@ -3,6 +3,7 @@
 // test and (as backends arrive) every-backend-vs-oracle tests; tests/make_golden.cpp
 // regenerates tests/golden/ from the CPU oracle.
 #pragma once
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,17 @@
 #include "curvestereo/rig.hpp"
 
 namespace cs::golden {
+
+// Deterministic pseudo-random value in [0, 1] from an integer (an integer hash; no std
+// distributions, so inputs are identical on every platform).
+inline float hash01(uint32_t i) {
+  i ^= i >> 16;
+  i *= 0x7feb352dU;
+  i ^= i >> 15;
+  i *= 0x846ca68bU;
+  i ^= i >> 16;
+  return float(i & 0xffffff) / float(0xffffff);
+}
 
 // One output buffer of one case: channels stacked vertically (height * channels rows) so
 // it fits a single-channel EXR.

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "cpu_backend.hpp"
+#include "golden_cases.hpp"
 #include "operators.hpp"
 #include "test_util.hpp"
 
@@ -12,15 +13,8 @@ using namespace cs::cpu;
 
 namespace {
 
-// Deterministic pseudo-random values in [-1, 1] (no std distributions: reproducible).
-float hashNoise(uint32_t i) {
-  i ^= i >> 16;
-  i *= 0x7feb352dU;
-  i ^= i >> 15;
-  i *= 0x846ca68bU;
-  i ^= i >> 16;
-  return float(i & 0xffffff) / float(0x7fffff) - 1.f;
-}
+// Deterministic pseudo-random values in [-1, 1].
+float hashNoise(uint32_t i) { return 2.f * cs::golden::hash01(i) - 1.f; }
 
 struct Grid {
   int w, h, c;
