@@ -35,16 +35,15 @@ void Params::validate() const {
 }
 
 Params preset(const std::string& name) {
-  Params p;  // the struct's defaults are the "default" preset
+  // The struct's defaults are the "default" preset: N = 30 warps reach the ~100 px
+  // displacements of near objects on 12-30 cm baselines; more warps (50) and a stronger or
+  // weaker data term (lambda 12..30) changed tau>1 by under 0.5 points on the development
+  // pairs, and the accelerated schedule (gamma > 0) lost accuracy with warm-started warps.
+  Params p;
   if (name == "default") return p;
   if (name == "realtime") {
     // The paper's configuration (Roxas & Oishi, Sec. IV): 5 levels x2, N=5, K=10, du_max 0.2.
     p.warps = 5;
-    return p;
-  }
-  if (name == "quality") {
-    p.warps = 60;
-    p.iterations = 15;
     return p;
   }
   std::string known;
@@ -52,7 +51,7 @@ Params preset(const std::string& name) {
   throw Error("unknown preset '" + name + "' (known: " + known + ")");
 }
 
-std::vector<std::string> presetNames() { return {"realtime", "default", "quality"}; }
+std::vector<std::string> presetNames() { return {"realtime", "default"}; }
 
 std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p) {
   std::vector<LevelSize> plan{{width, height, 1.0}};

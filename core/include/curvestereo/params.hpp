@@ -44,8 +44,8 @@ struct Params {
   void validate() const;
 };
 
-// Named presets: "realtime" (the paper's configuration), "default" (accuracy oriented),
-// "quality". Throws cs::Error listing the known names for an unknown one.
+// Named presets: "realtime" (the paper's configuration), "default" (accuracy oriented).
+// Throws cs::Error listing the known names for an unknown one.
 Params preset(const std::string& name);
 std::vector<std::string> presetNames();
 
