@@ -38,7 +38,7 @@ std::unique_ptr<Backend> tryBackend(const std::string& name) {
   try {
     return createBackend(name);
   } catch (const Error& e) {
-    MESSAGE("SKIPPED backend " << name << ": " << e.what());
+    MESSAGE("SKIPPED backend " << name << ": " << std::string(e.what()));
     return nullptr;
   }
 }

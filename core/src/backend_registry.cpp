@@ -24,6 +24,8 @@ struct Entry {
   std::string name;
   std::string (*probe)(const std::string& device);
   std::unique_ptr<Backend> (*create)(const std::string& device);
+  // Optional stricter probe for "auto" (Vulkan: a real GPU only, not lavapipe).
+  std::string (*probeAuto)(const std::string& device) = nullptr;
 };
 
 std::string probeCpu(const std::string&) { return ""; }
@@ -36,7 +38,7 @@ std::vector<Entry> entries() {
   e.push_back({"cuda", probeCuda, createCudaBackend});
 #endif
 #ifdef CS_HAVE_VULKAN
-  e.push_back({"vulkan", probeVulkan, createVulkanBackend});
+  e.push_back({"vulkan", probeVulkan, createVulkanBackend, probeVulkanAuto});
 #endif
   e.push_back({"cpu", probeCpu, createCpu});
   return e;
@@ -56,7 +58,7 @@ std::unique_ptr<Backend> createBackend(const std::string& spec, std::string* why
   std::string skipped;
   for (const Entry& e : entries()) {
     if (name != "auto" && name != e.name) continue;
-    const std::string reason = e.probe(device);
+    const std::string reason = name == "auto" && e.probeAuto ? e.probeAuto(device) : e.probe(device);
     if (reason.empty()) {
       std::unique_ptr<Backend> b = e.create(device);
       if (why) *why = name == "auto" ? "auto: using " + e.name + (skipped.empty() ? "" : " (" + skipped + ")") : e.name + ": requested";

@@ -1,6 +1,5 @@
 #include "pipeline.hpp"
 
-#include <chrono>
 #include <cmath>
 
 namespace cs {
@@ -29,6 +28,16 @@ std::vector<float> levelMask(const ImageU8& userMask, const LevelSize& size) {
 }
 
 }  // namespace
+
+// Keep in step with the constructor below: 34 floats per pixel per level (userMask, i0, i1,
+// mask, scratch 1; trajectory, w, tangent 2; tensor, steps 4; pd 12; data 3) plus 7 at
+// level 0 (rawRight 1, calibration 2, radial 1, points 3).
+unsigned long long Pipeline::bufferBytes(int width, int height, const Params& params) {
+  unsigned long long floats = 7ull * (unsigned long long)width * (unsigned long long)height;
+  for (const LevelSize& size : pyramidPlan(width, height, params))
+    floats += 34ull * (unsigned long long)size.width * (unsigned long long)size.height;
+  return floats * sizeof(float);
+}
 
 Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask)
     : backend_(backend), params_(params) {
@@ -200,6 +209,22 @@ Pipeline::Output Pipeline::run(const ImageF& left, const ImageF& right, bool pro
   Output out = download();
   if (profiling_) out.stages = backend_.takeStageTimes();
   return out;
+}
+
+Pipeline::DeviceIO Pipeline::deviceIO() const {
+  const Level& L0 = levels_[0];
+  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_};
+}
+
+void Pipeline::runOnDevice() {
+  profiling_ = false;
+  if (backend_.canReplayFrame()) {
+    backend_.replayFrame();
+  } else {
+    backend_.beginFrame();
+    issueFrame(nullptr);
+    backend_.endFrame();
+  }
 }
 
 }  // namespace cs

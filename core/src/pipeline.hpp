@@ -15,6 +15,8 @@ class Pipeline {
   // Allocates every buffer of every level once. userMask (optional, full resolution)
   // restricts the solve; setPose() must be called before run().
   Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask);
+  // What the constructor allocates on the backend for a width x height frame.
+  static unsigned long long bufferBytes(int width, int height, const Params& params);
 
   // Recomputes the per-rig fields of every level on the backend (a moving camera calls
   // this whenever the relative pose changes).
@@ -30,6 +32,17 @@ class Pipeline {
   };
   // profile: time each stage (synchronising at each boundary) instead of replaying.
   Output run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress);
+
+  // For callers whose images are already on the backend's device (cs::cuda::DeviceStereo):
+  // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
+  // the frame with no host transfer and no synchronisation, and read the results from
+  // the other buffers on the device.
+  struct DeviceIO {
+    Buffer left, right;                            // 1 ch, full resolution
+    Buffer valid, disparity, warp, radial, points;  // 1, 1, 2, 1, 3 ch
+  };
+  DeviceIO deviceIO() const;
+  void runOnDevice();
 
  private:
   struct Level {

@@ -78,6 +78,9 @@ class Backend {
   virtual ~Backend() = default;
   virtual std::string name() const = 0;    // "cpu", "cuda", "vulkan"
   virtual std::string device() const = 0;  // human-readable device description
+  // Memory the backend's buffers may use, in bytes (0 = unknown). Stereo refuses a frame
+  // whose buffers need more, with an error naming the size, before allocating any.
+  virtual unsigned long long memoryBytes() const { return 0; }
 
   // --- memory ---
   virtual Buffer create(int width, int height, int channels) = 0;

@@ -1,0 +1,151 @@
+// curvestereo_cuda_bench: the CUDA device-pointer path timed end to end per frame, as a
+// robot would run it: pinned host pair -> device (async), DeviceStereo::compute on one
+// stream, radial depth -> pinned host, synchronise. Median / min / max over --runs frames
+// after 3 warm-up frames (direct, recorded, first replay).
+//
+//   curvestereo_cuda_bench [--size WxH | --calib CAMCHAIN LEFT.png RIGHT.png] [--preset NAME]
+//                          [--levels L] [--warps N] [--iterations K] [--runs R]
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "curvestereo/cuda.hpp"
+#include "curvestereo/image_io.hpp"
+#include "synth/scene.hpp"
+
+namespace {
+
+void ok(cudaError_t e, const char* what) {
+  if (e != cudaSuccess) throw cs::Error(std::string(what) + ": " + cudaGetErrorString(e));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  std::string size = "848x800", preset = "realtime", calib, leftPath, rightPath;
+  int levels = -1, warps = -1, iterations = -1, runs = 50;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw cs::Error("option " + a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--size") size = next();
+    else if (a == "--preset") preset = next();
+    else if (a == "--levels") levels = std::stoi(next());
+    else if (a == "--warps") warps = std::stoi(next());
+    else if (a == "--iterations") iterations = std::stoi(next());
+    else if (a == "--runs") runs = std::stoi(next());
+    else if (a == "--calib") {
+      calib = next();
+      leftPath = next();
+      rightPath = next();
+    } else throw cs::Error("unknown option " + a);
+  }
+  cs::Params params = cs::preset(preset);
+  if (levels > 0) params.levels = levels;
+  if (warps > 0) params.warps = warps;
+  if (iterations > 0) params.iterations = iterations;
+
+  cs::Rig rig;
+  cs::ImageF left, right;
+  std::string what;
+  if (!calib.empty()) {
+    rig = cs::loadKalibr(calib);
+    left = cs::readPngGray(leftPath);
+    right = cs::readPngGray(rightPath);
+    what = calib;
+  } else {
+    int w = 0, h = 0;
+    if (std::sscanf(size.c_str(), "%dx%d", &w, &h) != 2) throw cs::Error("--size expects WxH");
+    cs::synth::SynthConfig cfg;
+    cfg.camera = cs::synth::defaultFisheye(std::max(w, h));
+    cfg.camera.width = w;
+    cfg.camera.height = h;
+    cfg.camera.params[2] = 0.5 * (w - 1);
+    cfg.camera.params[3] = 0.5 * (h - 1);
+    cfg.samplesPerAxis = 1;
+    const cs::synth::SynthPair pair = cs::synth::renderPair(cfg);
+    rig = pair.rig;
+    left = pair.left;
+    right = pair.right;
+    what = "synthetic " + size;
+  }
+  const int w = left.width, h = left.height;
+  const size_t n = size_t(w) * h;
+
+  cudaStream_t stream = nullptr;
+  ok(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), "cudaStreamCreate");
+  cs::cuda::DeviceStereo stereo(rig, params, stream);
+  float *hPair = nullptr, *hDepth = nullptr, *dPair = nullptr;
+  ok(cudaMallocHost(&hPair, 2 * n * sizeof(float)), "cudaMallocHost");
+  ok(cudaMallocHost(&hDepth, n * sizeof(float)), "cudaMallocHost");
+  ok(cudaMalloc(&dPair, 2 * n * sizeof(float)), "cudaMalloc");
+  std::memcpy(hPair, left.data.data(), n * sizeof(float));
+  std::memcpy(hPair + n, right.data.data(), n * sizeof(float));
+
+  std::printf("device:   %s\n", stereo.deviceName().c_str());
+  std::printf("input:    %s, %dx%d\n", what.c_str(), w, h);
+  std::printf("settings: %s\n", cs::describe(params).c_str());
+  std::printf("path:     device pointers; per frame: pair H2D (pinned, async), solve (CUDA graph), radial depth D2H\n");
+
+  auto frame = [&] {
+    ok(cudaMemcpyAsync(dPair, hPair, 2 * n * sizeof(float), cudaMemcpyHostToDevice, stream), "upload");
+    const cs::cuda::DeviceDepth d = stereo.compute(dPair, dPair + n);
+    ok(cudaMemcpyAsync(hDepth, d.radial, n * sizeof(float), cudaMemcpyDeviceToHost, stream), "download");
+    ok(cudaStreamSynchronize(stream), "synchronize");
+  };
+  for (int i = 0; i < 3; ++i) frame();
+  std::vector<double> ms;
+  for (int i = 0; i < runs; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    frame();
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  // GPU-only time of the solve (graph replay), from events, for reference.
+  cudaEvent_t e0, e1;
+  ok(cudaEventCreate(&e0), "cudaEventCreate");
+  ok(cudaEventCreate(&e1), "cudaEventCreate");
+  std::vector<double> solveMs;
+  for (int i = 0; i < runs; ++i) {
+    ok(cudaEventRecord(e0, stream), "cudaEventRecord");
+    stereo.compute(dPair, dPair + n);
+    ok(cudaEventRecord(e1, stream), "cudaEventRecord");
+    ok(cudaEventSynchronize(e1), "cudaEventSynchronize");
+    float t = 0.f;
+    ok(cudaEventElapsedTime(&t, e0, e1), "cudaEventElapsedTime");
+    solveMs.push_back(t);
+  }
+  long long finite = 0;
+  std::vector<float> depths;
+  for (size_t i = 0; i < n; ++i)
+    if (std::isfinite(hDepth[i])) ++finite, depths.push_back(hDepth[i]);
+  std::sort(depths.begin(), depths.end());
+
+  auto summary = [](std::vector<double> v, const char* label) {
+    std::sort(v.begin(), v.end());
+    const size_t k = v.size();
+    const double med = k % 2 ? v[k / 2] : 0.5 * (v[k / 2 - 1] + v[k / 2]);
+    std::printf("%s median %.3f ms  min %.3f  max %.3f  (%.1f fps) over %zu frames\n", label, med, v.front(), v.back(),
+                1000.0 / med, k);
+  };
+  std::printf("\n");
+  summary(ms, "frame:   ");
+  summary(solveMs, "solve:   ");
+  std::printf("          (frame: end to end incl. pair upload and depth download; solve: GPU time of the graph)\n");
+  std::printf("depth:    %.1f %% of pixels finite, median %.3f m\n", 100.0 * finite / double(n),
+              depths.empty() ? 0.0 : double(depths[depths.size() / 2]));
+  cudaFree(dPair);
+  cudaFreeHost(hPair);
+  cudaFreeHost(hDepth);
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "error: %s\n", e.what());
+  return 1;
+}

@@ -1,0 +1,262 @@
+// The camera models of core/include/curvestereo/camera_models.hpp on the device, in
+// double precision like the oracle: the same equations, branches and iteration limits.
+// What the host constructors precompute (Kannala-Brandt turning angle, valid-region
+// bounds) arrives in CamDev::a / CamDev::b.
+#pragma once
+#include "common.cuh"
+
+namespace cs::cudak {
+
+struct V2 {
+  double x, y;
+};
+struct V3 {
+  double x, y, z;
+};
+
+// CameraModel's order.
+enum : int { kKannalaBrandt4 = 0, kUnified = 1, kExtendedUnified = 2, kDoubleSphere = 3, kPinholeRadtan = 4 };
+constexpr double kEpsD = 2.220446049250313080847e-16;
+
+__device__ __forceinline__ double norm3(const V3& p) { return sqrt(p.x * p.x + p.y * p.y + p.z * p.z); }
+// Eigen's normalized(): unchanged when the norm is zero.
+__device__ __forceinline__ V3 normalized(const V3& p) {
+  const double n2 = p.x * p.x + p.y * p.y + p.z * p.z;
+  if (!(n2 > 0)) return p;
+  const double n = sqrt(n2);
+  return {p.x / n, p.y / n, p.z / n};
+}
+
+struct J23 {
+  double m[2][3];
+};
+
+__device__ __forceinline__ V2 toNormalized(const CamDev& c, double px, double py) {
+  return {(px - c.p[2]) / c.p[0], (py - c.p[3]) / c.p[1]};
+}
+__device__ __forceinline__ V2 toPixel(const CamDev& c, double mx, double my) {
+  return {c.p[0] * mx + c.p[2], c.p[1] * my + c.p[3]};
+}
+
+__device__ __forceinline__ void projectRational(const CamDev& c, const V3& p, double den, const V3& gradDen, V2& px,
+                                                J23* J) {
+  const double inv = 1.0 / den;
+  px = toPixel(c, p.x * inv, p.y * inv);
+  if (!J) return;
+  const double inv2 = inv * inv;
+  const double r0 = -c.p[0] * p.x * inv2, r1 = -c.p[1] * p.y * inv2;
+  J->m[0][0] = r0 * gradDen.x, J->m[0][1] = r0 * gradDen.y, J->m[0][2] = r0 * gradDen.z;
+  J->m[1][0] = r1 * gradDen.x, J->m[1][1] = r1 * gradDen.y, J->m[1][2] = r1 * gradDen.z;
+  J->m[0][0] += c.p[0] * inv;
+  J->m[1][1] += c.p[1] * inv;
+}
+
+// --- Kannala-Brandt 4 ---
+__device__ __forceinline__ double kbDistort(const CamDev& c, double th) {
+  const double t2 = th * th;
+  return th * (1.0 + t2 * (c.p[4] + t2 * (c.p[5] + t2 * (c.p[6] + t2 * c.p[7]))));
+}
+__device__ __forceinline__ double kbDistortDerivative(const CamDev& c, double th) {
+  const double t2 = th * th;
+  return 1.0 + t2 * (3.0 * c.p[4] + t2 * (5.0 * c.p[5] + t2 * (7.0 * c.p[6] + t2 * 9.0 * c.p[7])));
+}
+__device__ inline bool kbProject(const CamDev& c, const V3& p, V2& px, J23* J) {
+  const double x = p.x, y = p.y, z = p.z;
+  const double r2 = x * x + y * y;
+  const double rho2 = r2 + z * z;
+  if (!(rho2 > 0)) return false;
+  const double r = sqrt(r2);
+  const double th = atan2(r, z);
+  if (!(th < c.a)) return false;
+  const double s = r > 0 ? kbDistort(c, th) / r : 1.0 / z;
+  px = toPixel(c, s * x, s * y);
+  if (!J) return true;
+  const double dd = kbDistortDerivative(c, th);
+  const bool nearAxis = z > 0 && r2 < kEpsD * rho2;
+  const double A = nearAxis ? 2.0 * (c.p[4] - 1.0 / 3.0) / (z * z * z) : (dd * z / rho2 - s) / r2;
+  const double B = -dd / rho2;
+  const double fx = c.p[0], fy = c.p[1];
+  J->m[0][0] = fx * (s + x * x * A), J->m[0][1] = fx * x * y * A, J->m[0][2] = fx * x * B;
+  J->m[1][0] = fy * x * y * A, J->m[1][1] = fy * (s + y * y * A), J->m[1][2] = fy * y * B;
+  return true;
+}
+__device__ inline double kbSolveTheta(const CamDev& c, double rd) {
+  double lo = 0, hi = c.a;
+  double th = rd < hi ? rd : 0.5 * hi;
+  for (int it = 0; it < 60; ++it) {
+    const double f = kbDistort(c, th) - rd;
+    if (f == 0) break;
+    (f < 0 ? lo : hi) = th;
+    double next = th - f / kbDistortDerivative(c, th);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    const double stp = fabs(next - th);
+    th = next;
+    if (stp <= 4.0 * kEpsD * th) break;
+  }
+  return th;
+}
+__device__ inline bool kbUnproject(const CamDev& c, double px, double py, V3& ray) {
+  const V2 m = toNormalized(c, px, py);
+  const double rd = sqrt(m.x * m.x + m.y * m.y);
+  if (!(rd < c.b)) return false;
+  if (rd == 0) {
+    ray = {0, 0, 1};
+    return true;
+  }
+  const double th = kbSolveTheta(c, rd);
+  const double sinOverRd = sin(th) / rd;
+  ray = {m.x * sinOverRd, m.y * sinOverRd, cos(th)};
+  return true;
+}
+
+// --- Unified ---
+__device__ inline bool ucmProject(const CamDev& c, const V3& p, V2& px, J23* J) {
+  const double xi = c.p[4], w = c.a;
+  const double d = norm3(p);
+  if (!(p.z > -w * d)) return false;
+  const double den = p.z + xi * d;
+  if (!(den > 0)) return false;
+  const double k = xi / d;
+  projectRational(c, p, den, V3{k * p.x, k * p.y, k * p.z + 1.0}, px, J);
+  return true;
+}
+__device__ inline bool ucmUnproject(const CamDev& c, double px, double py, V3& ray) {
+  const double xi = c.p[4], w = c.a;
+  const V2 m = toNormalized(c, px, py);
+  const double r2 = m.x * m.x + m.y * m.y;
+  const double disc = 1.0 + (1.0 - xi * xi) * r2;
+  if (!(disc >= 0)) return false;
+  const double factor = (xi + sqrt(disc)) / (1.0 + r2);
+  ray = normalized(V3{factor * m.x, factor * m.y, factor - xi});
+  return ray.z > -w * norm3(ray);
+}
+
+// --- Extended unified ---
+__device__ __forceinline__ double eucmDistance(double beta, const V3& p) {
+  return sqrt(beta * (p.x * p.x + p.y * p.y) + p.z * p.z);
+}
+__device__ inline bool eucmProject(const CamDev& c, const V3& p, V2& px, J23* J) {
+  const double alpha = c.p[4], beta = c.p[5], w = c.a;
+  const double d = eucmDistance(beta, p);
+  if (!(p.z > -w * d)) return false;
+  const double den = alpha * d + (1.0 - alpha) * p.z;
+  if (!(den > 0)) return false;
+  const V3 gradD{beta * p.x / d, beta * p.y / d, p.z / d};
+  projectRational(c, p, den, V3{alpha * gradD.x, alpha * gradD.y, alpha * gradD.z + (1.0 - alpha)}, px, J);
+  return true;
+}
+__device__ inline bool eucmUnproject(const CamDev& c, double px, double py, V3& ray) {
+  const double alpha = c.p[4], beta = c.p[5], w = c.a;
+  const V2 m = toNormalized(c, px, py);
+  const double r2 = m.x * m.x + m.y * m.y;
+  const double disc = 1.0 - (2.0 * alpha - 1.0) * beta * r2;
+  if (!(disc >= 0)) return false;
+  const double mz = (1.0 - beta * alpha * alpha * r2) / (alpha * sqrt(disc) + 1.0 - alpha);
+  ray = normalized(V3{m.x, m.y, mz});
+  return ray.z > -w * eucmDistance(beta, ray);
+}
+
+// --- Double sphere ---
+__device__ inline bool dsProject(const CamDev& c, const V3& p, V2& px, J23* J) {
+  const double xi = c.p[4], alpha = c.p[5], w2 = c.a;
+  const double d1 = norm3(p);
+  if (!(p.z > -w2 * d1)) return false;
+  const double k = xi * d1 + p.z;
+  const double d2 = sqrt(p.x * p.x + p.y * p.y + k * k);
+  const double den = alpha * d2 + (1.0 - alpha) * k;
+  if (!(den > 0)) return false;
+  const double kk = xi / d1;
+  const V3 gradK{kk * p.x, kk * p.y, kk * p.z + 1.0};
+  const V3 gradD2{(p.x + k * gradK.x) / d2, (p.y + k * gradK.y) / d2, (0.0 + k * gradK.z) / d2};
+  const V3 gradDen{alpha * gradD2.x + (1.0 - alpha) * gradK.x, alpha * gradD2.y + (1.0 - alpha) * gradK.y,
+                   alpha * gradD2.z + (1.0 - alpha) * gradK.z};
+  projectRational(c, p, den, gradDen, px, J);
+  return true;
+}
+__device__ inline bool dsUnproject(const CamDev& c, double px, double py, V3& ray) {
+  const double xi = c.p[4], alpha = c.p[5], w2 = c.a;
+  const V2 m = toNormalized(c, px, py);
+  const double r2 = m.x * m.x + m.y * m.y;
+  const double disc1 = 1.0 - (2.0 * alpha - 1.0) * r2;
+  if (!(disc1 >= 0)) return false;
+  const double mz = (1.0 - alpha * alpha * r2) / (alpha * sqrt(disc1) + 1.0 - alpha);
+  const double disc2 = mz * mz + (1.0 - xi * xi) * r2;
+  if (!(disc2 >= 0)) return false;
+  const double factor = (mz * xi + sqrt(disc2)) / (mz * mz + r2);
+  ray = normalized(V3{factor * m.x, factor * m.y, factor * mz - xi});
+  return ray.z > -w2 * norm3(ray);
+}
+
+// --- Pinhole + radial-tangential ---
+__device__ __forceinline__ V2 rtDistort(const CamDev& c, double x, double y, double Jd[2][2]) {
+  const double k1 = c.p[4], k2 = c.p[5], p1 = c.p[6], p2 = c.p[7];
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * k2);
+  const V2 out{x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+               y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y};
+  if (Jd) {
+    const double dRadial = 2.0 * (k1 + 2.0 * k2 * r2);
+    Jd[0][0] = radial + x * x * dRadial + 2.0 * p1 * y + 6.0 * p2 * x;
+    Jd[0][1] = x * y * dRadial + 2.0 * p1 * x + 2.0 * p2 * y;
+    Jd[1][0] = x * y * dRadial + 2.0 * p1 * x + 2.0 * p2 * y;
+    Jd[1][1] = radial + y * y * dRadial + 6.0 * p1 * y + 2.0 * p2 * x;
+  }
+  return out;
+}
+__device__ inline bool rtProject(const CamDev& c, const V3& p, V2& px, J23* J) {
+  if (!(p.z > 1e-6 * norm3(p))) return false;
+  const double iz = 1.0 / p.z;
+  const double nx = p.x * iz, ny = p.y * iz;
+  double Jd[2][2];
+  const V2 md = rtDistort(c, nx, ny, J ? Jd : nullptr);
+  px = toPixel(c, md.x, md.y);
+  if (!J) return true;
+  const double Jn[2][3] = {{iz, 0, -nx * iz}, {0, iz, -ny * iz}};
+  const double f[2] = {c.p[0], c.p[1]};
+  for (int r = 0; r < 2; ++r)
+    for (int col = 0; col < 3; ++col) J->m[r][col] = f[r] * (Jd[r][0] * Jn[0][col] + Jd[r][1] * Jn[1][col]);
+  return true;
+}
+__device__ inline bool rtUnproject(const CamDev& c, double px, double py, V3& ray) {
+  const V2 m = toNormalized(c, px, py);
+  if (!isfinite(m.x) || !isfinite(m.y)) return false;
+  double nx = m.x, ny = m.y;
+  double Jd[2][2];
+  for (int it = 0; it < 20; ++it) {
+    const V2 d = rtDistort(c, nx, ny, Jd);
+    const double rx = d.x - m.x, ry = d.y - m.y;
+    const double det = Jd[0][0] * Jd[1][1] - Jd[0][1] * Jd[1][0];
+    if (!(fabs(det) > kEpsD)) return false;
+    const double sx = (Jd[1][1] * rx - Jd[0][1] * ry) / det, sy = (Jd[0][0] * ry - Jd[1][0] * rx) / det;
+    nx -= sx;
+    ny -= sy;
+    if (sqrt(sx * sx + sy * sy) <= 16.0 * kEpsD * (1.0 + sqrt(nx * nx + ny * ny))) break;
+  }
+  const double accepted = sqrt(kEpsD) * (1.0 + sqrt(m.x * m.x + m.y * m.y));
+  const V2 d = rtDistort(c, nx, ny, nullptr);
+  const double ex = d.x - m.x, ey = d.y - m.y;
+  if (!(sqrt(ex * ex + ey * ey) <= accepted)) return false;
+  ray = normalized(V3{nx, ny, 1.0});
+  return true;
+}
+
+__device__ inline bool cameraProject(const CamDev& c, const V3& p, V2& px, J23* J = nullptr) {
+  switch (c.model) {
+    case kUnified: return ucmProject(c, p, px, J);
+    case kExtendedUnified: return eucmProject(c, p, px, J);
+    case kDoubleSphere: return dsProject(c, p, px, J);
+    case kPinholeRadtan: return rtProject(c, p, px, J);
+    default: return kbProject(c, p, px, J);
+  }
+}
+__device__ inline bool cameraUnproject(const CamDev& c, double px, double py, V3& ray) {
+  switch (c.model) {
+    case kUnified: return ucmUnproject(c, px, py, ray);
+    case kExtendedUnified: return eucmUnproject(c, px, py, ray);
+    case kDoubleSphere: return dsUnproject(c, px, py, ray);
+    case kPinholeRadtan: return rtUnproject(c, px, py, ray);
+    default: return kbUnproject(c, px, py, ray);
+  }
+}
+
+}  // namespace cs::cudak

@@ -1,0 +1,34 @@
+// Device helpers shared by the kernels: buffer access, the oracle's bilinear sampling
+// (explicit arithmetic, clamped to the edge) and the masked-grid links.
+#pragma once
+#include <cuda_runtime.h>
+
+#include "kernels.hpp"
+
+namespace cs::cudak {
+
+__device__ __forceinline__ float& at(const Img& v, int x, int y, int c = 0) {
+  return v.data[(size_t(y) * v.width + x) * v.channels + c];
+}
+__device__ __forceinline__ bool inside(const Img& v, int x, int y) {
+  return x >= 0 && y >= 0 && x < v.width && y < v.height;
+}
+__device__ __forceinline__ bool masked(const Img& m, int x, int y) { return inside(m, x, y) && at(m, x, y) != 0.f; }
+__device__ __forceinline__ bool linkX(const Img& m, int x, int y) { return masked(m, x, y) && masked(m, x + 1, y); }
+__device__ __forceinline__ bool linkY(const Img& m, int x, int y) { return masked(m, x, y) && masked(m, x, y + 1); }
+
+// Same arithmetic, in the same order, as cs::cpu::sampleBilinear.
+__device__ __forceinline__ float sampleBilinear(const Img& v, float x, float y, int c = 0) {
+  x = fminf(fmaxf(x, 0.f), float(v.width - 1));
+  y = fminf(fmaxf(y, 0.f), float(v.height - 1));
+  const int x0 = int(floorf(x)), y0 = int(floorf(y));
+  const int x1 = min(x0 + 1, v.width - 1), y1 = min(y0 + 1, v.height - 1);
+  const float fx = x - float(x0), fy = y - float(y0);
+  const float top = __ldg(&at(v, x0, y0, c)) * (1.f - fx) + __ldg(&at(v, x1, y0, c)) * fx;
+  const float bottom = __ldg(&at(v, x0, y1, c)) * (1.f - fx) + __ldg(&at(v, x1, y1, c)) * fx;
+  return top * (1.f - fy) + bottom * fy;
+}
+
+inline dim3 grid2d(int w, int h, dim3 block) { return dim3((w + block.x - 1) / block.x, (h + block.y - 1) / block.y); }
+
+}  // namespace cs::cudak

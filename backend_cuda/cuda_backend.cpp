@@ -1,0 +1,401 @@
+#include "cuda_backend.hpp"
+
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "curvestereo/camera_models.hpp"
+#include "curvestereo/image.hpp"
+#include "kernels.hpp"
+
+namespace cs {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& what, cudaError_t e) {
+  throw Error("cuda backend: " + what + ": " + cudaGetErrorName(e) + " (" + cudaGetErrorString(e) + ")");
+}
+
+void ok(cudaError_t e, const char* what) {
+  if (e != cudaSuccess) fail(what, e);
+}
+
+// "" or a decimal index; -1 when the text is not one.
+int parseDeviceIndex(const std::string& device) {
+  if (device.empty()) return 0;
+  if (!std::all_of(device.begin(), device.end(), [](char c) { return c >= '0' && c <= '9'; }) || device.size() > 4)
+    return -1;
+  return std::stoi(device);
+}
+
+std::string versionText(int v) { return std::to_string(v / 1000) + "." + std::to_string((v % 1000) / 10); }
+
+cudak::CamDev camDev(const CameraParams& c) {
+  cudak::CamDev d{};
+  d.model = c.model;
+  d.width = c.width;
+  d.height = c.height;
+  std::copy(c.params, c.params + 8, d.p);
+  switch (CameraModel(c.model)) {
+    case CameraModel::KannalaBrandt4: {
+      const models::KannalaBrandt4<double> kb(c.params);
+      d.a = kb.thetaMax;
+      d.b = kb.radiusMax;
+      break;
+    }
+    case CameraModel::Unified: d.a = models::Unified<double>(c.params).w; break;
+    case CameraModel::ExtendedUnified: d.a = models::ExtendedUnified<double>(c.params).w; break;
+    case CameraModel::DoubleSphere: d.a = models::DoubleSphere<double>(c.params).w2; break;
+    case CameraModel::PinholeRadtan: break;
+    default: throw Error("cuda backend: unknown camera model " + std::to_string(c.model));
+  }
+  return d;
+}
+
+cudak::Img img(float* data, const Buffer& b) { return cudak::Img{data, b.width, b.height, b.channels}; }
+
+}  // namespace
+
+std::string probeCuda(const std::string& device) {
+  const int index = parseDeviceIndex(device);
+  if (index < 0) return "CUDA device selector '" + device + "' is not an index";
+  int count = 0;
+  const cudaError_t e = cudaGetDeviceCount(&count);
+  if (e != cudaSuccess || count == 0)
+    return std::string("no CUDA device present") + (e != cudaSuccess ? std::string(" (") + cudaGetErrorString(e) + ")" : "");
+  if (index >= count) return "CUDA device " + std::to_string(index) + " requested but " + std::to_string(count) + " present";
+  cudaDeviceProp prop{};
+  if (cudaGetDeviceProperties(&prop, index) != cudaSuccess) return "cannot query CUDA device " + std::to_string(index);
+  if (prop.major * 10 + prop.minor < 75)
+    return std::string(prop.name) + " (sm_" + std::to_string(prop.major * 10 + prop.minor) +
+           ") is older than the oldest architecture this build targets (sm_75)";
+  return "";
+}
+
+std::unique_ptr<Backend> createCudaBackend(const std::string& device) {
+  const std::string why = probeCuda(device);
+  if (!why.empty()) throw Error("cuda backend: " + why);
+  return std::make_unique<cuda::CudaBackend>(parseDeviceIndex(device));
+}
+
+namespace cuda {
+
+CudaBackend::CudaBackend(int device, CUstream_st* stream) : device_(device), stream_(stream) {
+  ok(cudaSetDevice(device_), "cudaSetDevice");
+  if (!stream_) {
+    ok(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
+    ownsStream_ = true;
+  }
+  cudaDeviceProp prop{};
+  ok(cudaGetDeviceProperties(&prop, device_), "cudaGetDeviceProperties");
+  memoryBytes_ = prop.totalGlobalMem;
+  int runtime = 0, driver = 0;
+  cudaRuntimeGetVersion(&runtime);
+  cudaDriverGetVersion(&driver);
+  char memory[32];
+  std::snprintf(memory, sizeof memory, "%.1f GiB", double(prop.totalGlobalMem) / (1024.0 * 1024.0 * 1024.0));
+  description_ = std::string(prop.name) + " (sm_" + std::to_string(prop.major * 10 + prop.minor) + ", " +
+                 std::to_string(prop.multiProcessorCount) + " SMs, " + memory + "), CUDA runtime " +
+                 versionText(runtime) + ", driver " + versionText(driver);
+}
+
+CudaBackend::~CudaBackend() {
+  cudaSetDevice(device_);
+  if (capturing_) {
+    cudaGraph_t g = nullptr;
+    cudaStreamEndCapture(stream_, &g);
+    if (g) cudaGraphDestroy(g);
+  }
+  cudaStreamSynchronize(stream_);
+  if (exec_) cudaGraphExecDestroy(exec_);
+  if (graph_) cudaGraphDestroy(graph_);
+  for (Slot& s : slots_) {
+    cudaFree(s.dev);
+    if (s.pinned) cudaFreeHost(s.pinned);
+    if (s.staged) cudaEventDestroy(s.staged);
+  }
+  for (auto& kv : scratch_) cudaFree(kv.second);
+  for (auto& kv : pdScratch_) {
+    cudaFree(kv.second.uBar);
+    cudaFree(kv.second.vBar);
+    cudaFree(kv.second.p);
+    cudaFree(kv.second.q);
+  }
+  for (CUevent_st* e : eventPool_) cudaEventDestroy(e);
+  if (ownsStream_) cudaStreamDestroy(stream_);
+}
+
+void CudaBackend::check(int launchResult, const char* what) const {
+  if (launchResult != cudaSuccess) fail(std::string("kernel ") + what, cudaError_t(launchResult));
+}
+
+const CudaBackend::Slot& CudaBackend::slot(const Buffer& b) const {
+  if (b.id < 0 || size_t(b.id) >= slots_.size()) throw Error("cuda backend: unknown buffer");
+  const Slot& s = slots_[size_t(b.id)];
+  if (s.buffer.width != b.width || s.buffer.height != b.height || s.buffer.channels != b.channels)
+    throw Error("cuda backend: buffer does not match its allocation");
+  return s;
+}
+
+float* CudaBackend::devicePointer(const Buffer& b) const { return slot(b).dev; }
+
+float* CudaBackend::pinnedFor(Slot& s) {
+  if (!s.pinned) {
+    void* p = nullptr;
+    ok(cudaMallocHost(&p, s.buffer.count() * sizeof(float)), "cudaMallocHost");
+    s.pinned = static_cast<float*>(p);
+    ok(cudaEventCreateWithFlags(&s.staged, cudaEventDisableTiming), "cudaEventCreate");
+  }
+  return s.pinned;
+}
+
+float* CudaBackend::scratch(size_t floats, int key) {
+  float*& p = scratch_[{key, floats}];
+  if (!p) ok(cudaMalloc(&p, floats * sizeof(float)), "cudaMalloc (scratch)");
+  return p;
+}
+
+void CudaBackend::dropGraph() {
+  if (exec_) cudaGraphExecDestroy(exec_);
+  if (graph_) cudaGraphDestroy(graph_);
+  exec_ = nullptr;
+  graph_ = nullptr;
+}
+
+Buffer CudaBackend::create(int width, int height, int channels) {
+  if (width <= 0 || height <= 0 || channels <= 0) throw Error("cuda backend: invalid buffer size");
+  ok(cudaSetDevice(device_), "cudaSetDevice");
+  Slot s;
+  s.buffer = Buffer{int(slots_.size()), width, height, channels};
+  ok(cudaMalloc(&s.dev, s.buffer.count() * sizeof(float)), "cudaMalloc");
+  ok(cudaMemsetAsync(s.dev, 0, s.buffer.count() * sizeof(float), stream_), "cudaMemsetAsync");
+  slots_.push_back(s);
+  // New buffers mean a new pipeline: record its frame afresh.
+  dropGraph();
+  framesIssued_ = 0;
+  return s.buffer;
+}
+
+void CudaBackend::upload(const Buffer& dst, const float* host) {
+  Slot& s = slots_[size_t(slot(dst).buffer.id)];
+  float* staging = pinnedFor(s);
+  ok(cudaEventSynchronize(s.staged), "cudaEventSynchronize");  // the previous upload left the staging area
+  const size_t bytes = dst.count() * sizeof(float);
+  std::memcpy(staging, host, bytes);
+  ok(cudaMemcpyAsync(s.dev, staging, bytes, cudaMemcpyHostToDevice, stream_), "upload");
+  ok(cudaEventRecord(s.staged, stream_), "cudaEventRecord");
+}
+
+void CudaBackend::download(const Buffer& src, float* host) {
+  Slot& s = slots_[size_t(slot(src).buffer.id)];
+  float* staging = pinnedFor(s);
+  const size_t bytes = src.count() * sizeof(float);
+  ok(cudaMemcpyAsync(staging, s.dev, bytes, cudaMemcpyDeviceToHost, stream_), "download");
+  ok(cudaStreamSynchronize(stream_), "download (synchronize)");
+  std::memcpy(host, staging, bytes);
+}
+
+void CudaBackend::copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes) {
+  const size_t rowBytes = size_t(dst.width) * dst.channels * sizeof(float);
+  ok(cudaMemcpy2DAsync(slot(dst).dev, rowBytes, src, srcPitchBytes ? srcPitchBytes : rowBytes, rowBytes,
+                       size_t(dst.height), cudaMemcpyDeviceToDevice, stream_),
+     "copy from device");
+}
+
+void CudaBackend::fill(const Buffer& dst, float value) {
+  const Slot& s = slot(dst);
+  if (value == 0.f && !std::signbit(value))
+    ok(cudaMemsetAsync(s.dev, 0, dst.count() * sizeof(float), stream_), "fill");
+  else
+    check(cudak::launchFill(stream_, s.dev, dst.count(), value), "fill");
+}
+
+void CudaBackend::copy(const Buffer& dst, const Buffer& src) {
+  if (dst.count() != src.count()) throw Error("cuda backend: copy between buffers of different size");
+  ok(cudaMemcpyAsync(slot(dst).dev, slot(src).dev, dst.count() * sizeof(float), cudaMemcpyDeviceToDevice, stream_),
+     "copy");
+}
+
+void CudaBackend::fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                         const FieldsParams& p) {
+  cudak::FieldsDev d{};
+  d.cam0 = camDev(p.cam0);
+  d.cam1 = camDev(p.cam1);
+  std::copy(p.R, p.R + 9, d.R);
+  std::copy(p.t, p.t + 3, d.t);
+  // t' = R^T t and its direction, as fieldsAtPixel computes them (Eigen, double).
+  const Eigen::Matrix3d R = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(p.R);
+  const Eigen::Vector3d tPrime = R.transpose() * Eigen::Vector3d(p.t[0], p.t[1], p.t[2]);
+  const Eigen::Vector3d dir = tPrime.normalized();
+  for (int i = 0; i < 3; ++i) d.tPrime[i] = tPrime[i], d.baselineDir[i] = dir[i];
+  d.maxFovDeg = p.maxFovDeg;
+  d.epipoleDeg = p.epipoleDeg;
+  check(cudak::launchFields(stream_, img(slot(mask).dev, mask), img(slot(calibration).dev, calibration),
+                            img(slot(trajectory).dev, trajectory), d),
+        "fields");
+  dropGraph();  // a new pose changes the frame's parameters (t' of triangulate)
+}
+
+void CudaBackend::triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                              const CameraParams& cam0, const double tPrime[3]) {
+  check(cudak::launchTriangulate(stream_, img(slot(radial).dev, radial), img(slot(points).dev, points),
+                                 img(slot(w).dev, w), img(slot(mask).dev, mask), camDev(cam0), tPrime),
+        "triangulate");
+}
+
+void CudaBackend::warp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
+  check(cudak::launchWarp(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(flow).dev, flow)),
+        "warp");
+}
+
+void CudaBackend::downsample(const Buffer& dst, const Buffer& src, float scale) {
+  check(cudak::launchDownsample(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), scale), "downsample");
+}
+
+void CudaBackend::upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
+  check(cudak::launchUpsample(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), scale, valueScale),
+        "upsample");
+}
+
+void CudaBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                                  const TensorParams& p) {
+  if (tensor.channels != 4 || steps.channels != 4 || image.channels != 1)
+    throw Error("cuda backend: structureTensor expects 4-channel tensor and steps and a 1-channel image");
+  cudak::TensorDev d{};
+  d.beta = p.beta, d.eta = p.eta, d.wMin = p.wMin, d.alpha0 = p.alpha0, d.alpha1 = p.alpha1;
+  d.radius = -1;
+  if (p.sigma > 0.f) {
+    // The oracle's taps (cpu/structure_tensor.cpp gaussianTaps), computed the same way.
+    const int radius = int(std::ceil(3.f * p.sigma));
+    if (2 * radius + 1 > cudak::kMaxTaps)
+      throw Error("cuda backend: tensor smoothing sigma " + std::to_string(p.sigma) + " exceeds the supported 42 px");
+    float sum = 0.f;
+    for (int i = -radius; i <= radius; ++i)
+      sum += d.taps[i + radius] = std::exp(-float(i * i) / (2.f * p.sigma * p.sigma));
+    for (int i = 0; i < 2 * radius + 1; ++i) d.taps[i] /= sum;
+    d.radius = radius;
+  }
+  const size_t n = size_t(image.width) * image.height;
+  check(cudak::launchStructureTensor(stream_, img(slot(tensor).dev, tensor), img(slot(steps).dev, steps),
+                                     img(slot(image).dev, image), img(slot(mask).dev, mask), d, scratch(n, 0),
+                                     scratch(n, 1)),
+        "structureTensor");
+}
+
+void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
+                                  const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
+                                  const Buffer& mask) {
+  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), img(slot(data.iu).dev, data.iu),
+                                     img(slot(data.iz).dev, data.iz), img(slot(tangent).dev, tangent),
+                                     img(slot(i0).dev, i0), img(slot(i1).dev, i1),
+                                     img(slot(trajectory).dev, trajectory), img(slot(w).dev, w), img(slot(u).dev, u),
+                                     img(slot(mask).dev, mask)),
+        "warpDerivatives");
+}
+
+void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                             const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
+  const int w = mask.width, h = mask.height;
+  const size_t n = size_t(w) * h;
+  PrimalDualScratch& b = pdScratch_[pd.p.id];
+  if (!b.uBar) {
+    ok(cudaMalloc(&b.uBar, n * sizeof(float)), "cudaMalloc (primal-dual)");
+    ok(cudaMalloc(&b.vBar, 2 * n * sizeof(float)), "cudaMalloc (primal-dual)");
+    ok(cudaMalloc(&b.p, 2 * n * sizeof(float)), "cudaMalloc (primal-dual)");
+    ok(cudaMalloc(&b.q, 4 * n * sizeof(float)), "cudaMalloc (primal-dual)");
+  }
+  cudak::PrimalDualDev d{};
+  d.u = slot(pd.u).dev;
+  d.v = slot(pd.v).dev;
+  d.uBar[0] = slot(pd.uBar).dev, d.uBar[1] = b.uBar;
+  d.vBar[0] = slot(pd.vBar).dev, d.vBar[1] = b.vBar;
+  d.p[0] = slot(pd.p).dev, d.p[1] = b.p;
+  d.q[0] = slot(pd.q).dev, d.q[1] = b.q;
+  d.u0 = slot(data.u0).dev, d.iu = slot(data.iu).dev, d.iz = slot(data.iz).dev;
+  d.tensor = slot(tensor).dev, d.steps = slot(steps).dev, d.mask = slot(mask).dev;
+  d.width = w, d.height = h;
+  d.lambda = params.lambda, d.alpha0 = params.alpha0, d.alpha1 = params.alpha1;
+  for (size_t k = 0; k < params.schedule.size(); ++k) {
+    const PrimalDualStep& s = params.schedule[k];
+    check(cudak::launchPrimalDualIteration(stream_, d, cudak::StepDev{s.tauScale, s.sigmaScale, s.theta}, int(k & 1)),
+          "primalDual");
+  }
+  if (params.schedule.size() % 2 == 1) {  // the last iteration wrote the scratch set
+    ok(cudaMemcpyAsync(d.uBar[0], b.uBar, n * sizeof(float), cudaMemcpyDeviceToDevice, stream_), "copy");
+    ok(cudaMemcpyAsync(d.vBar[0], b.vBar, 2 * n * sizeof(float), cudaMemcpyDeviceToDevice, stream_), "copy");
+    ok(cudaMemcpyAsync(d.p[0], b.p, 2 * n * sizeof(float), cudaMemcpyDeviceToDevice, stream_), "copy");
+    ok(cudaMemcpyAsync(d.q[0], b.q, 4 * n * sizeof(float), cudaMemcpyDeviceToDevice, stream_), "copy");
+  }
+}
+
+void CudaBackend::median(const Buffer& dst, const Buffer& src, const Buffer& mask) {
+  check(cudak::launchMedian(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(mask).dev, mask)),
+        "median");
+}
+
+void CudaBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
+                             const Buffer& mask, float duMax) {
+  check(cudak::launchAccumulate(stream_, img(slot(u).dev, u), img(slot(w).dev, w), img(slot(u0).dev, u0),
+                                img(slot(tangent).dev, tangent), img(slot(mask).dev, mask), duMax),
+        "accumulate");
+}
+
+void CudaBackend::synchronize() { ok(cudaStreamSynchronize(stream_), "synchronize"); }
+
+void CudaBackend::beginFrame() {
+  if (profiling_ || framesIssued_ == 0) return;  // run directly
+  dropGraph();
+  ok(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeRelaxed), "cudaStreamBeginCapture");
+  capturing_ = true;
+}
+
+void CudaBackend::endFrame() {
+  ++framesIssued_;
+  if (!capturing_) return;
+  capturing_ = false;
+  ok(cudaStreamEndCapture(stream_, &graph_), "cudaStreamEndCapture");
+  ok(cudaGraphInstantiate(&exec_, graph_, 0), "cudaGraphInstantiate");
+  ok(cudaGraphLaunch(exec_, stream_), "cudaGraphLaunch");
+}
+
+void CudaBackend::replayFrame() {
+  if (!exec_) throw Error("cuda backend: no recorded frame to replay");
+  ok(cudaGraphLaunch(exec_, stream_), "cudaGraphLaunch");
+}
+
+void CudaBackend::beginStage(const std::string& name) {
+  profiling_ = true;
+  if (eventsUsed_ == eventPool_.size()) {
+    cudaEvent_t e = nullptr;
+    ok(cudaEventCreate(&e), "cudaEventCreate");
+    eventPool_.push_back(e);
+  }
+  CUevent_st* e = eventPool_[eventsUsed_++];
+  ok(cudaEventRecord(e, stream_), "cudaEventRecord");
+  stageMarks_.emplace_back(name, e);
+}
+
+std::vector<StageTime> CudaBackend::takeStageTimes() {
+  std::vector<StageTime> out;
+  if (!stageMarks_.empty()) {
+    beginStage("");
+    ok(cudaEventSynchronize(stageMarks_.back().second), "cudaEventSynchronize");
+    for (size_t i = 0; i + 1 < stageMarks_.size(); ++i) {
+      float ms = 0.f;
+      ok(cudaEventElapsedTime(&ms, stageMarks_[i].second, stageMarks_[i + 1].second), "cudaEventElapsedTime");
+      const std::string& name = stageMarks_[i].first;
+      auto it = std::find_if(out.begin(), out.end(), [&](const StageTime& s) { return s.name == name; });
+      if (it == out.end()) out.push_back({name, double(ms)});
+      else it->ms += ms;
+    }
+  }
+  stageMarks_.clear();
+  eventsUsed_ = 0;
+  profiling_ = false;
+  return out;
+}
+
+}  // namespace cuda
+}  // namespace cs

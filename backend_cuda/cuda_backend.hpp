@@ -1,0 +1,120 @@
+// The CUDA backend: the kernels of backend.hpp on one CUDA stream, one device buffer per
+// Backend buffer (allocated once), pinned host staging for transfers, and the frame
+// recorded once as a CUDA graph and replayed. This header names no CUDA types (core's
+// backend registry includes it): the CUDA handles are forward-declared driver structs.
+#pragma once
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "curvestereo/backend.hpp"
+
+struct CUstream_st;
+struct CUevent_st;
+struct CUgraph_st;
+struct CUgraphExec_st;
+
+namespace cs {
+
+// "" when a CUDA device is usable (device: "" or an index), else the reason.
+std::string probeCuda(const std::string& device);
+std::unique_ptr<Backend> createCudaBackend(const std::string& device);
+
+namespace cuda {
+
+class CudaBackend final : public Backend {
+ public:
+  // stream: work is enqueued there (nullptr: the backend creates its own). A user stream
+  // must be capturable (not the legacy default stream).
+  explicit CudaBackend(int device, CUstream_st* stream = nullptr);
+  ~CudaBackend() override;
+  CudaBackend(const CudaBackend&) = delete;
+  CudaBackend& operator=(const CudaBackend&) = delete;
+
+  std::string name() const override { return "cuda"; }
+  std::string device() const override { return description_; }
+  unsigned long long memoryBytes() const override { return memoryBytes_; }
+
+  Buffer create(int width, int height, int channels) override;
+  void upload(const Buffer& dst, const float* host) override;
+  void download(const Buffer& src, float* host) override;
+  void fill(const Buffer& dst, float value) override;
+  void copy(const Buffer& dst, const Buffer& src) override;
+
+  void fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+              const FieldsParams& params) override;
+  void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
+  void downsample(const Buffer& dst, const Buffer& src, float scale) override;
+  void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                       const TensorParams& params) override;
+  void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) override;
+  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                  const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) override;
+  void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
+  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                  float duMax) override;
+  void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                   const CameraParams& cam0, const double tPrime[3]) override;
+
+  void synchronize() override;
+
+  // The first frame runs directly (it allocates scratch and loads the kernels); the
+  // second is captured into a graph, which later frames replay. Creating buffers or
+  // recomputing fields (a new pose) drops the graph.
+  void beginFrame() override;
+  void endFrame() override;
+  bool canReplayFrame() const override { return exec_ != nullptr; }
+  void replayFrame() override;
+
+  // Stage times from CUDA events on the stream (no host synchronisation per stage).
+  void beginStage(const std::string& name) override;
+  std::vector<StageTime> takeStageTimes() override;
+
+  // --- CUDA extensions (used by cs::cuda::DeviceStereo) ---
+  float* devicePointer(const Buffer& b) const;
+  CUstream_st* stream() const { return stream_; }
+  int deviceIndex() const { return device_; }
+  // dst = the packed float image at src (device memory, rows srcPitchBytes apart), async.
+  void copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes);
+
+ private:
+  struct Slot {
+    float* dev = nullptr;
+    float* pinned = nullptr;  // host staging, allocated at the first transfer
+    CUevent_st* staged = nullptr;  // completes when the last upload from `pinned` is done
+    Buffer buffer;
+  };
+  struct PrimalDualScratch {
+    float *uBar = nullptr, *vBar = nullptr, *p = nullptr, *q = nullptr;
+  };
+  const Slot& slot(const Buffer& b) const;
+  float* pinnedFor(Slot& s);
+  void dropGraph();
+  void check(int launchResult, const char* what) const;
+  float* scratch(size_t floats, int key);
+
+  int device_ = 0;
+  CUstream_st* stream_ = nullptr;
+  bool ownsStream_ = false;
+  std::string description_;
+  unsigned long long memoryBytes_ = 0;
+  std::vector<Slot> slots_;
+  std::map<std::pair<int, size_t>, float*> scratch_;  // (role, floats) -> device memory
+  std::map<int, PrimalDualScratch> pdScratch_;       // by the id of pd.p
+
+  CUgraph_st* graph_ = nullptr;
+  CUgraphExec_st* exec_ = nullptr;
+  bool capturing_ = false;
+  int framesIssued_ = 0;
+
+  bool profiling_ = false;
+  std::vector<std::pair<std::string, CUevent_st*>> stageMarks_;
+  std::vector<CUevent_st*> eventPool_;
+  size_t eventsUsed_ = 0;
+};
+
+}  // namespace cuda
+}  // namespace cs

@@ -1,0 +1,57 @@
+// Per rig / per pose: valid mask, calibration and trajectory fields in double precision
+// (core/src/fields.cpp fieldsAtPixel), so a moving camera can update them per frame.
+#include "camera_models.cuh"
+
+namespace cs::cudak {
+
+namespace {
+
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+
+__global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsDev p) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= mask.width || y >= mask.height) return;
+  bool valid = false;
+  float cx = 0.f, cy = 0.f, tx = 0.f, ty = 0.f;
+  V3 ray;
+  do {
+    if (!cameraUnproject(p.cam0, double(x), double(y), ray)) break;
+    if (p.maxFovDeg > 0 && atan2(sqrt(ray.x * ray.x + ray.y * ray.y), ray.z) > 0.5 * p.maxFovDeg * kDegToRad) break;
+    const double c = fabs(ray.x * p.baselineDir[0] + ray.y * p.baselineDir[1] + ray.z * p.baselineDir[2]);
+    if (acos(fmin(1.0, c)) < p.epipoleDeg * kDegToRad) break;
+    const V3 r1{p.R[0] * ray.x + p.R[1] * ray.y + p.R[2] * ray.z, p.R[3] * ray.x + p.R[4] * ray.y + p.R[5] * ray.z,
+                p.R[6] * ray.x + p.R[7] * ray.y + p.R[8] * ray.z};
+    V2 px1;
+    if (!cameraProject(p.cam1, r1, px1)) break;
+    if (!(px1.x >= -0.5 && px1.y >= -0.5 && px1.x <= p.cam1.width - 0.5 && px1.y <= p.cam1.height - 0.5)) break;
+    V2 proj;
+    J23 J;
+    if (!cameraProject(p.cam0, ray, proj, &J)) break;
+    double gx = J.m[0][0] * p.tPrime[0] + J.m[0][1] * p.tPrime[1] + J.m[0][2] * p.tPrime[2];
+    double gy = J.m[1][0] * p.tPrime[0] + J.m[1][1] * p.tPrime[1] + J.m[1][2] * p.tPrime[2];
+    const double n = sqrt(gx * gx + gy * gy);
+    if (!(n > 1e-12)) break;
+    gx /= n;
+    gy /= n;
+    valid = true;
+    cx = float(px1.x - x);
+    cy = float(px1.y - y);
+    tx = float(gx);
+    ty = float(gy);
+  } while (false);
+  at(mask, x, y) = valid && at(mask, x, y) != 0.f ? 1.f : 0.f;
+  at(calibration, x, y, 0) = cx;
+  at(calibration, x, y, 1) = cy;
+  at(trajectory, x, y, 0) = tx;
+  at(trajectory, x, y, 1) = ty;
+}
+
+}  // namespace
+
+cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsDev& p) {
+  const dim3 block(16, 8);
+  fieldsKernel<<<grid2d(mask.width, mask.height, block), block, 0, s>>>(mask, calibration, trajectory, p);
+  return cudaGetLastError();
+}
+
+}  // namespace cs::cudak

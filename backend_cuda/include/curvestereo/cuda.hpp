@@ -1,0 +1,73 @@
+// CUDA entry point for callers whose images already live on the GPU: inputs are device
+// pointers, outputs stay on the device, and all work is enqueued on the caller's
+// cudaStream_t without host synchronisation. The same pipeline as cs::Stereo on the
+// CUDA backend (recorded once as a CUDA graph, then replayed).
+//
+//   cs::cuda::DeviceStereo stereo(rig, cs::preset("realtime"), stream);
+//   cs::cuda::DeviceDepth d = stereo.compute(dLeft, dRight);  // enqueued on `stream`
+//   myKernel<<<..., stream>>>(d.radial, ...);                  // ordered after it
+//
+// Only available when the library was built with CUDA (CS_HAVE_CUDA).
+#pragma once
+#include <cuda_runtime_api.h>
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+
+#include "curvestereo/image.hpp"
+#include "curvestereo/params.hpp"
+#include "curvestereo/rig.hpp"
+
+namespace cs::cuda {
+
+// Device pointers into buffers owned by the DeviceStereo, packed rows (width * channels
+// floats), channels interleaved. They stay valid for the object's lifetime; their
+// contents are those of the latest compute() once the stream has reached it, and are
+// overwritten by the next compute().
+struct DeviceDepth {
+  int width = 0, height = 0;
+  const float* valid = nullptr;      // 1 ch: 1 where the pixel was solved, else 0
+  const float* disparity = nullptr;  // 1 ch: u, px along the epipolar curve (meaningful where valid)
+  const float* warp = nullptr;       // 2 ch: w into the calibrated image 1 (meaningful where valid)
+  const float* radial = nullptr;     // 1 ch: radial depth, m; NaN where not valid, +inf at infinity
+  const float* points = nullptr;     // 3 ch: camera-0 points, m; NaN where not valid or infinite
+};
+
+// "" when CUDA device `device` can run the backend, else the reason (e.g. "no CUDA
+// device present").
+std::string probe(int device = 0);
+
+class DeviceStereo {
+ public:
+  // stream: where every call enqueues its work; nullptr creates a private non-blocking
+  // stream (see stream()). The legacy default stream (0 passed explicitly as
+  // cudaStreamLegacy) cannot be recorded into a graph and is refused. device: the CUDA
+  // device index the stream belongs to. Throws cs::Error on a bad rig or parameters, or
+  // when no usable CUDA device is present.
+  DeviceStereo(const Rig& rig, const Params& params, cudaStream_t stream = nullptr, int device = 0);
+  ~DeviceStereo();
+  DeviceStereo(const DeviceStereo&) = delete;
+  DeviceStereo& operator=(const DeviceStereo&) = delete;
+
+  // A new relative pose (X1 = R X0 + t): the fields are recomputed on the device.
+  void setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
+  // Restrict the solve to mask != 0 (host image of the rig's size).
+  void setMask(const ImageU8& mask);
+
+  // Enqueues one frame and returns at once. left / right: float gray in [0, 1] of the
+  // rig's size on the device, rows pitchBytes apart (0: packed). They are read by the
+  // time the stream reaches this frame's work; they are not checked for NaN.
+  DeviceDepth compute(const float* left, const float* right, size_t pitchBytes = 0);
+
+  cudaStream_t stream() const;
+  std::string deviceName() const;
+  const Rig& rig() const;
+  const Params& params() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cs::cuda

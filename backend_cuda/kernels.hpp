@@ -1,0 +1,82 @@
+// The CUDA kernels' host-side interface: plain-data descriptions of buffers and
+// parameters, and one launcher per stage (each defined in the .cu file named after the
+// stage). Launchers enqueue on the given stream and return cudaGetLastError().
+// Included by host C++ (cuda_backend.cpp) and by the .cu files; no Eigen, no core types.
+#pragma once
+#include <cuda_runtime_api.h>
+
+namespace cs::cudak {
+
+// A device buffer of `channels` interleaved floats per pixel.
+struct Img {
+  float* data;
+  int width, height, channels;
+};
+
+// A camera in the form the device camera models take (double precision, as the oracle).
+// a, b: what each model's constructor precomputes on the host:
+//   Kannala-Brandt 4: thetaMax, radiusMax;  unified, extended unified: w;  double sphere: w2.
+struct CamDev {
+  int model;  // CameraModel
+  int width, height;
+  double p[8];
+  double a, b;
+};
+
+struct FieldsDev {
+  CamDev cam0, cam1;
+  double R[9], t[3];
+  double tPrime[3];       // R^T t
+  double baselineDir[3];  // tPrime normalised
+  double maxFovDeg, epipoleDeg;
+};
+
+constexpr int kMaxTaps = 255;  // Gaussian pre-smoothing radius up to 127 px
+struct TensorDev {
+  float beta, eta, wMin, alpha0, alpha1;
+  int radius;  // -1: no smoothing (copy)
+  float taps[kMaxTaps];
+};
+
+struct StepDev {
+  float tauScale, sigmaScale, theta;
+};
+
+// The primal-dual state: the buffers of the Backend call (set A) and the scratch copies
+// (set B) that iterations ping-pong with, so that one launch can run the dual and the
+// primal pass of an iteration without racing with neighbouring blocks.
+struct PrimalDualDev {
+  float* u;
+  float* v;  // 2 ch
+  float* uBar[2];
+  float* vBar[2];  // 2 ch
+  float* p[2];     // 2 ch
+  float* q[2];     // 4 ch
+  const float* u0;
+  const float* iu;
+  const float* iz;
+  const float* tensor;  // 4 ch
+  const float* steps;   // 4 ch
+  const float* mask;
+  int width, height;
+  float lambda, alpha0, alpha1;
+};
+
+cudaError_t launchFill(cudaStream_t s, float* data, size_t count, float value);
+cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsDev& p);
+cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img mask, const CamDev& cam0,
+                              const double tPrime[3]);
+cudaError_t launchWarp(cudaStream_t s, Img dst, Img src, Img flow);
+cudaError_t launchDownsample(cudaStream_t s, Img dst, Img src, float scale);
+cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float valueScale);
+// tmpRows, tmpSmooth: scratch of image.width * image.height floats each.
+cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorDev& p,
+                                  float* tmpRows, float* tmpSmooth);
+cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1,
+                                  Img trajectory, Img w, Img u, Img mask);
+// One iteration; `parity` selects which set is read (the other is written).
+cudaError_t launchPrimalDualIteration(cudaStream_t s, const PrimalDualDev& pd, StepDev step, int parity);
+cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask);
+cudaError_t launchAccumulate(cudaStream_t s, Img u, Img w, Img u0, Img tangent, Img mask, float duMax);
+
+}  // namespace cs::cudak

@@ -1,0 +1,58 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Per warp: the tangent g = normalize(T(x + w)) and the linearised data term at x + w
+// (backend_cpu/warp_derivatives.cpp).
+#include "sampling.glsl"
+
+layout(push_constant) uniform PC {
+  FBuf u0, iu, iz, tangent, i0, i1, trajectory, w, u, mask;
+  int width, height;
+} pc;
+
+float derivativeAlong(FBuf image, float x, float y, float gx, float gy) {
+  float fp2 = sampleBilinear(image, pc.width, pc.height, 1, 0, x + 2.0 * gx, y + 2.0 * gy);
+  float fp1 = sampleBilinear(image, pc.width, pc.height, 1, 0, x + 1.0 * gx, y + 1.0 * gy);
+  float fm1 = sampleBilinear(image, pc.width, pc.height, 1, 0, x + -1.0 * gx, y + -1.0 * gy);
+  float fm2 = sampleBilinear(image, pc.width, pc.height, 1, 0, x + -2.0 * gx, y + -2.0 * gy);
+  return (-fp2 + 8.0 * fp1 - 8.0 * fm1 + fm2) / 12.0;
+}
+
+bool sampleable(float x, float y, float gx, float gy) {
+  const float reach = 2.0;
+  for (int k = 0; k < 2; ++k) {
+    float s = k == 0 ? -reach : reach;
+    float sx = x + s * gx, sy = y + s * gy;
+    if (sx < 0.0 || sy < 0.0 || sx > float(pc.width - 1) || sy > float(pc.height - 1)) return false;
+  }
+  return masked(pc.mask, pc.width, pc.height, lroundf(x), lroundf(y));
+}
+
+void main() {
+  int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
+  if (x >= pc.width || y >= pc.height) return;
+  const int i = y * pc.width + x;
+  pc.u0.v[i] = pc.u.v[i];
+  pc.iu.v[i] = 0.0;
+  pc.iz.v[i] = 0.0;
+  pc.tangent.v[2 * i] = 0.0;
+  pc.tangent.v[2 * i + 1] = 0.0;
+  if (!masked(pc.mask, pc.width, pc.height, x, y)) return;
+
+  const float px = float(x) + pc.w.v[2 * i], py = float(y) + pc.w.v[2 * i + 1];
+  float gx = sampleBilinear(pc.trajectory, pc.width, pc.height, 2, 0, px, py);
+  float gy = sampleBilinear(pc.trajectory, pc.width, pc.height, 2, 1, px, py);
+  float n = sqrt(gx * gx + gy * gy);
+  if (n < 1e-3) {  // interpolated across a flip of the field: keep the pixel's own tangent
+    gx = pc.trajectory.v[2 * i];
+    gy = pc.trajectory.v[2 * i + 1];
+    n = sqrt(gx * gx + gy * gy);
+  }
+  gx /= n;
+  gy /= n;
+  pc.tangent.v[2 * i] = gx;
+  pc.tangent.v[2 * i + 1] = gy;
+  if (!sampleable(px, py, gx, gy)) return;
+
+  pc.iz.v[i] = sampleBilinear(pc.i1, pc.width, pc.height, 1, 0, px, py) - pc.i0.v[i];
+  pc.iu.v[i] = 0.5 * (derivativeAlong(pc.i1, px, py, gx, gy) + derivativeAlong(pc.i0, float(x), float(y), gx, gy));
+}

@@ -1,0 +1,277 @@
+// Vulkan-specific checks (the generic cross-backend comparison is test_backends.cpp):
+// the Khronos validation layer reports nothing for every kernel, a whole solve, replay
+// and timestamps; outputs never write outside their buffers (guard values before and
+// after each one); outputs are finite where the oracle's are; errors (bad device
+// selectors, memory exhaustion) are cs::Error, not crashes; auto skips lavapipe.
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+
+#include "curvestereo/stereo.hpp"
+#include "golden_cases.hpp"
+#include "synth/scene.hpp"
+#include "test_util.hpp"
+
+#ifdef CS_HAVE_VULKAN
+#include "vulkan_backend.hpp"
+#endif
+
+using namespace cs;
+
+#ifndef CS_HAVE_VULKAN
+
+TEST_CASE("vulkan backend") { MESSAGE("SKIPPED: this build has no Vulkan backend (Vulkan or glslangValidator not found)"); }
+
+#else
+
+namespace {
+
+// Validation on for every Vulkan instance this process creates (before the first one).
+const bool kValidationOn = [] {
+  setenv("CURVESTEREO_VULKAN_VALIDATION", "1", 1);
+  return true;
+}();
+
+// Lavapipe's ICD installed here (CI installs mesa-vulkan-drivers): then the backend must
+// run, so that a broken setup fails instead of being skipped silently.
+bool lavapipeInstalled() {
+  for (const char* dir : {"/usr/share/vulkan/icd.d", "/etc/vulkan/icd.d"}) {
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+      if (e.path().filename().string().rfind("lvp_icd", 0) == 0) return true;
+  }
+  return false;
+}
+
+// The backend, or null with the reason reported (a failure where lavapipe is installed).
+std::unique_ptr<Backend> vulkanOrSkip() {
+  (void)kValidationOn;
+  const std::string reason = probeVulkan("");
+  if (!reason.empty()) {
+    if (lavapipeInstalled()) FAIL("lavapipe is installed but the Vulkan backend is unusable: " << reason);
+    MESSAGE("SKIPPED vulkan: " << reason);
+    return nullptr;
+  }
+  return createBackend("vulkan");
+}
+
+// Forwards to a backend, giving every buffer a guard buffer right before it and two guard
+// rows after it, holding a guard value of its own (a kernel copying one buffer's guard
+// into another's changes it); check() says how many guard values changed.
+class GuardedBackend final : public Backend {
+ public:
+  static constexpr float kGuard = -12345.678f;
+  explicit GuardedBackend(Backend& inner) : b_(inner) {}
+
+  std::string name() const override { return b_.name(); }
+  std::string device() const override { return b_.device(); }
+  Buffer create(int w, int h, int c) override {
+    Buffer before = b_.create(4, 1, 1);  // 16 bytes: buffers are packed 16-byte aligned
+    Buffer big = b_.create(w, h + 2, c);
+    const float guard = kGuard - float(guards_.size());
+    std::vector<float> g(big.count(), guard);
+    b_.upload(big, g.data());
+    b_.upload(before, g.data());
+    guards_.push_back({before, big, h, guard});
+    return Buffer{big.id, w, h, c};
+  }
+  void upload(const Buffer& d, const float* h) override { b_.upload(d, h); }
+  void download(const Buffer& s, float* h) override { b_.download(s, h); }
+  void fill(const Buffer& d, float v) override { b_.fill(d, v); }
+  void copy(const Buffer& d, const Buffer& s) override { b_.copy(d, s); }
+  void fields(const Buffer& m, const Buffer& c, const Buffer& t, const FieldsParams& p) override { b_.fields(m, c, t, p); }
+  void warp(const Buffer& d, const Buffer& s, const Buffer& f) override { b_.warp(d, s, f); }
+  void downsample(const Buffer& d, const Buffer& s, float sc) override { b_.downsample(d, s, sc); }
+  void upsample(const Buffer& d, const Buffer& s, float sc, float v) override { b_.upsample(d, s, sc, v); }
+  void structureTensor(const Buffer& t, const Buffer& s, const Buffer& i, const Buffer& m, const TensorParams& p) override {
+    b_.structureTensor(t, s, i, m, p);
+  }
+  void warpDerivatives(const DataTermBuffers& d, const Buffer& t, const Buffer& i0, const Buffer& i1, const Buffer& tr,
+                       const Buffer& w, const Buffer& u, const Buffer& m) override {
+    b_.warpDerivatives(d, t, i0, i1, tr, w, u, m);
+  }
+  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& d, const Buffer& t, const Buffer& s, const Buffer& m,
+                  const PrimalDualParams& p) override {
+    b_.primalDual(pd, d, t, s, m, p);
+  }
+  void median(const Buffer& d, const Buffer& s, const Buffer& m) override { b_.median(d, s, m); }
+  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& t, const Buffer& m, float d) override {
+    b_.accumulate(u, w, u0, t, m, d);
+  }
+  void triangulate(const Buffer& r, const Buffer& p, const Buffer& w, const Buffer& m, const CameraParams& c,
+                   const double t[3]) override {
+    b_.triangulate(r, p, w, m, c, t);
+  }
+  void synchronize() override { b_.synchronize(); }
+
+  // Number of guard values that changed.
+  long long check() {
+    long long changed = 0;
+    for (const Guard& g : guards_) {
+      std::vector<float> big(g.big.count()), before(g.before.count());
+      b_.download(g.big, big.data());
+      b_.download(g.before, before.data());
+      const size_t used = size_t(g.big.width) * size_t(g.height) * size_t(g.big.channels);
+      for (size_t i = used; i < big.size(); ++i) changed += big[i] != g.value;
+      for (float v : before) changed += v != g.value;
+    }
+    guards_.clear();
+    return changed;
+  }
+
+ private:
+  struct Guard {
+    Buffer before, big;
+    int height;  // rows in use
+    float value;
+  };
+  Backend& b_;
+  std::vector<Guard> guards_;
+};
+
+synth::SynthPair smallPair() {
+  synth::SynthConfig cfg;
+  cfg.camera = synth::defaultFisheye(97);
+  cfg.baseline = 0.12;
+  cfg.seed = 5;
+  cfg.samplesPerAxis = 1;
+  return synth::renderPair(cfg);
+}
+
+Params smallParams() {
+  Params params = preset("default");
+  params.minWidth = 20;
+  params.warps = 4;
+  return params;
+}
+
+}  // namespace
+
+TEST_CASE("vulkan: every kernel stays inside its buffers and is finite where the oracle is") {
+  auto vk = vulkanOrSkip();
+  if (!vk) return;
+  MESSAGE("device: " << vk->device());
+  auto cpu = createBackend("cpu");
+  GuardedBackend guarded(*vk);
+  for (const auto& c : golden::kernelCases()) {
+    INFO("kernel " << c.kernel);
+    const auto actual = c.run(guarded);
+    const auto expected = c.run(*cpu);
+    CHECK(guarded.check() == 0);
+    REQUIRE(actual.size() == expected.size());
+    for (size_t i = 0; i < actual.size(); ++i) {
+      INFO("output " << actual[i].name);
+      long long nonFinite = 0, unexpected = 0;
+      for (size_t k = 0; k < actual[i].planes.data.size(); ++k) {
+        const float a = actual[i].planes.data[k], e = expected[i].planes.data[k];
+        nonFinite += !std::isfinite(a);
+        // NaN exactly where the oracle has NaN, +inf where it has +inf.
+        unexpected += std::isnan(a) != std::isnan(e) || (std::isinf(a) != std::isinf(e)) || (std::isinf(a) && a != e);
+      }
+      if (c.kernel != "triangulate") CHECK(nonFinite == 0);
+      CHECK(unexpected == 0);
+    }
+  }
+}
+
+TEST_CASE("vulkan: a whole solve, replayed and profiled, matches the oracle with zero validation messages") {
+  auto probe = vulkanOrSkip();
+  if (!probe) return;
+  probe.reset();
+  const long long before = vulkanValidationMessageCount();
+  const synth::SynthPair pair = smallPair();
+  const Params params = smallParams();
+  Stereo oracle(pair.rig, params, "cpu");
+  const DepthResult ref = oracle.compute(pair.left, pair.right);
+  Stereo stereo(pair.rig, params, "vulkan");
+  std::vector<DepthResult> frames;
+  for (int f = 0; f < 3; ++f) {  // recorded, replayed, replayed
+    frames.push_back(stereo.compute(pair.left, pair.right));
+  }
+  stereo.setProfiling(true);
+  frames.push_back(stereo.compute(pair.left, pair.right));
+  stereo.setProfiling(false);
+  frames.push_back(stereo.compute(pair.left, pair.right));  // records again after profiling
+  for (size_t f = 0; f < frames.size(); ++f) {
+    INFO("frame " << f);
+    const DepthResult& r = frames[f];
+    CHECK(r.valid.data == ref.valid.data);
+    long long valid = 0, close = 0, identical = 0;
+    for (size_t i = 0; i < r.valid.size(); ++i) {
+      if (!ref.valid.data[i]) continue;
+      ++valid;
+      close += std::abs(r.disparity.data[i] - ref.disparity.data[i]) <= 0.05f;
+      identical += r.disparity.data[i] == frames[0].disparity.data[i];
+    }
+    CHECK(double(close) >= 0.99 * double(valid));
+    CHECK(identical == valid);  // replay and profiled runs compute the same frame
+  }
+  // Timestamps: one entry per stage the pipeline names, none negative.
+  const auto& stages = frames[3].stages;
+  CHECK(stages.size() >= 6);
+  double sum = 0;
+  for (const StageTime& s : stages) {
+    CHECK(s.ms >= 0.0);
+    sum += s.ms;
+    MESSAGE("stage " << s.name << ": " << s.ms << " ms");
+  }
+  CHECK(sum > 0.0);
+  if (!vulkanValidationLayerActive()) {
+    MESSAGE("SKIPPED validation check: VK_LAYER_KHRONOS_validation is not installed");
+  } else {
+    MESSAGE("validation layer active; messages: " << vulkanValidationMessageCount() - before);
+    CHECK_MESSAGE(vulkanValidationMessageCount() == 0, "last: " << vulkanValidationLastMessage());
+  }
+}
+
+TEST_CASE("vulkan: kernels under the validation layer report nothing") {
+  auto vk = vulkanOrSkip();
+  if (!vk) return;
+  for (const auto& c : golden::kernelCases()) c.run(*vk);
+  vk->synchronize();
+  if (!vulkanValidationLayerActive()) {
+    MESSAGE("SKIPPED validation check: VK_LAYER_KHRONOS_validation is not installed");
+    return;
+  }
+  CHECK_MESSAGE(vulkanValidationMessageCount() == 0, "last: " << vulkanValidationLastMessage());
+}
+
+TEST_CASE("vulkan: device selection and errors") {
+  auto vk = vulkanOrSkip();
+  if (!vk) return;
+  // By index and by (case-insensitive) name substring.
+  CHECK_NOTHROW(createBackend("vulkan:0"));
+  const std::string dev = vk->device();
+  CHECK_NOTHROW(createBackend("vulkan:" + dev.substr(0, 4)));
+  CHECK_THROWS_AS(createBackend("vulkan:no-such-gpu"), Error);
+  CHECK_THROWS_AS(createBackend("vulkan:99"), Error);
+  try {
+    createBackend("vulkan:no-such-gpu");
+  } catch (const Error& e) {
+    CHECK(std::string(e.what()).find("no Vulkan device matches") != std::string::npos);
+  }
+  // auto takes a discrete GPU only: on a CPU implementation (lavapipe) it says why and
+  // falls back.
+  std::string why;
+  auto a = createBackend("auto", &why);
+  MESSAGE("auto: " << why);
+  if (dev.find("discrete GPU") == std::string::npos) {
+    CHECK(a->name() != "vulkan");
+    CHECK(why.find("vulkan skipped") != std::string::npos);
+  }
+  // Running out of memory is an error, not a crash.
+  CHECK_THROWS_AS(vk->create(1 << 20, 1 << 20, 4), Error);
+  // A buffer used with a larger shape than it was created with is refused.
+  Buffer small = vk->create(5, 5, 1);
+  Buffer wrong{small.id, 50, 50, 1};
+  std::vector<float> host(wrong.count());
+  CHECK_THROWS_AS(vk->upload(wrong, host.data()), Error);
+  // Still usable afterwards.
+  std::vector<float> ones(25, 1.f), back(25, 0.f);
+  vk->upload(small, ones.data());
+  vk->download(small, back.data());
+  CHECK(back == ones);
+}
+
+#endif
