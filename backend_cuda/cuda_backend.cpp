@@ -99,10 +99,12 @@ CudaBackend::CudaBackend(int device, CUstream_st* stream) : device_(device), str
   description_ = std::string(prop.name) + " (sm_" + std::to_string(prop.major * 10 + prop.minor) + ", " +
                  std::to_string(prop.multiProcessorCount) + " SMs, " + memory + "), CUDA runtime " +
                  versionText(runtime) + ", driver " + versionText(driver);
+  residentBlocks_ = cudak::primalDualResidentBlocks(device_);
 }
 
 CudaBackend::~CudaBackend() {
   cudaSetDevice(device_);
+  pending_.clear();
   if (capturing_) {
     cudaGraph_t g = nullptr;
     cudaStreamEndCapture(stream_, &g);
@@ -157,6 +159,28 @@ float* CudaBackend::scratch(size_t floats, int key) {
   return p;
 }
 
+void CudaBackend::enqueue(const PendingOp& op) {
+  // Ops of one launch run concurrently: queue only what touches none of the buffers the
+  // queued ops write (and writes none they read).
+  for (const PendingOp& o : pending_)
+    if (o.dst == op.dst || (op.src && o.dst == op.src) || (o.src && o.src == op.dst)) {
+      flush();
+      break;
+    }
+  if (int(pending_.size()) == cudak::kMaxMemOps) flush();
+  pending_.push_back(op);
+}
+
+void CudaBackend::flush() {
+  if (pending_.empty()) return;
+  cudak::MemOps ops{};
+  ops.count = int(pending_.size());
+  for (size_t i = 0; i < pending_.size(); ++i)
+    ops.op[i] = cudak::MemOp{pending_[i].dst, pending_[i].src, pending_[i].count, pending_[i].value};
+  pending_.clear();
+  check(cudak::launchMemOps(stream_, ops), "copy/fill");
+}
+
 void CudaBackend::dropGraph() {
   if (exec_) cudaGraphExecDestroy(exec_);
   if (graph_) cudaGraphDestroy(graph_);
@@ -167,6 +191,7 @@ void CudaBackend::dropGraph() {
 Buffer CudaBackend::create(int width, int height, int channels) {
   if (width <= 0 || height <= 0 || channels <= 0) throw Error("cuda backend: invalid buffer size");
   ok(cudaSetDevice(device_), "cudaSetDevice");
+  flush();
   Slot s;
   s.buffer = Buffer{int(slots_.size()), width, height, channels};
   ok(cudaMalloc(&s.dev, s.buffer.count() * sizeof(float)), "cudaMalloc");
@@ -179,6 +204,7 @@ Buffer CudaBackend::create(int width, int height, int channels) {
 }
 
 void CudaBackend::upload(const Buffer& dst, const float* host) {
+  flush();
   Slot& s = slots_[size_t(slot(dst).buffer.id)];
   float* staging = pinnedFor(s);
   ok(cudaEventSynchronize(s.staged), "cudaEventSynchronize");  // the previous upload left the staging area
@@ -189,6 +215,7 @@ void CudaBackend::upload(const Buffer& dst, const float* host) {
 }
 
 void CudaBackend::download(const Buffer& src, float* host) {
+  flush();
   Slot& s = slots_[size_t(slot(src).buffer.id)];
   float* staging = pinnedFor(s);
   const size_t bytes = src.count() * sizeof(float);
@@ -198,28 +225,25 @@ void CudaBackend::download(const Buffer& src, float* host) {
 }
 
 void CudaBackend::copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes) {
+  flush();
   const size_t rowBytes = size_t(dst.width) * dst.channels * sizeof(float);
   ok(cudaMemcpy2DAsync(slot(dst).dev, rowBytes, src, srcPitchBytes ? srcPitchBytes : rowBytes, rowBytes,
                        size_t(dst.height), cudaMemcpyDeviceToDevice, stream_),
      "copy from device");
 }
 
-void CudaBackend::fill(const Buffer& dst, float value) {
-  const Slot& s = slot(dst);
-  if (value == 0.f && !std::signbit(value))
-    ok(cudaMemsetAsync(s.dev, 0, dst.count() * sizeof(float), stream_), "fill");
-  else
-    check(cudak::launchFill(stream_, s.dev, dst.count(), value), "fill");
-}
+void CudaBackend::fill(const Buffer& dst, float value) { enqueue({slot(dst).dev, nullptr, dst.count(), value}); }
 
 void CudaBackend::copy(const Buffer& dst, const Buffer& src) {
   if (dst.count() != src.count()) throw Error("cuda backend: copy between buffers of different size");
-  ok(cudaMemcpyAsync(slot(dst).dev, slot(src).dev, dst.count() * sizeof(float), cudaMemcpyDeviceToDevice, stream_),
-     "copy");
+  float* d = slot(dst).dev;
+  const float* s = slot(src).dev;
+  if (d != s) enqueue({d, s, dst.count(), 0.f});
 }
 
 void CudaBackend::fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
                          const FieldsParams& p) {
+  flush();
   cudak::FieldsDev d{};
   d.cam0 = camDev(p.cam0);
   d.cam1 = camDev(p.cam1);
@@ -240,27 +264,32 @@ void CudaBackend::fields(const Buffer& mask, const Buffer& calibration, const Bu
 
 void CudaBackend::triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                               const CameraParams& cam0, const double tPrime[3]) {
+  flush();
   check(cudak::launchTriangulate(stream_, img(slot(radial).dev, radial), img(slot(points).dev, points),
                                  img(slot(w).dev, w), img(slot(mask).dev, mask), camDev(cam0), tPrime),
         "triangulate");
 }
 
 void CudaBackend::warp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
+  flush();
   check(cudak::launchWarp(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(flow).dev, flow)),
         "warp");
 }
 
 void CudaBackend::downsample(const Buffer& dst, const Buffer& src, float scale) {
+  flush();
   check(cudak::launchDownsample(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), scale), "downsample");
 }
 
 void CudaBackend::upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
+  flush();
   check(cudak::launchUpsample(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), scale, valueScale),
         "upsample");
 }
 
 void CudaBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                                   const TensorParams& p) {
+  flush();
   if (tensor.channels != 4 || steps.channels != 4 || image.channels != 1)
     throw Error("cuda backend: structureTensor expects 4-channel tensor and steps and a 1-channel image");
   cudak::TensorDev d{};
@@ -287,6 +316,7 @@ void CudaBackend::structureTensor(const Buffer& tensor, const Buffer& steps, con
 void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
                                   const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
                                   const Buffer& mask) {
+  flush();
   check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), img(slot(data.iu).dev, data.iu),
                                      img(slot(data.iz).dev, data.iz), img(slot(tangent).dev, tangent),
                                      img(slot(i0).dev, i0), img(slot(i1).dev, i1),
@@ -297,6 +327,7 @@ void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tan
 
 void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
                              const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
+  flush();
   const int w = mask.width, h = mask.height;
   const size_t n = size_t(w) * h;
   PrimalDualScratch& b = pdScratch_[pd.p.id];
@@ -317,34 +348,45 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
   d.tensor = slot(tensor).dev, d.steps = slot(steps).dev, d.mask = slot(mask).dev;
   d.width = w, d.height = h;
   d.lambda = params.lambda, d.alpha0 = params.alpha0, d.alpha1 = params.alpha1;
-  for (size_t k = 0; k < params.schedule.size(); ++k) {
-    const PrimalDualStep& s = params.schedule[k];
-    check(cudak::launchPrimalDualIteration(stream_, d, cudak::StepDev{s.tauScale, s.sigmaScale, s.theta}, int(k & 1)),
-          "primalDual");
-  }
-  if (params.schedule.size() % 2 == 1) {  // the last iteration wrote the scratch set
-    ok(cudaMemcpyAsync(d.uBar[0], b.uBar, n * sizeof(float), cudaMemcpyDeviceToDevice, stream_), "copy");
-    ok(cudaMemcpyAsync(d.vBar[0], b.vBar, 2 * n * sizeof(float), cudaMemcpyDeviceToDevice, stream_), "copy");
-    ok(cudaMemcpyAsync(d.p[0], b.p, 2 * n * sizeof(float), cudaMemcpyDeviceToDevice, stream_), "copy");
-    ok(cudaMemcpyAsync(d.q[0], b.q, 4 * n * sizeof(float), cudaMemcpyDeviceToDevice, stream_), "copy");
-  }
+  std::vector<cudak::StepDev> schedule;
+  for (const PrimalDualStep& s : params.schedule) schedule.push_back({s.tauScale, s.sigmaScale, s.theta});
+  if (schedule.empty()) return;
+  check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()),
+                                persistentPrimalDual_ ? residentBlocks_ : 0),
+        "primalDual");
 }
 
 void CudaBackend::median(const Buffer& dst, const Buffer& src, const Buffer& mask) {
+  flush();
   check(cudak::launchMedian(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(mask).dev, mask)),
         "median");
 }
 
 void CudaBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
                              const Buffer& mask, float duMax) {
-  check(cudak::launchAccumulate(stream_, img(slot(u).dev, u), img(slot(w).dev, w), img(slot(u0).dev, u0),
+  // The pipeline's median -> copy(u, scratch) -> accumulate: when the last queued op is a
+  // copy into u, this launch reads u from its source and writes u everywhere instead.
+  float* const uDev = slot(u).dev;
+  const float* uIn = uDev;
+  if (!pending_.empty() && pending_.back().dst == uDev && pending_.back().src) {
+    uIn = pending_.back().src;
+    pending_.pop_back();
+  }
+  flush();
+  check(cudak::launchAccumulate(stream_, img(uDev, u), uIn, img(slot(w).dev, w), img(slot(u0).dev, u0),
                                 img(slot(tangent).dev, tangent), img(slot(mask).dev, mask), duMax),
         "accumulate");
 }
 
-void CudaBackend::synchronize() { ok(cudaStreamSynchronize(stream_), "synchronize"); }
+
+
+void CudaBackend::synchronize() {
+  flush();
+  ok(cudaStreamSynchronize(stream_), "synchronize");
+}
 
 void CudaBackend::beginFrame() {
+  flush();
   if (profiling_ || framesIssued_ == 0) return;  // run directly
   dropGraph();
   ok(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeRelaxed), "cudaStreamBeginCapture");
@@ -352,6 +394,7 @@ void CudaBackend::beginFrame() {
 }
 
 void CudaBackend::endFrame() {
+  flush();
   ++framesIssued_;
   if (!capturing_) return;
   capturing_ = false;
@@ -361,11 +404,13 @@ void CudaBackend::endFrame() {
 }
 
 void CudaBackend::replayFrame() {
+  flush();
   if (!exec_) throw Error("cuda backend: no recorded frame to replay");
   ok(cudaGraphLaunch(exec_, stream_), "cudaGraphLaunch");
 }
 
 void CudaBackend::beginStage(const std::string& name) {
+  flush();
   profiling_ = true;
   if (eventsUsed_ == eventPool_.size()) {
     cudaEvent_t e = nullptr;

@@ -79,6 +79,10 @@ class CudaBackend final : public Backend {
   int deviceIndex() const { return device_; }
   // dst = the packed float image at src (device memory, rows srcPitchBytes apart), async.
   void copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes);
+  // Whether primalDual() may run a level's whole schedule as one cooperative launch when
+  // the level's tiles fit on the device at once (default true; false: one launch per
+  // iteration at every level, the path of large levels, e.g. to test it on small ones).
+  void setPersistentPrimalDual(bool on) { persistentPrimalDual_ = on; }
 
  private:
   struct Slot {
@@ -90,6 +94,16 @@ class CudaBackend final : public Backend {
   struct PrimalDualScratch {
     float *uBar = nullptr, *vBar = nullptr, *p = nullptr, *q = nullptr;
   };
+  // copy() and fill() are queued and run together as one launch (fewer graph nodes);
+  // every other call runs the queue first (flush) so that the stream order is kept.
+  struct PendingOp {
+    float* dst;
+    const float* src;  // null: fill with value
+    size_t count;
+    float value;
+  };
+  void enqueue(const PendingOp& op);
+  void flush();
   const Slot& slot(const Buffer& b) const;
   float* pinnedFor(Slot& s);
   void dropGraph();
@@ -104,6 +118,9 @@ class CudaBackend final : public Backend {
   std::vector<Slot> slots_;
   std::map<std::pair<int, size_t>, float*> scratch_;  // (role, floats) -> device memory
   std::map<int, PrimalDualScratch> pdScratch_;       // by the id of pd.p
+  std::vector<PendingOp> pending_;
+  int residentBlocks_ = 0;  // of the persistent primal-dual kernel
+  bool persistentPrimalDual_ = true;
 
   CUgraph_st* graph_ = nullptr;
   CUgraphExec_st* exec_ = nullptr;

@@ -62,7 +62,27 @@ struct PrimalDualDev {
   float lambda, alpha0, alpha1;
 };
 
+constexpr int kMaxPersistentIterations = 64;  // even: every chunk starts at parity 0
+struct PrimalDualSchedule {
+  int count;
+  StepDev steps[kMaxPersistentIterations];
+};
+
+// Queued copies and fills that touch disjoint buffers, run by one launch (src null: fill).
+constexpr int kMaxMemOps = 8;
+struct MemOp {
+  float* dst;
+  const float* src;
+  size_t count;
+  float value;
+};
+struct MemOps {
+  int count;
+  MemOp op[kMaxMemOps];
+};
+
 cudaError_t launchFill(cudaStream_t s, float* data, size_t count, float value);
+cudaError_t launchMemOps(cudaStream_t s, const MemOps& ops);
 cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsDev& p);
 cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img mask, const CamDev& cam0,
                               const double tPrime[3]);
@@ -74,9 +94,18 @@ cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img ima
                                   float* tmpRows, float* tmpSmooth);
 cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1,
                                   Img trajectory, Img w, Img u, Img mask);
-// One iteration; `parity` selects which set is read (the other is written).
-cudaError_t launchPrimalDualIteration(cudaStream_t s, const PrimalDualDev& pd, StepDev step, int parity);
+// Blocks of the primal-dual kernel the device runs at once in one cooperative launch
+// (0: no cooperative launch).
+int primalDualResidentBlocks(int device);
+// `count` iterations, the first reading set 0; the result is left in set 0. A level whose
+// tiles number at most residentBlocks runs them all in one cooperative launch, a larger
+// one launches once per iteration. Pixels outside the mask are left untouched.
+cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
+                             int residentBlocks);
 cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask);
-cudaError_t launchAccumulate(cudaStream_t s, Img u, Img w, Img u0, Img tangent, Img mask, float duMax);
+// uIn: where u is read (u.data, or a buffer whose copy to u this launch stands in for:
+// u is then written at every pixel).
+cudaError_t launchAccumulate(cudaStream_t s, Img u, const float* uIn, Img w, Img u0, Img tangent, Img mask,
+                             float duMax);
 
 }  // namespace cs::cudak

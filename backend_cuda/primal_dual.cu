@@ -1,13 +1,19 @@
-// One preconditioned primal-dual iteration of anisotropic TGV-L1 per launch
-// (cpu/primal_dual.cpp), the dual and the primal pass fused: a block computes the new
+// Preconditioned primal-dual iterations of anisotropic TGV-L1 (cpu/primal_dual.cpp): one
+// launch per iteration on large levels, one cooperative launch for the whole schedule
+// (a grid barrier between iterations) on levels whose tiles fit on the device at once.
+// Each iteration fuses the dual and the primal pass: a block computes the new
 // duals p, q (and D p) of its tile plus a one-pixel halo to the left and above into
 // shared memory, then the primal update of its tile from there. The dual variables and
 // the over-relaxed primals ping-pong between two buffer sets (read one, write the
 // other), so a block never reads what a neighbouring block of the same launch wrote;
 // u and v are only read and written at their own pixel and stay in place.
+#include <cooperative_groups.h>
+
 #include "common.cuh"
 
 namespace cs::cudak {
+
+namespace cg = cooperative_groups;
 
 namespace {
 
@@ -22,6 +28,9 @@ constexpr int kMinBlocks = 6;
 #else
 constexpr int kMinBlocks = 4;
 #endif
+// The persistent kernel keeps more values live (the schedule loop, the grid barrier): it
+// asks for 4 blocks per SM (64 registers), enough for the levels it runs (~500 tiles).
+constexpr int kMinBlocksPersistent = kMinBlocks > 4 ? 4 : kMinBlocks;
 constexpr int kDualW = kTileW + 1, kDualH = kTileH + 1;  // tile plus the left / upper halo
 
 __device__ __forceinline__ float dataProx(float uHat, float u0, float iu, float iz, float tauLambda) {
@@ -34,29 +43,61 @@ __device__ __forceinline__ float dataProx(float uHat, float u0, float iu, float 
 }
 
 __device__ __forceinline__ bool isMasked(const float* mask, int w, int h, int x, int y) {
-  return x >= 0 && y >= 0 && x < w && y < h && __ldg(&mask[size_t(y) * w + x]) != 0.f;
+  return x >= 0 && y >= 0 && x < w && y < h && __ldg(&mask[y * w + x]) != 0.f;
 }
 
 enum : unsigned char { kMasked = 1, kLinkX = 2, kLinkY = 4 };
 
-__global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(PrimalDualDev pd, StepDev step, int parity) {
-  __shared__ float2 sP[kDualH][kDualW];
-  __shared__ float2 sDp[kDualH][kDualW];
-  __shared__ float4 sQ[kDualH][kDualW];
-  __shared__ unsigned char sFlags[kDualH][kDualW];
+struct SharedTile {
+  float2 p[kDualH][kDualW];
+  float2 dp[kDualH][kDualW];
+  float4 q[kDualH][kDualW];
+  unsigned char flags[kDualH][kDualW];
+};
 
+// Loads of the iterated state (p, q, uBar, vBar). A launch that runs one iteration reads
+// buffers no block of it writes: the read-only path. The persistent kernel reads what
+// other blocks wrote before the last grid barrier: L2 (coherent), never the SM's L1.
+template <bool kCoherent, class T>
+__device__ __forceinline__ T loadState(const T* a) {
+  if constexpr (kCoherent) return __ldcg(a);
+  else return __ldg(a);
+}
+
+// One iteration over the block's tile (the dual pass over the tile and its halo into
+// shared memory, a barrier, the primal pass). Pixels outside the mask keep their values
+// (copied from the read set to the written one).
+template <bool kCoherent>
+__device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepDev step, int parity, SharedTile& s) {
   const int w = pd.width, h = pd.height;
   const int x0 = blockIdx.x * kTileW, y0 = blockIdx.y * kTileH;
   const int tid = threadIdx.y * kTileW + threadIdx.x;
-  const float* __restrict__ uBarIn = pd.uBar[parity];
-  const float2* __restrict__ vBarIn = reinterpret_cast<const float2*>(pd.vBar[parity]);
-  const float2* __restrict__ pIn = reinterpret_cast<const float2*>(pd.p[parity]);
-  const float4* __restrict__ qIn = reinterpret_cast<const float4*>(pd.q[parity]);
-  float2* __restrict__ pOut = reinterpret_cast<float2*>(pd.p[1 - parity]);
-  float4* __restrict__ qOut = reinterpret_cast<float4*>(pd.q[1 - parity]);
+  const float* uBarIn = pd.uBar[parity];
+  const float2* vBarIn = reinterpret_cast<const float2*>(pd.vBar[parity]);
+  const float2* pIn = reinterpret_cast<const float2*>(pd.p[parity]);
+  const float4* qIn = reinterpret_cast<const float4*>(pd.q[parity]);
+  float2* pOut = reinterpret_cast<float2*>(pd.p[1 - parity]);
+  float4* qOut = reinterpret_cast<float4*>(pd.q[1 - parity]);
   const float4* __restrict__ tensor = reinterpret_cast<const float4*>(pd.tensor);
   const float4* __restrict__ steps = reinterpret_cast<const float4*>(pd.steps);
   const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+
+  // The primal pass's own-pixel inputs: loaded up front on the latency-bound path so that
+  // they arrive while the dual pass runs.
+  float2 tau = make_float2(0.f, 0.f), vOld = tau;
+  float uOld = 0.f, u0 = 0.f, iu = 0.f, iz = 0.f;
+  if constexpr (kCoherent) {
+    const int x = x0 + threadIdx.x, y = y0 + threadIdx.y;
+    if (x < w && y < h) {
+      const int idx = y * w + x;
+      tau = __ldg(reinterpret_cast<const float2*>(steps + idx));
+      uOld = pd.u[idx];
+      vOld = reinterpret_cast<const float2*>(pd.v)[idx];
+      u0 = __ldg(&pd.u0[idx]);
+      iu = __ldg(&pd.iu[idx]);
+      iz = __ldg(&pd.iz[idx]);
+    }
+  }
 
   // --- dual pass over the tile and its halo ---
   for (int k = tid; k < kDualW * kDualH; k += kTileW * kTileH) {
@@ -67,26 +108,55 @@ __global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(
     float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
     unsigned char flags = 0;
     if (i >= 0 && j >= 0 && i < w && j < h) {
-      const size_t idx = size_t(j) * w + i;
-      p = __ldg(&pIn[idx]);
-      q = __ldg(&qIn[idx]);
-      if (__ldg(&pd.mask[idx]) != 0.f) {
-        const bool ex = isMasked(pd.mask, w, h, i + 1, j), ey = isMasked(pd.mask, w, h, i, j + 1);
-        flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
+      const int idx = j * w + i;  // 32-bit: fewer registers (a level has < 2^31 pixels)
+      p = loadState<kCoherent>(&pIn[idx]);
+      q = loadState<kCoherent>(&qIn[idx]);
+      const float m = __ldg(&pd.mask[idx]);
+      bool ex = false, ey = false;
+      float2 sigmaP = make_float2(0.f, 0.f), vb = make_float2(0.f, 0.f), vr = vb, vd = vb;
+      float ub = 0.f, ur = 0.f, ud = 0.f;
+      if constexpr (kCoherent) {
+        // Latency-bound small levels: every load of the pixel in one round trip (the
+        // neighbours' values are used only where the links below say so, as in the
+        // other path, which loads them only then).
+        const int iR = idx + (i + 1 < w ? 1 : 0), iD = idx + (j + 1 < h ? w : 0);
+        ex = i + 1 < w && __ldg(&pd.mask[iR]) != 0.f;
+        ey = j + 1 < h && __ldg(&pd.mask[iD]) != 0.f;
         t = __ldg(&tensor[idx]);
-        const float2 sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
-        const float ub = __ldg(&uBarIn[idx]);
-        const float2 vb = __ldg(&vBarIn[idx]);
+        sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
+        ub = loadState<kCoherent>(&uBarIn[idx]);
+        vb = loadState<kCoherent>(&vBarIn[idx]);
+        ur = loadState<kCoherent>(&uBarIn[iR]);
+        vr = loadState<kCoherent>(&vBarIn[iR]);
+        ud = loadState<kCoherent>(&uBarIn[iD]);
+        vd = loadState<kCoherent>(&vBarIn[iD]);
+      }
+      if (m != 0.f) {
+        if constexpr (!kCoherent) {
+          ex = isMasked(pd.mask, w, h, i + 1, j);
+          ey = isMasked(pd.mask, w, h, i, j + 1);
+          t = __ldg(&tensor[idx]);
+          sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
+          ub = loadState<kCoherent>(&uBarIn[idx]);
+          vb = loadState<kCoherent>(&vBarIn[idx]);
+          if (ex) {
+            ur = loadState<kCoherent>(&uBarIn[idx + 1]);
+            vr = loadState<kCoherent>(&vBarIn[idx + 1]);
+          }
+          if (ey) {
+            ud = loadState<kCoherent>(&uBarIn[idx + w]);
+            vd = loadState<kCoherent>(&vBarIn[idx + w]);
+          }
+        }
+        flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
         float gx = 0.f, gy = 0.f;
         float2 vgx = make_float2(0.f, 0.f), vgy = make_float2(0.f, 0.f);
         if (ex) {
-          gx = __ldg(&uBarIn[idx + 1]) - ub;
-          const float2 vr = __ldg(&vBarIn[idx + 1]);
+          gx = ur - ub;
           vgx = make_float2(vr.x - vb.x, vr.y - vb.y);
         }
         if (ey) {
-          gy = __ldg(&uBarIn[idx + w]) - ub;
-          const float2 vd = __ldg(&vBarIn[idx + w]);
+          gy = ud - ub;
           vgy = make_float2(vd.x - vb.x, vd.y - vb.y);
         }
         const float a1 = t.x * gx + t.y * gy - vb.x;
@@ -94,10 +164,10 @@ __global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(
         p.x = p.x + step.sigmaScale * sigmaP.x * alpha1 * a1;
         p.y = p.y + step.sigmaScale * sigmaP.y * alpha1 * a2;
         {
-          float s = 0.f;
-          s += p.x * p.x;
-          s += p.y * p.y;
-          const float norm = sqrtf(s);
+          float sum = 0.f;
+          sum += p.x * p.x;
+          sum += p.y * p.y;
+          const float norm = sqrtf(sum);
           if (norm > 1.f) {
             p.x /= norm;
             p.y /= norm;
@@ -109,12 +179,12 @@ __global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(
         q.z = q.z + sigmaQ * alpha0 * vgx.y;
         q.w = q.w + sigmaQ * alpha0 * vgy.y;
         {
-          float s = 0.f;
-          s += q.x * q.x;
-          s += q.y * q.y;
-          s += q.z * q.z;
-          s += q.w * q.w;
-          const float norm = sqrtf(s);
+          float sum = 0.f;
+          sum += q.x * q.x;
+          sum += q.y * q.y;
+          sum += q.z * q.z;
+          sum += q.w * q.w;
+          const float norm = sqrtf(sum);
           if (norm > 1.f) {
             q.x /= norm;
             q.y /= norm;
@@ -128,44 +198,50 @@ __global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(
         qOut[idx] = q;
       }
     }
-    sP[ly][lx] = p;
-    sQ[ly][lx] = q;
-    sDp[ly][lx] = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
-    sFlags[ly][lx] = flags;
+    s.p[ly][lx] = p;
+    s.q[ly][lx] = q;
+    s.dp[ly][lx] = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
+    s.flags[ly][lx] = flags;
   }
   __syncthreads();
 
   // --- primal pass over the tile ---
   const int x = x0 + threadIdx.x, y = y0 + threadIdx.y;
-  if (x >= w || y >= h) return;
   const int lx = threadIdx.x + 1, ly = threadIdx.y + 1;
-  const size_t idx = size_t(y) * w + x;
-  float* __restrict__ uBarOut = pd.uBar[1 - parity];
-  float2* __restrict__ vBarOut = reinterpret_cast<float2*>(pd.vBar[1 - parity]);
-  const unsigned char f = sFlags[ly][lx];
+  if (x >= w || y >= h) return;
+  const int idx = y * w + x;
+  float* uBarOut = pd.uBar[1 - parity];
+  float2* vBarOut = reinterpret_cast<float2*>(pd.vBar[1 - parity]);
+  const unsigned char f = s.flags[ly][lx];
   if (!(f & kMasked)) {
-    uBarOut[idx] = uBarIn[idx];
-    vBarOut[idx] = vBarIn[idx];
+    uBarOut[idx] = loadState<kCoherent>(&uBarIn[idx]);
+    vBarOut[idx] = loadState<kCoherent>(&vBarIn[idx]);
     return;
   }
   const bool ex = f & kLinkX, ey = f & kLinkY;
-  const bool exLeft = sFlags[ly][lx - 1] & kLinkX, eyUp = sFlags[ly - 1][lx] & kLinkY;
-  const float2 tau = __ldg(reinterpret_cast<const float2*>(steps + idx));
+  const bool exLeft = s.flags[ly][lx - 1] & kLinkX, eyUp = s.flags[ly - 1][lx] & kLinkY;
+  if constexpr (!kCoherent) tau = __ldg(reinterpret_cast<const float2*>(steps + idx));
   const float tauU = step.tauScale * tau.x;
   const float tauV = step.tauScale * tau.y;
 
   float divDp = 0.f;
-  if (ex) divDp += sDp[ly][lx].x;
-  if (exLeft) divDp -= sDp[ly][lx - 1].x;
-  if (ey) divDp += sDp[ly][lx].y;
-  if (eyUp) divDp -= sDp[ly - 1][lx].y;
-  const float uOld = pd.u[idx];
+  if (ex) divDp += s.dp[ly][lx].x;
+  if (exLeft) divDp -= s.dp[ly][lx - 1].x;
+  if (ey) divDp += s.dp[ly][lx].y;
+  if (eyUp) divDp -= s.dp[ly - 1][lx].y;
+  // u and v: read and written by this thread alone, at its own pixel.
+  if constexpr (!kCoherent) {
+    uOld = pd.u[idx];
+    u0 = __ldg(&pd.u0[idx]);
+    iu = __ldg(&pd.iu[idx]);
+    iz = __ldg(&pd.iz[idx]);
+  }
   const float uHat = uOld + tauU * alpha1 * divDp;
-  const float uNew = dataProx(uHat, __ldg(&pd.u0[idx]), __ldg(&pd.iu[idx]), __ldg(&pd.iz[idx]), tauU * pd.lambda);
+  const float uNew = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
   pd.u[idx] = uNew;
   uBarOut[idx] = uNew + step.theta * (uNew - uOld);
 
-  const float4 q = sQ[ly][lx], qLeft = sQ[ly][lx - 1], qUp = sQ[ly - 1][lx];
+  const float4 q = s.q[ly][lx], qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
   float div0 = 0.f, div1 = 0.f;
   if (ex) div0 += q.x;
   if (exLeft) div0 -= qLeft.x;
@@ -175,9 +251,9 @@ __global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(
   if (exLeft) div1 -= qLeft.z;
   if (ey) div1 += q.w;
   if (eyUp) div1 -= qUp.w;
-  const float2 p = sP[ly][lx];
+  const float2 p = s.p[ly][lx];
   float2* v = reinterpret_cast<float2*>(pd.v);
-  const float2 vOld = v[idx];
+  if constexpr (!kCoherent) vOld = v[idx];
   float2 vNew;
   vNew.x = vOld.x + tauV * (alpha1 * p.x + alpha0 * div0);
   vNew.y = vOld.y + tauV * (alpha1 * p.y + alpha0 * div1);
@@ -185,11 +261,72 @@ __global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(
   vBarOut[idx] = make_float2(vNew.x + step.theta * (vNew.x - vOld.x), vNew.y + step.theta * (vNew.y - vOld.y));
 }
 
+// One iteration per launch (levels with more tiles than the device holds at once).
+__global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(PrimalDualDev pd, StepDev step, int parity) {
+  __shared__ SharedTile s;
+  iterateTile<false>(pd, step, parity, s);
+}
+
+// All iterations of a schedule in one cooperative launch, one block per tile, a grid
+// barrier between iterations (levels whose tiles all fit on the device at once: the
+// coarse levels, where one launch per iteration costs more than the iteration).
+__global__ void __launch_bounds__(kTileW * kTileH, kMinBlocksPersistent)
+    primalDualPersistentKernel(PrimalDualDev pd, const __grid_constant__ PrimalDualSchedule schedule, int parity0) {
+  __shared__ SharedTile s;
+  cg::grid_group grid = cg::this_grid();
+  for (int k = 0; k < schedule.count; ++k) {
+    if (k > 0) grid.sync();
+    iterateTile<true>(pd, schedule.steps[k], (parity0 + k) & 1, s);
+  }
+}
+
+// Odd schedules end in set 1: copy it back to set 0, one launch for the four buffers.
+__global__ void copyBackKernel(PrimalDualDev pd) {
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= pd.width || y >= pd.height) return;
+  const size_t idx = size_t(y) * pd.width + x;
+  pd.uBar[0][idx] = pd.uBar[1][idx];
+  reinterpret_cast<float2*>(pd.vBar[0])[idx] = reinterpret_cast<const float2*>(pd.vBar[1])[idx];
+  reinterpret_cast<float2*>(pd.p[0])[idx] = reinterpret_cast<const float2*>(pd.p[1])[idx];
+  reinterpret_cast<float4*>(pd.q[0])[idx] = reinterpret_cast<const float4*>(pd.q[1])[idx];
+}
+
 }  // namespace
 
-cudaError_t launchPrimalDualIteration(cudaStream_t s, const PrimalDualDev& pd, StepDev step, int parity) {
+int primalDualResidentBlocks(int device) {
+  int sms = 0, perSm = 0, cooperative = 0;
+  if (cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device) != cudaSuccess || !cooperative) return 0;
+  if (cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device) != cudaSuccess) return 0;
+  if (cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, primalDualPersistentKernel, kTileW * kTileH, 0) !=
+      cudaSuccess)
+    return 0;
+  return sms * perSm;
+}
+
+cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
+                             int residentBlocks) {
   const dim3 block(kTileW, kTileH), grid = grid2d(pd.width, pd.height, block);
-  primalDualKernel<<<grid, block, 0, s>>>(pd, step, parity);
+  if (int(grid.x * grid.y) <= residentBlocks) {
+    for (int k0 = 0; k0 < count; k0 += kMaxPersistentIterations) {
+      PrimalDualSchedule schedule{};
+      schedule.count = count - k0 < kMaxPersistentIterations ? count - k0 : kMaxPersistentIterations;
+      for (int k = 0; k < schedule.count; ++k) schedule.steps[k] = steps[k0 + k];
+      cudaLaunchConfig_t config{};
+      config.gridDim = grid;
+      config.blockDim = block;
+      config.stream = s;
+      cudaLaunchAttribute attribute{};
+      attribute.id = cudaLaunchAttributeCooperative;
+      attribute.val.cooperative = 1;
+      config.attrs = &attribute;
+      config.numAttrs = 1;
+      const cudaError_t e = cudaLaunchKernelEx(&config, primalDualPersistentKernel, pd, schedule, k0 & 1);
+      if (e != cudaSuccess) return e;
+    }
+  } else {
+    for (int k = 0; k < count; ++k) primalDualKernel<<<grid, block, 0, s>>>(pd, steps[k], k & 1);
+  }
+  if (count % 2 == 1) copyBackKernel<<<grid, block, 0, s>>>(pd);
   return cudaGetLastError();
 }
 

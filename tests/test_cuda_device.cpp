@@ -2,6 +2,7 @@
 // left there, work on the caller's stream. Checked against the host API on the same
 // backend (same kernels: identical results) and against the CPU oracle. Skipped, with
 // the reason, when the build has no CUDA or no device is present.
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -12,7 +13,9 @@
 #ifdef CS_HAVE_CUDA
 #include <cuda_runtime.h>
 
+#include "../backend_cuda/cuda_backend.hpp"
 #include "curvestereo/cuda.hpp"
+#include "golden_cases.hpp"
 #endif
 
 using namespace cs;
@@ -122,6 +125,91 @@ TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream")
   cudaFree(left);
   cudaFree(right);
   cudaStreamDestroy(stream);
+}
+
+// primalDual runs a level's whole schedule as one cooperative launch when its tiles fit on
+// the device at once (every level of the other tests' small frames) and one launch per
+// iteration otherwise (large levels): both paths, odd and even schedules, against the
+// oracle on random state over several tiles with a ragged edge and a masked disc.
+TEST_CASE("CUDA primal-dual: the persistent and the per-iteration kernels match the oracle") {
+  const std::string why = cuda::probe();
+  if (!why.empty()) {
+    MESSAGE("SKIPPED cuda primal-dual paths: " << why);
+    return;
+  }
+  const int w = 203, h = 131;
+  const size_t n = size_t(w) * h;
+  auto noise = [&](int channels, uint32_t seed, float amp) {
+    std::vector<float> v(n * size_t(channels));
+    for (size_t i = 0; i < v.size(); ++i) v[i] = amp * (2.f * golden::hash01(uint32_t(i) * 2891336453U + seed) - 1.f);
+    return v;
+  };
+  std::vector<float> image(n), mask(n);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      image[i] = 0.5f + 0.3f * std::sin(0.21f * x) * std::cos(0.17f * y) + 0.05f * golden::hash01(uint32_t(i) + 99U);
+      const bool inDisc = std::hypot(x - 0.5 * (w - 1), y - 0.5 * (h - 1)) <= 0.47 * std::min(w, h);
+      mask[i] = inDisc && golden::hash01(uint32_t(i) * 7U + 3U) > 0.03f ? 1.f : 0.f;
+    }
+  auto cpu = createBackend("cpu");
+  std::vector<float> tensor(4 * n), steps(4 * n);
+  {
+    const Buffer t = cpu->create(w, h, 4), st = cpu->create(w, h, 4), im = cpu->create(w, h, 1),
+                 m = cpu->create(w, h, 1);
+    cpu->upload(im, image.data());
+    cpu->upload(m, mask.data());
+    cpu->structureTensor(t, st, im, m, TensorParams{9.f, 0.85f, 1e-4f, 1.f, 17.f, 1.2f});
+    cpu->download(t, tensor.data());
+    cpu->download(st, steps.data());
+  }
+  const std::vector<float> u = noise(1, 11, 1.f), v = noise(2, 12, 0.1f), p = noise(2, 13, 0.5f),
+                           q = noise(4, 14, 0.2f), u0 = noise(1, 15, 1.f), iu = noise(1, 16, 0.1f),
+                           iz = noise(1, 17, 0.05f);
+  // u, uBar, v, vBar, p, q after the solve.
+  auto solve = [&](Backend& b, int iterations) {
+    auto put = [&](const std::vector<float>& host, int channels) {
+      const Buffer buf = b.create(w, h, channels);
+      b.upload(buf, host.data());
+      return buf;
+    };
+    const PrimalDualBuffers pd{put(u, 1), put(u, 1), put(v, 2), put(v, 2), put(p, 2), put(q, 4)};
+    const DataTermBuffers data{put(u0, 1), put(iu, 1), put(iz, 1)};
+    PrimalDualParams prm{20.f, 17.f, 1.2f, {}};
+    float scale = 1.f;
+    for (int k = 0; k < iterations; ++k) {
+      const float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
+      prm.schedule.push_back({scale, 1.f / scale, theta});
+      scale *= theta;
+    }
+    b.primalDual(pd, data, put(tensor, 4), put(steps, 4), put(mask, 1), prm);
+    std::vector<std::vector<float>> out;
+    for (const Buffer& buf : {pd.u, pd.uBar, pd.v, pd.vBar, pd.p, pd.q}) {
+      out.emplace_back(buf.count());
+      b.download(buf, out.back().data());
+    }
+    return out;
+  };
+  for (int iterations : {5, 6, 70}) {
+    const auto ref = solve(*cpu, iterations);
+    for (bool persistent : {true, false}) {
+      cuda::CudaBackend cuda(0);
+      cuda.setPersistentPrimalDual(persistent);
+      const auto out = solve(cuda, iterations);
+      double maxAbs = 0;
+      long long nonFinite = 0;
+      for (size_t b = 0; b < out.size(); ++b)
+        for (size_t i = 0; i < out[b].size(); ++i) {
+          if (!std::isfinite(out[b][i])) ++nonFinite;
+          else maxAbs = std::max(maxAbs, double(std::abs(out[b][i] - ref[b][i])));
+        }
+      const std::string path = persistent ? "persistent" : "per iteration";
+      MESSAGE("primal-dual " << path << ", " << iterations
+                             << " iterations: max abs " << maxAbs << " against the oracle");
+      CHECK(nonFinite == 0);
+      CHECK(maxAbs <= 1e-4);
+    }
+  }
 }
 
 TEST_CASE("CUDA device-pointer API refuses what it cannot run") {
