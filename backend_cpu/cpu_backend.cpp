@@ -1,8 +1,12 @@
 #include "cpu_backend.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <condition_variable>
+#include <fstream>
 #include <mutex>
+#include <new>
 #include <thread>
 
 #include "curvestereo/image.hpp"
@@ -85,6 +89,19 @@ std::mutex poolInUse;
 
 }  // namespace
 
+unsigned long long usableMemoryBytes() {
+  unsigned long long bytes = 0;
+  const long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
+  if (pages > 0 && pageSize > 0) bytes = (unsigned long long)pages * (unsigned long long)pageSize;
+  // A container's memory limit (cgroup v2, then v1) is what the kernel enforces.
+  for (const char* path : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    std::ifstream file(path);
+    unsigned long long limit = 0;
+    if (file >> limit && limit > 0 && (bytes == 0 || limit < bytes)) bytes = limit;
+  }
+  return bytes;
+}
+
 void parallelRows(int height, const std::function<void(int)>& body) {
   std::unique_lock<std::mutex> lock(poolInUse, std::try_to_lock);
   if (!lock.owns_lock() || pool().workers() == 1 || height < 32) {
@@ -101,7 +118,22 @@ std::string CpuBackend::device() const {
 Buffer CpuBackend::create(int width, int height, int channels) {
   if (width <= 0 || height <= 0 || channels <= 0) throw Error("cpu backend: invalid buffer size");
   Buffer b{int(storage_.size()), width, height, channels};
-  storage_.emplace_back(b.count(), 0.f);
+  const unsigned long long bytes = (unsigned long long)b.count() * sizeof(float);
+  // Refuse what the machine cannot hold before touching it: with overcommit, allocating
+  // succeeds and zero-filling it gets the process killed instead of a bad_alloc.
+  const std::string what = "cpu backend: out of memory for a " + std::to_string(width) + "x" +
+                           std::to_string(height) + "x" + std::to_string(channels) + " float buffer (" +
+                           std::to_string(bytes) + " bytes";
+  const unsigned long long limit = usableMemoryBytes();
+  if (limit && allocatedBytes_ + bytes > limit)
+    throw Error(what + "; " + std::to_string(allocatedBytes_) + " bytes already allocated, " +
+                std::to_string(limit) + " bytes of memory)");
+  try {
+    storage_.emplace_back(b.count(), 0.f);
+  } catch (const std::bad_alloc&) {
+    throw Error(what + "; " + std::to_string(allocatedBytes_) + " bytes already allocated)");
+  }
+  allocatedBytes_ += bytes;
   return b;
 }
 

@@ -27,10 +27,15 @@ void primalDual(const View& u, const View& uBar, const View& v, const View& vBar
 void median(const View& dst, const View& src, const View& mask);
 void accumulate(const View& u, const View& w, const View& u0, const View& tangent, const View& mask, float duMax);
 
+// Physical memory, or the container's memory limit when lower (0 if unknown): create()
+// refuses buffers beyond it with a cs::Error naming the size instead of being OOM-killed.
+unsigned long long usableMemoryBytes();
+
 class CpuBackend final : public Backend {
  public:
   std::string name() const override { return "cpu"; }
   std::string device() const override;
+  unsigned long long memoryBytes() const override { return usableMemoryBytes(); }
 
   Buffer create(int width, int height, int channels) override;
   void upload(const Buffer& dst, const float* host) override;
@@ -60,6 +65,7 @@ class CpuBackend final : public Backend {
 
  private:
   std::vector<std::vector<float>> storage_;
+  unsigned long long allocatedBytes_ = 0;
 };
 
 }  // namespace cs::cpu

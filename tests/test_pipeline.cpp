@@ -129,3 +129,36 @@ TEST_CASE("setPose: a moving camera's new pose recomputes the fields; bad poses 
   CHECK(forward.valid(112, 112) == 0);
   CHECK(before.valid(112, 112) == 1);
 }
+
+TEST_CASE("setOutputs: depth-only frames give the same depth and leave the rest empty") {
+  synth::SynthPair pair = renderSmall("binocular", 0.12, 3);
+  Stereo stereo(pair.rig, preset("realtime"), "cpu");
+  const DepthResult all = stereo.compute(pair.left, pair.right);
+  stereo.setOutputs({false, false, false});
+  const DepthResult depthOnly = stereo.compute(pair.left, pair.right);
+  CHECK(depthOnly.valid.data == all.valid.data);
+  for (size_t i = 0; i < all.valid.size(); ++i)
+    if (all.valid.data[i]) CHECK(depthOnly.depth.radial.data[i] == all.depth.radial.data[i]);
+  CHECK(depthOnly.disparity.empty());
+  CHECK(depthOnly.warp.empty());
+  CHECK(depthOnly.depth.points.empty());
+  CHECK(depthOnly.depth.z.empty());
+  CHECK(!all.depth.z.empty());
+}
+
+TEST_CASE("setMask restricts the solve, and can be called again") {
+  synth::SynthPair pair = renderSmall("binocular", 0.12, 3);
+  Stereo stereo(pair.rig, preset("realtime"), "cpu");
+  ImageU8 left(pair.left.width, pair.left.height, 1);
+  for (int y = 0; y < left.height; ++y)
+    for (int x = left.width / 2; x < left.width; ++x) left(x, y) = 0;
+  for (int i = 0; i < 3; ++i) {
+    stereo.setMask(left);
+    const DepthResult r = stereo.compute(pair.left, pair.right);
+    long long rightHalf = 0, leftHalf = 0;
+    for (int y = 0; y < r.valid.height; ++y)
+      for (int x = 0; x < r.valid.width; ++x) (x >= r.valid.width / 2 ? rightHalf : leftHalf) += r.valid(x, y);
+    CHECK(rightHalf == 0);
+    CHECK(leftHalf > 1000);
+  }
+}

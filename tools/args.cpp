@@ -1,5 +1,7 @@
 #include "args.hpp"
 
+#include <cerrno>
+#include <climits>
 #include <cmath>
 #include <cstdlib>
 
@@ -50,8 +52,9 @@ int Args::getInt(const std::string& name, int fallback) const {
   auto it = options_.find(name);
   if (it == options_.end()) return fallback;
   char* end = nullptr;
+  errno = 0;
   long v = std::strtol(it->second.c_str(), &end, 10);
-  if (end == it->second.c_str() || *end != '\0')
+  if (end == it->second.c_str() || *end != '\0' || errno == ERANGE || v < INT_MIN || v > INT_MAX)
     throw Error("option --" + name + " expects an integer, got '" + it->second + "'");
   return int(v);
 }

@@ -32,10 +32,9 @@ struct Inputs {
 Inputs benchInputs(const Args& args) {
   if (args.has("calib")) {
     if (args.positional().size() != 2) throw Error("bench --calib needs LEFT RIGHT images");
-    Rig rig = loadKalibr(args.require("calib"));
-    ImageF l = loadImageFor(args.positional()[0], rig.cam0, "left");
-    ImageF r = loadImageFor(args.positional()[1], rig.cam1, "right");
-    return {rig, l, r, args.require("calib")};
+    StereoInputs in = loadStereoInputs(args.require("calib"), args.positional()[0], args.positional()[1],
+                                       args.has("scale-intrinsics"));
+    return {std::move(in.rig), std::move(in.left), std::move(in.right), args.require("calib")};
   }
   // A synthetic pair of the requested size (same default fisheye as the demo).
   int w = 800, h = 800;
@@ -57,17 +56,23 @@ Inputs benchInputs(const Args& args) {
 
 int cmdBench(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"calib", "size", "runs"});
+  known.insert({"calib", "size", "runs", "scale-intrinsics", "outputs"});
   args.allowOnly(known);
   const int runs = args.getInt("runs", 10);
   if (runs < 1) throw Error("option --runs must be >= 1");
   const Params params = paramsFromArgs(args);
   const Inputs in = benchInputs(args);
   Stereo stereo(in.rig, params, backendFromArgs(args));
+  // By default a frame is what a depth application needs: images up, depth + valid mask
+  // back. --outputs all adds disparity, warp and points (and their transfers).
+  const std::string outputs = args.get("outputs", "depth");
+  if (outputs != "depth" && outputs != "all") throw Error("option --outputs expects depth or all, got '" + outputs + "'");
+  if (outputs == "depth") stereo.setOutputs({false, false, false});
 
   std::printf("device:   %s (backend %s)\n", stereo.deviceName().c_str(), stereo.backendName().c_str());
   std::printf("input:    %s, %dx%d\n", in.what.c_str(), in.left.width, in.left.height);
   std::printf("settings: %s\n", describe(params).c_str());
+  std::printf("outputs:  %s\n", outputs == "depth" ? "radial depth + valid mask" : "all (depth, disparity, warp, points)");
   std::printf("runs:     %d after 1 warm-up frame\n", runs);
   stereo.compute(in.left, in.right);  // warm-up: first-touch allocation, caches
 

@@ -21,14 +21,16 @@ ImageU8 loadMask(const std::string& path) {
 
 int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"calib", "o", "output"});
+  known.insert({"calib", "o", "output", "scale-intrinsics"});
   args.allowOnly(known);
   if (args.positional().size() != 2) throw Error("run needs exactly two images: LEFT RIGHT");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
-  const Rig rig = loadKalibr(args.require("calib"));
   const Params params = paramsFromArgs(args);
-  const ImageF left = loadImageFor(args.positional()[0], rig.cam0, "left");
-  const ImageF right = loadImageFor(args.positional()[1], rig.cam1, "right");
+  const StereoInputs in = loadStereoInputs(args.require("calib"), args.positional()[0], args.positional()[1],
+                                           args.has("scale-intrinsics"));
+  const Rig& rig = in.rig;
+  const ImageF& left = in.left;
+  const ImageF& right = in.right;
 
   Stereo stereo(rig, params, backendFromArgs(args));
   if (args.has("mask")) stereo.setMask(loadMask(args.get("mask", "")));

@@ -45,13 +45,66 @@ Params paramsFromArgs(const Args& args) {
   return p;
 }
 
-ImageF loadImageFor(const std::string& path, const Camera& cam, const char* which) {
-  ImageF img = readPngGray(path);
-  if (img.width != cam.width || img.height != cam.height)
-    throw Error(std::string(which) + " image '" + path + "' is " + std::to_string(img.width) + "x" +
-                std::to_string(img.height) + " but the calibration is for " + std::to_string(cam.width) + "x" +
-                std::to_string(cam.height));
+namespace {
+
+std::string sizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+
+// "1/2", "3/4", "2": s = num/den in lowest terms, for messages.
+std::string ratioText(long long num, long long den) {
+  long long a = num, b = den;
+  while (b) a %= b, std::swap(a, b);
+  num /= a, den /= a;
+  return den == 1 ? std::to_string(num) : std::to_string(num) + "/" + std::to_string(den);
+}
+
+}  // namespace
+
+ImageF loadImage(const std::string& path, const char* which) {
+  PngFormat format;
+  ImageF img = readPngGray(path, &format);
+  if (format.colour)
+    std::fprintf(stderr, "curvestereo: note: %s image '%s' is colour (%d-bit%s); converted to gray (Rec. 601 luma)\n",
+                 which, path.c_str(), format.bitDepth, format.alpha ? ", alpha dropped" : "");
   return img;
+}
+
+ImageF loadImageFor(const std::string& path, const Camera& cam, const char* which) {
+  ImageF img = loadImage(path, which);
+  if (img.width != cam.width || img.height != cam.height)
+    throw Error(std::string(which) + " image '" + path + "' is " + sizeText(img.width, img.height) +
+                " but the calibration is for " + sizeText(cam.width, cam.height));
+  return img;
+}
+
+StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftPath, const std::string& rightPath,
+                              bool scaleIntrinsics) {
+  StereoInputs in{loadKalibr(calib), loadImage(leftPath, "left"), loadImage(rightPath, "right")};
+  const ImageF &l = in.left, &r = in.right;
+  if (l.width != r.width || l.height != r.height)
+    throw Error("left image '" + leftPath + "' is " + sizeText(l.width, l.height) + " but right image '" + rightPath +
+                "' is " + sizeText(r.width, r.height) + ": the pair must have the same size");
+  const Camera cam = in.rig.cam0;  // a copy: the rig's cameras may be replaced below
+  if (l.width == cam.width && l.height == cam.height) return in;
+  // The same lens at another resolution (e.g. a half-resolution T265 stream) keeps its
+  // model; only fx, fy, cx, cy scale. That holds only for a uniform rescale: a crop or a
+  // change of aspect ratio needs a new calibration.
+  const bool uniform = (long long)l.width * cam.height == (long long)l.height * cam.width;
+  const std::string mismatch = "left image '" + leftPath + "' is " + sizeText(l.width, l.height) +
+                               " but the calibration '" + calib + "' is for " + sizeText(cam.width, cam.height);
+  if (!uniform)
+    throw Error(mismatch + " (not a uniform rescale, so the intrinsics cannot be scaled: calibrate at this resolution)");
+  const std::string ratio = ratioText(l.width, cam.width);
+  if (!scaleIntrinsics)
+    throw Error(mismatch + " (an exact " + ratio + " rescale: pass --scale-intrinsics to scale the calibration)");
+  const double s = double(l.width) / double(cam.width);
+  in.rig.cam0 = in.rig.cam0.scaled(s);
+  in.rig.cam1 = in.rig.cam1.scaled(s);
+  if (in.rig.cam1.width != l.width || in.rig.cam1.height != l.height)
+    throw Error("the calibration's cameras differ in resolution; cannot scale it to " + sizeText(l.width, l.height));
+  in.rig.validate();
+  std::fprintf(stderr, "curvestereo: note: images are %s, calibration %s: intrinsics scaled by %s\n",
+               sizeText(l.width, l.height).c_str(), sizeText(cam.width, cam.height).c_str(), ratio.c_str());
+  return in;
 }
 
 void writeDepthPng(const std::string& path, const ImageF& radialDepth) {

@@ -21,8 +21,21 @@ Params paramsFromArgs(const Args& args);
 // ("vulkan" + "1" -> "vulkan:1").
 std::string backendFromArgs(const Args& args);
 
-// A gray image checked against the rig's resolution (one-line error otherwise).
+// A gray image (8/16-bit; colour is converted to luma, with a note on stderr).
+ImageF loadImage(const std::string& path, const char* which);
+// The same, checked against the rig's resolution (one-line error otherwise).
 ImageF loadImageFor(const std::string& path, const Camera& cam, const char* which);
+
+// A calibration and a stereo pair checked against each other: same size left and right,
+// and the calibration's resolution. With scaleIntrinsics, images that are a uniform
+// rescale of the calibrated resolution (e.g. a half-resolution T265 pair) get the
+// cameras scaled to them (Camera::scaled, a note on stderr); otherwise a one-line error.
+struct StereoInputs {
+  Rig rig;
+  ImageF left, right;
+};
+StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftPath, const std::string& rightPath,
+                              bool scaleIntrinsics);
 
 // Writes depth.exr, depth.png, disparity.exr, flow.flo, points.ply (and valid.png) into
 // dir; the left image colours the point cloud.

@@ -12,8 +12,10 @@ const char* kUsage = R"(usage: curvestereo <command> [options]
 
 commands:
   demo                          render a synthetic fisheye pair, solve it, report accuracy
-  run --calib CAMCHAIN LEFT RIGHT -o OUTDIR
-                                depth.exr depth.png disparity.exr flow.flo points.ply
+  run --calib CAMCHAIN LEFT RIGHT -o OUTDIR [--scale-intrinsics]
+                                depth.exr depth.png disparity.exr flow.flo points.ply;
+                                --scale-intrinsics: images at a uniform rescale of the
+                                calibrated resolution (e.g. half) scale the cameras
   eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR]
                                 accuracy against ground truth (tau>1, tau>3, EPE, abs-rel)
   bench [--calib CAMCHAIN LEFT RIGHT | --size WxH] [--runs N]
@@ -24,7 +26,7 @@ commands:
                                 render a synthetic pair with exact ground truth
 
 solver options (run, demo, eval, bench):
-  --backend auto|cpu|...  --device INDEX|NAME  --preset realtime|default|quality   --warps N  --iterations K
+  --backend auto|cpu|...  --device INDEX|NAME  --preset realtime|default   --warps N  --iterations K
   --levels L  --lambda X  --du-max PX  --max-fov DEG  --median on|off  --mask PNG (run)
 
 'curvestereo <command> --help' repeats this text.
@@ -48,7 +50,7 @@ int main(int argc, char** argv) {
     std::vector<char*> rest;
     std::string dashO = "--o";
     for (int i = 2; i < argc; ++i) rest.push_back(!std::strcmp(argv[i], "-o") ? dashO.data() : argv[i]);
-    const cs::cli::Args args(int(rest.size()), rest.data(), {"quiet"});
+    const cs::cli::Args args(int(rest.size()), rest.data(), {"quiet", "scale-intrinsics"});
     if (command == "run") return cs::cli::cmdRun(args);
     if (command == "demo") return cs::cli::cmdDemo(args);
     if (command == "synth") return cs::cli::cmdSynth(args);

@@ -1,6 +1,7 @@
 // Camera: the run-time choice among the model value types of camera_models.hpp.
 #include "curvestereo/camera.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -164,6 +165,13 @@ void Camera::validate() const {
     if (!std::isfinite(params[i])) fail(*this, std::string(paramName(model, i)) + " is not finite");
   if (params[0] <= 0 || params[1] <= 0)
     fail(*this, "focal length (fx, fy) = (" + str(params[0]) + ", " + str(params[1]) + ") is not positive");
+  // Focal lengths span about 0.15 (a 200+ degree fisheye) to 100 (a long telephoto) times
+  // the image size; far outside that is a units mistake (metres, millimetres) or garbage.
+  const double size = std::max(width, height);
+  for (int i = 0; i < 2; ++i)
+    if (params[size_t(i)] < 1e-2 * size || params[size_t(i)] > 1e4 * size)
+      fail(*this, std::string(i ? "fy" : "fx") + " = " + str(params[size_t(i)]) +
+                      " px is absurd for this image size (expected 0.01 to 10000 times " + str(size) + ")");
   // A principal point more than an image size away from the centre is a units or
   // ordering mistake (e.g. intrinsics in the wrong order), not a real lens.
   const double cxCentre = 0.5 * (width - 1), cyCentre = 0.5 * (height - 1);

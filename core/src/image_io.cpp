@@ -54,6 +54,10 @@ struct FileCloser {
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
 FilePtr openForRead(const std::string& path, const char* what) {
+  // fopen succeeds on a directory (reads then fail with EISDIR): say what it is.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw Error(std::string("cannot open ") + what + " " + quoted(path) + ": " + std::strerror(EISDIR));
   FilePtr file(std::fopen(path.c_str(), "rb"));
   if (!file) throw Error(std::string("cannot open ") + what + " " + quoted(path) + ": " + std::strerror(errno));
   return file;
@@ -298,6 +302,63 @@ std::string pickExrChannel(const Imf::ChannelList& channels, const std::string& 
   return channels.begin().name();
 }
 
+// Walks the header of a single-part EXR before OpenEXR sees it. OpenEXR allocates each
+// attribute's value at the size the file claims before reading it, so a 100-byte file can
+// ask for gigabytes (found by fuzzing); a data window is likewise trusted. Here every
+// attribute must fit in the file and the data window must be plausible.
+void checkExrHeader(std::FILE* file, const std::string& path) {
+  std::error_code ec;
+  const auto fileSize = std::filesystem::file_size(path, ec);
+  if (ec) throw Error("cannot read EXR " + quoted(path) + ": " + ec.message());
+  // Attribute names come from the file: keep control characters out of the one-line message.
+  auto corrupt = [&](std::string why) {
+    for (char& c : why)
+      if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+    return Error("corrupt EXR " + quoted(path) + ": " + why);
+  };
+  uint8_t head[8];
+  if (std::fread(head, 1, sizeof head, file) != sizeof head) throw corrupt("header is incomplete");
+  const uint32_t version = readU32LE(head + 4);
+  if ((version & 0xff) != 2) throw corrupt("unknown format version " + std::to_string(version & 0xff));
+  if (version & 0x1800) throw Error("EXR " + quoted(path) + " is deep or multi-part, which is not supported");
+  const size_t maxName = (version & 0x400) ? 255 : 31;
+  auto readName = [&](const char* what) {
+    std::string name;
+    for (int c; (c = std::fgetc(file)) != 0;) {
+      if (c == EOF) throw corrupt("header ends inside an attribute " + std::string(what));
+      if (name.size() == maxName) throw corrupt(std::string("attribute ") + what + " is too long");
+      name.push_back(char(c));
+    }
+    return name;
+  };
+  bool sawWindow = false;
+  for (;;) {
+    const std::string name = readName("name");
+    if (name.empty()) break;
+    const std::string type = readName("type");
+    if (type.empty()) throw corrupt("attribute '" + name + "' has no type");
+    uint8_t sizeBytes[4];
+    if (std::fread(sizeBytes, 1, 4, file) != 4) throw corrupt("header ends inside attribute '" + name + "'");
+    const int32_t size = int32_t(readU32LE(sizeBytes));
+    const long position = std::ftell(file);
+    if (size < 0 || position < 0 || (unsigned long long)position + (unsigned long long)size > fileSize)
+      throw corrupt("attribute '" + name + "' claims " + std::to_string(size) + " bytes, more than the file holds");
+    if (name == "dataWindow" && type == "box2i" && size == 16) {
+      uint8_t box[16];
+      if (std::fread(box, 1, 16, file) != 16) throw corrupt("header ends inside the data window");
+      const long long width = (long long)int32_t(readU32LE(box + 8)) - int32_t(readU32LE(box)) + 1;
+      const long long height = (long long)int32_t(readU32LE(box + 12)) - int32_t(readU32LE(box + 4)) + 1;
+      if (width <= 0 || height <= 0 || !plausibleSize(width, height))
+        throw Error("EXR " + quoted(path) + " has an implausible size " + std::to_string(width) + "x" +
+                    std::to_string(height));
+      sawWindow = true;
+    } else if (std::fseek(file, size, SEEK_CUR) != 0) {
+      throw corrupt("cannot skip attribute '" + name + "'");
+    }
+  }
+  if (!sawWindow) throw corrupt("no dataWindow attribute");
+}
+
 ImageF readExrChannel(const std::string& path) {
   Imf::InputFile file(path.c_str());
   const Imf::Header& header = file.header();
@@ -407,7 +468,7 @@ uint32_t flowColour(const Vec2f& f, float maxMagnitude) {
 
 // ==================================================================== PNG
 
-ImageF readPngGray(const std::string& path) {
+ImageF readPngGray(const std::string& path, PngFormat* format) {
   FilePtr file = openForRead(path, "image");
   requirePngSignature(file.get(), path);
   PngErrorState errors{};
@@ -421,6 +482,12 @@ ImageF readPngGray(const std::string& path) {
     throw Error("PNG " + quoted(path) + " has an implausible size " + std::to_string(width) + "x" +
                 std::to_string(height));
 
+  if (format) {
+    const int colorType = png_get_color_type(handle.png(), handle.info());
+    format->bitDepth = png_get_bit_depth(handle.png(), handle.info());
+    format->colour = (colorType & PNG_COLOR_MASK_COLOR) != 0;
+    format->alpha = (colorType & PNG_COLOR_MASK_ALPHA) != 0 || png_get_valid(handle.png(), handle.info(), PNG_INFO_tRNS);
+  }
   PngLayout layout;
   if (!applyGrayTransforms(handle.png(), handle.info(), &layout)) throwCorruptPng(path, file.get(), errors);
   ImageF image(static_cast<int>(layout.width), static_cast<int>(layout.height));
@@ -459,8 +526,10 @@ void writePngRgb(const std::string& path, const Image<uint32_t>& rgb) {
 // ==================================================================== OpenEXR
 
 ImageF readExr(const std::string& path) {
-  openForRead(path, "image");  // a clear errno message before OpenEXR's own wording
+  FilePtr file = openForRead(path, "image");  // a clear errno message before OpenEXR's own wording
   if (!Imf::isOpenExrFile(path.c_str())) throw Error(quoted(path) + " is not an OpenEXR file");
+  checkExrHeader(file.get(), path);
+  file.reset();
   try {
     return readExrChannel(path);
   } catch (const Error&) {

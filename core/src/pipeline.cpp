@@ -53,14 +53,18 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
     L.tensor = make(4), L.steps = make(4), L.w = make(2), L.tangent = make(2), L.scratch = make(1);
     L.pd = {make(1), make(1), make(2), make(2), make(2), make(4)};
     L.data = {make(1), make(1), make(1)};
-    backend_.upload(L.userMask, levelMask(userMask, size).data());
     levels_.push_back(L);
   }
+  setUserMask(userMask);
   const int w = rig.cam0.width, h = rig.cam0.height;
   rawRight_ = backend_.create(w, h, 1);
   calibration_ = backend_.create(w, h, 2);
   radial_ = backend_.create(w, h, 1);
   points_ = backend_.create(w, h, 3);
+}
+
+void Pipeline::setUserMask(const ImageU8& userMask) {
+  for (const Level& L : levels_) backend_.upload(L.userMask, levelMask(userMask, L.size).data());
 }
 
 void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
@@ -175,22 +179,29 @@ Pipeline::Output Pipeline::download() {
   stage("download");
   const Level& L0 = levels_[0];
   const int w = L0.size.width, h = L0.size.height;
+  const size_t n = size_t(w) * h;
   Output out;
-  std::vector<float> mask(size_t(w) * h), warp(2 * size_t(w) * h), points(3 * size_t(w) * h);
-  out.disparity = ImageF(w, h);
-  out.radial = ImageF(w, h);
+  std::vector<float> mask(n);
   backend_.download(L0.mask, mask.data());
-  backend_.download(L0.pd.u, out.disparity.data.data());
-  backend_.download(L0.w, warp.data());
-  backend_.download(radial_, out.radial.data.data());
-  backend_.download(points_, points.data());
   out.valid = ImageU8(w, h);
-  out.warp = FlowImage(w, h);
-  out.points = Image<Point3f>(w, h);
-  for (size_t i = 0; i < out.warp.size(); ++i) {
-    out.valid.data[i] = mask[i] != 0.f;
-    out.warp.data[i] = {warp[2 * i], warp[2 * i + 1]};
-    out.points.data[i] = {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
+  for (size_t i = 0; i < n; ++i) out.valid.data[i] = mask[i] != 0.f;
+  out.radial = ImageF(w, h);
+  backend_.download(radial_, out.radial.data.data());
+  if (selection_.disparity) {
+    out.disparity = ImageF(w, h);
+    backend_.download(L0.pd.u, out.disparity.data.data());
+  }
+  if (selection_.warp) {
+    std::vector<float> warp(2 * n);
+    backend_.download(L0.w, warp.data());
+    out.warp = FlowImage(w, h);
+    for (size_t i = 0; i < n; ++i) out.warp.data[i] = {warp[2 * i], warp[2 * i + 1]};
+  }
+  if (selection_.points) {
+    std::vector<float> points(3 * n);
+    backend_.download(points_, points.data());
+    out.points = Image<Point3f>(w, h);
+    for (size_t i = 0; i < n; ++i) out.points.data[i] = {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
   }
   return out;
 }

@@ -21,6 +21,15 @@ class Pipeline {
   // Recomputes the per-rig fields of every level on the backend (a moving camera calls
   // this whenever the relative pose changes).
   void setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
+  // Replaces the user's mask (empty: none); takes effect with the next setPose().
+  void setUserMask(const ImageU8& userMask);
+
+  // Which of the optional outputs run() downloads; the valid mask and radial depth always
+  // come back. Skipping the rest saves most of a GPU frame's transfer time.
+  struct Selection {
+    bool disparity = true, warp = true, points = true;
+  };
+  void select(const Selection& selection) { selection_ = selection; }
 
   struct Output {
     ImageU8 valid;
@@ -69,6 +78,7 @@ class Pipeline {
   std::vector<Level> levels_;
   Buffer rawRight_, calibration_, radial_, points_;
   bool profiling_ = false;
+  Selection selection_;
 };
 
 }  // namespace cs

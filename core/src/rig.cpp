@@ -40,6 +40,13 @@ std::string exactNumber(double v) {
   return formatNumber(v, 17);
 }
 
+// Messages are one line; YAML text quoted into them may not be.
+std::string oneLine(std::string text) {
+  for (char& c : text)
+    if (c == '\n' || c == '\r') c = ' ';
+  return text;
+}
+
 void validateCamera(const Camera& cam, const char* name) {
   try {
     cam.validate();
@@ -72,6 +79,8 @@ namespace {
 class KalibrReader {
  public:
   explicit KalibrReader(std::string path) : path_(std::move(path)) {}
+  // Parses text instead of reading a file; name stands in for the path in messages.
+  KalibrReader(std::string name, const std::string* text) : path_(std::move(name)), text_(text) {}
 
   Rig read() {
     const YAML::Node root = loadRoot();
@@ -89,8 +98,9 @@ class KalibrReader {
 
  private:
   std::string path_;
+  const std::string* text_ = nullptr;
 
-  [[noreturn]] void fail(const std::string& problem) const { throw Error(path_ + ": " + problem); }
+  [[noreturn]] void fail(const std::string& problem) const { throw Error(oneLine(path_ + ": " + problem)); }
 
   static std::string lineOf(const YAML::Node& node) {
     const YAML::Mark mark = node.Mark();
@@ -98,14 +108,16 @@ class KalibrReader {
   }
 
   YAML::Node loadRoot() const {
-    if (!std::filesystem::exists(path_)) fail("cannot open file (it does not exist)");
+    if (!text_ && !std::filesystem::exists(path_)) fail("cannot open file (it does not exist)");
     YAML::Node root;
     try {
-      root = YAML::LoadFile(path_);
+      root = text_ ? YAML::Load(*text_) : YAML::LoadFile(path_);
     } catch (const YAML::BadFile&) {
       fail("cannot open file");
     } catch (const YAML::ParserException& e) {
       fail("YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+    } catch (const YAML::Exception& e) {
+      fail(std::string("YAML error: ") + e.what());
     }
     if (!root.IsMap()) fail("not a Kalibr camchain (expected a mapping with keys cam0 and cam1)");
     return root;
@@ -275,6 +287,8 @@ void writeCamera(std::ostream& os, const Camera& cam) {
 }  // namespace
 
 Rig loadKalibr(const std::string& path) { return KalibrReader(path).read(); }
+
+Rig parseKalibr(const std::string& yaml, const std::string& name) { return KalibrReader(name, &yaml).read(); }
 
 void saveKalibr(const Rig& rig, const std::string& path) {
   // Never write a file that loadKalibr would refuse.

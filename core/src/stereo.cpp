@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <new>
 
 #include "curvestereo/backend.hpp"
 #include "pipeline.hpp"
@@ -10,6 +11,8 @@
 namespace cs {
 
 namespace {
+
+constexpr int kMaxSide = 32768;
 
 std::string sizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 
@@ -21,6 +24,39 @@ void checkImage(const ImageF& img, const Camera& cam, const char* which) {
     if (!std::isfinite(v)) throw Error(std::string(which) + " image contains NaN or infinite pixels");
 }
 
+// The pipeline's output as the public result. A solved pixel whose depth came out NaN
+// (a solver failure, or a warp that left the camera model's valid region) is reported
+// unsolved rather than passed on as if it were depth. Outputs not selected stay empty.
+DepthResult finish(Pipeline::Output&& out, std::chrono::steady_clock::time_point t0) {
+  DepthResult r;
+  r.valid = std::move(out.valid);
+  r.disparity = std::move(out.disparity);
+  r.warp = std::move(out.warp);
+  r.depth.radial = std::move(out.radial);
+  r.depth.points = std::move(out.points);
+  const bool hasDisparity = !r.disparity.empty(), hasWarp = !r.warp.empty(), hasPoints = !r.depth.points.empty();
+  if (hasPoints) r.depth.z = ImageF(r.valid.width, r.valid.height);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (size_t i = 0; i < r.valid.size(); ++i) {
+    const bool solved = r.valid.data[i] && !std::isnan(r.depth.radial.data[i]) &&
+                        (!hasDisparity || std::isfinite(r.disparity.data[i])) &&
+                        (!hasWarp || (std::isfinite(r.warp.data[i].x) && std::isfinite(r.warp.data[i].y)));
+    if (!solved) {
+      r.valid.data[i] = 0;
+      r.depth.radial.data[i] = nan;
+      if (hasDisparity) r.disparity.data[i] = nan;
+      if (hasWarp) r.warp.data[i] = {nan, nan};
+      if (hasPoints) r.depth.points.data[i] = {nan, nan, nan};
+    }
+    // A point at infinity has infinite z too (reported as +inf, also beyond 90 degrees).
+    const float radial = r.depth.radial.data[i];
+    if (hasPoints) r.depth.z.data[i] = std::isinf(radial) ? radial : r.depth.points.data[i].z;
+  }
+  r.stages = std::move(out.stages);
+  r.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
 }  // namespace
 
 Stereo::Stereo(const Rig& rig, const Params& params, const std::string& backend) : rig_(rig), params_(params) {
@@ -28,22 +64,47 @@ Stereo::Stereo(const Rig& rig, const Params& params, const std::string& backend)
   params_.validate();
   if (rig.cam0.width < 16 || rig.cam0.height < 16)
     throw Error("images of " + sizeText(rig.cam0.width, rig.cam0.height) + " are too small (at least 16x16)");
+  // The image readers' limit too: larger is a corrupt calibration, not a camera.
+  if (rig.cam0.width > kMaxSide || rig.cam0.height > kMaxSide)
+    throw Error("images of " + sizeText(rig.cam0.width, rig.cam0.height) + " are too large (at most " +
+                std::to_string(kMaxSide) + " px per side)");
   if (rig.cam1.width != rig.cam0.width || rig.cam1.height != rig.cam0.height)
     throw Error("the cameras differ in resolution (" + sizeText(rig.cam0.width, rig.cam0.height) + " and " +
                 sizeText(rig.cam1.width, rig.cam1.height) + "): both images must have the same size");
   backend_ = createBackend(backend, &backendWhy_);
   backendName_ = backend_->name();
-  pipeline_ = std::make_unique<Pipeline>(*backend_, rig_, params_, userMask_);
-  pipeline_->setPose(rig_.R, rig_.t);
+  makePipeline();
 }
 
 Stereo::~Stereo() = default;
+
+// Every buffer of every level is allocated here, so this is where a frame too large for
+// the device fails: say which frame, not just which buffer.
+void Stereo::makePipeline() {
+  const std::string frame = sizeText(rig_.cam0.width, rig_.cam0.height);
+  const unsigned long long need = Pipeline::bufferBytes(rig_.cam0.width, rig_.cam0.height, params_);
+  const unsigned long long have = backend_->memoryBytes();
+  if (have && need > have)
+    throw Error("out of memory: a " + frame + " frame needs " + std::to_string(need) + " bytes of buffers on backend " +
+                backendName_ + ", which has " + std::to_string(have) + " bytes");
+  try {
+    pipeline_.reset();
+    pipeline_ = std::make_unique<Pipeline>(*backend_, rig_, params_, userMask_);
+    pipeline_->select({outputs_.disparity, outputs_.warp, outputs_.points});
+    pipeline_->setPose(rig_.R, rig_.t);
+  } catch (const std::bad_alloc&) {
+    throw Error("out of memory setting up a " + frame + " frame on backend " + backendName_);
+  } catch (const Error& e) {
+    throw Error("cannot set up a " + frame + " frame on backend " + backendName_ + ": " + e.what());
+  }
+}
 
 void Stereo::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   Rig moved = rig_;
   moved.R = R;
   moved.t = t;
   moved.validate();
+  if (!pipeline_) throw Error("this Stereo object failed to set up (see the earlier error)");
   rig_ = moved;
   pipeline_->setPose(R, t);
 }
@@ -52,9 +113,16 @@ void Stereo::setMask(const ImageU8& mask) {
   if (mask.width != rig_.cam0.width || mask.height != rig_.cam0.height)
     throw Error("mask is " + sizeText(mask.width, mask.height) + " but the images are " +
                 sizeText(rig_.cam0.width, rig_.cam0.height));
+  if (!pipeline_) throw Error("this Stereo object failed to set up (see the earlier error)");
+  // The buffers stay: only the masks of the levels and the fields are redone.
   userMask_ = mask;
-  pipeline_ = std::make_unique<Pipeline>(*backend_, rig_, params_, userMask_);
+  pipeline_->setUserMask(userMask_);
   pipeline_->setPose(rig_.R, rig_.t);
+}
+
+void Stereo::setOutputs(const Outputs& outputs) {
+  outputs_ = outputs;
+  if (pipeline_) pipeline_->select({outputs.disparity, outputs.warp, outputs.points});
 }
 
 void Stereo::setProgress(std::function<void(double)> progress) { progress_ = std::move(progress); }
@@ -66,35 +134,12 @@ DepthResult Stereo::compute(const ImageF& left, const ImageF& right) {
   checkImage(left, rig_.cam0, "left");
   checkImage(right, rig_.cam1, "right");
   const auto t0 = std::chrono::steady_clock::now();
-  Pipeline::Output out = pipeline_->run(left, right, profiling_, progress_);
-
-  DepthResult r;
-  r.valid = std::move(out.valid);
-  r.disparity = std::move(out.disparity);
-  r.warp = std::move(out.warp);
-  r.depth.radial = std::move(out.radial);
-  r.depth.points = std::move(out.points);
-  r.depth.z = ImageF(r.valid.width, r.valid.height);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (size_t i = 0; i < r.valid.size(); ++i) {
-    // A non-finite solution would be a solver failure: report the pixel as unsolved
-    // rather than pass a NaN on as if it were depth.
-    const bool finite =
-        std::isfinite(r.disparity.data[i]) && std::isfinite(r.warp.data[i].x) && std::isfinite(r.warp.data[i].y);
-    if (!finite || !r.valid.data[i]) {
-      r.valid.data[i] = 0;
-      r.disparity.data[i] = nan;
-      r.warp.data[i] = {nan, nan};
-      r.depth.radial.data[i] = nan;
-      r.depth.points.data[i] = {nan, nan, nan};
-    }
-    // A point at infinity has infinite z too (reported as +inf, also beyond 90 degrees).
-    const float radial = r.depth.radial.data[i];
-    r.depth.z.data[i] = std::isinf(radial) ? radial : r.depth.points.data[i].z;
+  if (!pipeline_) throw Error("this Stereo object failed to set up (see the earlier error)");
+  try {
+    return finish(pipeline_->run(left, right, profiling_, progress_), t0);
+  } catch (const std::bad_alloc&) {
+    throw Error("out of memory computing a " + sizeText(left.width, left.height) + " frame (host result images)");
   }
-  r.stages = std::move(out.stages);
-  r.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  return r;
 }
 
 }  // namespace cs

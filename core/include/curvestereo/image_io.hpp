@@ -8,9 +8,17 @@
 
 namespace cs {
 
+// What a PNG file held before readPngGray converted it (for callers that report it).
+struct PngFormat {
+  int bitDepth = 0;     // 1, 2, 4, 8 or 16 (per sample, as stored)
+  bool colour = false;  // RGB, RGBA or palette: converted to luma
+  bool alpha = false;   // an alpha channel or tRNS transparency: dropped
+};
+
 // 8- or 16-bit PNG, gray / gray+alpha / RGB / RGBA / palette; colour is converted to
-// luma (Rec. 601 weights), alpha dropped. Values scaled to [0, 1].
-ImageF readPngGray(const std::string& path);
+// luma (Rec. 601 weights), alpha dropped. Values scaled to [0, 1]. `format` (optional)
+// receives what the file held.
+ImageF readPngGray(const std::string& path, PngFormat* format = nullptr);
 void writePngGray(const std::string& path, const ImageF& img);       // clamps to [0,1], 8-bit
 void writePngGray16(const std::string& path, const ImageF& img);     // clamps to [0,1], 16-bit
 void writePngRgb(const std::string& path, const Image<uint32_t>& rgb);  // 0x00RRGGBB per pixel

@@ -25,6 +25,8 @@ struct Rig {
 // pinhole+radtan, pinhole+none, omni+none, eucm+none, ds+none. Throws cs::Error with a
 // one-line message naming the file and the problem.
 Rig loadKalibr(const std::string& path);
+// The same from text already in memory; `name` stands in for the path in messages.
+Rig parseKalibr(const std::string& yaml, const std::string& name = "<camchain>");
 void saveKalibr(const Rig& rig, const std::string& path);
 
 }  // namespace cs

@@ -20,6 +20,9 @@ namespace cs {
 
 class Pipeline;
 
+// Where valid is 1, disparity and warp are finite and depth.radial is finite and positive
+// or +inf (zero disparity: a point at infinity; depth.z is +inf too). Where valid is 0,
+// every output is NaN.
 struct DepthResult {
   ImageU8 valid;          // 1 where the pixel was solved
   ImageF disparity;       // u: px along the epipolar curve (NaN where invalid)
@@ -32,7 +35,9 @@ struct DepthResult {
 class Stereo {
  public:
   // backend: "auto", "cpu", ... (see availableBackends()). Throws cs::Error on a bad
-  // rig, bad parameters, or an unavailable backend.
+  // rig, bad parameters, an unavailable backend, images smaller than 16x16 or larger than
+  // 32768 px per side, or a frame whose buffers do not fit in the backend's memory (the
+  // message names the frame size and the bytes).
   Stereo(const Rig& rig, const Params& params, const std::string& backend = "auto");
   ~Stereo();
   Stereo(const Stereo&) = delete;
@@ -47,6 +52,13 @@ class Stereo {
   // Per-stage timing (DepthResult::stages). It costs a synchronisation at every stage
   // boundary and disables frame replay on GPU backends; off by default, on in bench.
   void setProfiling(bool on) { profiling_ = on; }
+  // Which optional outputs compute() fills; `valid` and `depth.radial` always are. Fewer
+  // outputs mean less to transfer from a GPU. Outputs left out are empty images
+  // (depth.z comes with the points).
+  struct Outputs {
+    bool disparity = true, warp = true, points = true;
+  };
+  void setOutputs(const Outputs& outputs);
   // Called during compute() with the fraction of the solve done (0..1), for progress bars.
   void setProgress(std::function<void(double)> progress);
   // Images: float gray in [0,1], both of the rig's resolution. Throws cs::Error on
@@ -61,6 +73,8 @@ class Stereo {
   const Params& params() const { return params_; }
 
  private:
+  void makePipeline();  // allocates every buffer; a frame too large gives cs::Error naming its size
+
   Rig rig_;
   Params params_;
   ImageU8 userMask_;
@@ -69,6 +83,7 @@ class Stereo {
   std::unique_ptr<Pipeline> pipeline_;
   std::function<void(double)> progress_;
   bool profiling_ = false;
+  Outputs outputs_;
 };
 
 }  // namespace cs
