@@ -121,13 +121,12 @@ Buffer CpuBackend::create(int width, int height, int channels) {
   const unsigned long long bytes = (unsigned long long)b.count() * sizeof(float);
   // Refuse what the machine cannot hold before touching it: with overcommit, allocating
   // succeeds and zero-filling it gets the process killed instead of a bad_alloc.
-  const std::string what = "cpu backend: out of memory for a " + std::to_string(width) + "x" +
-                           std::to_string(height) + "x" + std::to_string(channels) + " float buffer (" +
-                           std::to_string(bytes) + " bytes";
+  const std::string what = "cpu backend: out of memory for a " + std::to_string(width) + "x" + std::to_string(height) +
+                           "x" + std::to_string(channels) + " float buffer (" + std::to_string(bytes) + " bytes";
   const unsigned long long limit = usableMemoryBytes();
   if (limit && allocatedBytes_ + bytes > limit)
-    throw Error(what + "; " + std::to_string(allocatedBytes_) + " bytes already allocated, " +
-                std::to_string(limit) + " bytes of memory)");
+    throw Error(what + "; " + std::to_string(allocatedBytes_) + " bytes already allocated, " + std::to_string(limit) +
+                " bytes of memory)");
   try {
     storage_.emplace_back(b.count(), 0.f);
   } catch (const std::bad_alloc&) {
@@ -142,9 +141,7 @@ View CpuBackend::view(const Buffer& b) {
   return View{storage_[size_t(b.id)].data(), b.width, b.height, b.channels};
 }
 
-void CpuBackend::upload(const Buffer& dst, const float* host) {
-  std::copy(host, host + dst.count(), view(dst).data);
-}
+void CpuBackend::upload(const Buffer& dst, const float* host) { std::copy(host, host + dst.count(), view(dst).data); }
 
 void CpuBackend::download(const Buffer& src, float* host) {
   const float* d = view(src).data;
@@ -181,16 +178,15 @@ void CpuBackend::upsample(const Buffer& dst, const Buffer& src, float scale, flo
   cpu::upsample(view(dst), view(src), scale, valueScale);
 }
 
-void CpuBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image,
-                                 const Buffer& mask, const TensorParams& params) {
+void CpuBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                                 const TensorParams& params) {
   cpu::structureTensor(view(tensor), view(steps), view(image), view(mask), params);
 }
 
-void CpuBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
-                                 const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
-                                 const Buffer& mask) {
-  cpu::warpDerivatives(view(data.u0), view(data.iu), view(data.iz), view(tangent), view(i0), view(i1),
-                       view(trajectory), view(w), view(u), view(mask));
+void CpuBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                                 const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) {
+  cpu::warpDerivatives(view(data.u0), view(data.iu), view(data.iz), view(tangent), view(i0), view(i1), view(trajectory),
+                       view(w), view(u), view(mask));
 }
 
 void CpuBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,

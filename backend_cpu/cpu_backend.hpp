@@ -22,8 +22,8 @@ void structureTensor(const View& tensor, const View& steps, const View& image, c
 void warpDerivatives(const View& u0, const View& iu, const View& iz, const View& tangent, const View& i0,
                      const View& i1, const View& trajectory, const View& w, const View& u, const View& mask);
 void primalDual(const View& u, const View& uBar, const View& v, const View& vBar, const View& p, const View& q,
-                const View& u0, const View& iu, const View& iz, const View& tensor, const View& steps,
-                const View& mask, const PrimalDualParams& params);
+                const View& u0, const View& iu, const View& iz, const View& tensor, const View& steps, const View& mask,
+                const PrimalDualParams& params);
 void median(const View& dst, const View& src, const View& mask);
 void accumulate(const View& u, const View& w, const View& u0, const View& tangent, const View& mask, float duMax);
 
@@ -52,8 +52,8 @@ class CpuBackend final : public Backend {
                        const TensorParams& params) override;
   void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
                        const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) override;
-  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
-                  const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) override;
+  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+                  const Buffer& mask, const PrimalDualParams& params) override;
   void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;

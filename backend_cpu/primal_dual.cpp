@@ -70,8 +70,8 @@ void primalUpdate(const Vars& s, const PrimalDualParams& prm, const PrimalDualSt
 }  // namespace
 
 void primalDual(const View& u, const View& uBar, const View& v, const View& vBar, const View& p, const View& q,
-                const View& u0, const View& iu, const View& iz, const View& tensor, const View& steps,
-                const View& mask, const PrimalDualParams& params) {
+                const View& u0, const View& iu, const View& iz, const View& tensor, const View& steps, const View& mask,
+                const PrimalDualParams& params) {
   const Vars s{u, uBar, v, vBar, p, q, u0, iu, iz, tensor, steps, mask};
   for (const PrimalDualStep& step : params.schedule) {
     parallelRows(mask.height, [&](int y) {

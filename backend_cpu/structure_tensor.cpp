@@ -14,7 +14,8 @@ std::vector<float> gaussianTaps(float sigma) {
   int radius = int(std::ceil(3.f * sigma));
   std::vector<float> taps(size_t(2 * radius + 1));
   float sum = 0.f;
-  for (int i = -radius; i <= radius; ++i) sum += taps[size_t(i + radius)] = std::exp(-float(i * i) / (2.f * sigma * sigma));
+  for (int i = -radius; i <= radius; ++i)
+    sum += taps[size_t(i + radius)] = std::exp(-float(i * i) / (2.f * sigma * sigma));
   for (auto& t : taps) t /= sum;
   return taps;
 }
@@ -34,14 +35,16 @@ std::vector<float> blur(const View& image, float sigma) {
   parallelRows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       float s = 0.f;
-      for (int i = -radius; i <= radius; ++i) s += taps[size_t(i + radius)] * image.at(std::min(std::max(x + i, 0), w - 1), y);
+      for (int i = -radius; i <= radius; ++i)
+        s += taps[size_t(i + radius)] * image.at(std::min(std::max(x + i, 0), w - 1), y);
       rows[size_t(y) * w + x] = s;
     }
   });
   parallelRows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       float s = 0.f;
-      for (int i = -radius; i <= radius; ++i) s += taps[size_t(i + radius)] * rows[size_t(std::min(std::max(y + i, 0), h - 1)) * w + x];
+      for (int i = -radius; i <= radius; ++i)
+        s += taps[size_t(i + radius)] * rows[size_t(std::min(std::max(y + i, 0), h - 1)) * w + x];
       out[size_t(y) * w + x] = s;
     }
   });
@@ -53,7 +56,9 @@ struct Tensor {
 };
 
 Tensor tensorAt(const std::vector<float>& smooth, int w, int h, int x, int y, const TensorParams& p) {
-  auto at = [&](int i, int j) { return smooth[size_t(std::min(std::max(j, 0), h - 1)) * w + std::min(std::max(i, 0), w - 1)]; };
+  auto at = [&](int i, int j) {
+    return smooth[size_t(std::min(std::max(j, 0), h - 1)) * w + std::min(std::max(i, 0), w - 1)];
+  };
   float gx = 0.5f * (at(x + 1, y) - at(x - 1, y));
   float gy = 0.5f * (at(x, y + 1) - at(x, y - 1));
   float mag = std::sqrt(gx * gx + gy * gy);

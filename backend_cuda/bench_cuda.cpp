@@ -36,17 +36,24 @@ int main(int argc, char** argv) try {
       if (i + 1 >= argc) throw cs::Error("option " + a + " needs a value");
       return argv[++i];
     };
-    if (a == "--size") size = next();
-    else if (a == "--preset") preset = next();
-    else if (a == "--levels") levels = std::stoi(next());
-    else if (a == "--warps") warps = std::stoi(next());
-    else if (a == "--iterations") iterations = std::stoi(next());
-    else if (a == "--runs") runs = std::stoi(next());
+    if (a == "--size")
+      size = next();
+    else if (a == "--preset")
+      preset = next();
+    else if (a == "--levels")
+      levels = std::stoi(next());
+    else if (a == "--warps")
+      warps = std::stoi(next());
+    else if (a == "--iterations")
+      iterations = std::stoi(next());
+    else if (a == "--runs")
+      runs = std::stoi(next());
     else if (a == "--calib") {
       calib = next();
       leftPath = next();
       rightPath = next();
-    } else throw cs::Error("unknown option " + a);
+    } else
+      throw cs::Error("unknown option " + a);
   }
   cs::Params params = cs::preset(preset);
   if (levels > 0) params.levels = levels;

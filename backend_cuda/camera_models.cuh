@@ -242,20 +242,30 @@ __device__ inline bool rtUnproject(const CamDev& c, double px, double py, V3& ra
 
 __device__ inline bool cameraProject(const CamDev& c, const V3& p, V2& px, J23* J = nullptr) {
   switch (c.model) {
-    case kUnified: return ucmProject(c, p, px, J);
-    case kExtendedUnified: return eucmProject(c, p, px, J);
-    case kDoubleSphere: return dsProject(c, p, px, J);
-    case kPinholeRadtan: return rtProject(c, p, px, J);
-    default: return kbProject(c, p, px, J);
+    case kUnified:
+      return ucmProject(c, p, px, J);
+    case kExtendedUnified:
+      return eucmProject(c, p, px, J);
+    case kDoubleSphere:
+      return dsProject(c, p, px, J);
+    case kPinholeRadtan:
+      return rtProject(c, p, px, J);
+    default:
+      return kbProject(c, p, px, J);
   }
 }
 __device__ inline bool cameraUnproject(const CamDev& c, double px, double py, V3& ray) {
   switch (c.model) {
-    case kUnified: return ucmUnproject(c, px, py, ray);
-    case kExtendedUnified: return eucmUnproject(c, px, py, ray);
-    case kDoubleSphere: return dsUnproject(c, px, py, ray);
-    case kPinholeRadtan: return rtUnproject(c, px, py, ray);
-    default: return kbUnproject(c, px, py, ray);
+    case kUnified:
+      return ucmUnproject(c, px, py, ray);
+    case kExtendedUnified:
+      return eucmUnproject(c, px, py, ray);
+    case kDoubleSphere:
+      return dsUnproject(c, px, py, ray);
+    case kPinholeRadtan:
+      return rtUnproject(c, px, py, ray);
+    default:
+      return kbUnproject(c, px, py, ray);
   }
 }
 

@@ -45,11 +45,19 @@ cudak::CamDev camDev(const CameraParams& c) {
       d.b = kb.radiusMax;
       break;
     }
-    case CameraModel::Unified: d.a = models::Unified<double>(c.params).w; break;
-    case CameraModel::ExtendedUnified: d.a = models::ExtendedUnified<double>(c.params).w; break;
-    case CameraModel::DoubleSphere: d.a = models::DoubleSphere<double>(c.params).w2; break;
-    case CameraModel::PinholeRadtan: break;
-    default: throw Error("cuda backend: unknown camera model " + std::to_string(c.model));
+    case CameraModel::Unified:
+      d.a = models::Unified<double>(c.params).w;
+      break;
+    case CameraModel::ExtendedUnified:
+      d.a = models::ExtendedUnified<double>(c.params).w;
+      break;
+    case CameraModel::DoubleSphere:
+      d.a = models::DoubleSphere<double>(c.params).w2;
+      break;
+    case CameraModel::PinholeRadtan:
+      break;
+    default:
+      throw Error("cuda backend: unknown camera model " + std::to_string(c.model));
   }
   return d;
 }
@@ -64,8 +72,10 @@ std::string probeCuda(const std::string& device) {
   int count = 0;
   const cudaError_t e = cudaGetDeviceCount(&count);
   if (e != cudaSuccess || count == 0)
-    return std::string("no CUDA device present") + (e != cudaSuccess ? std::string(" (") + cudaGetErrorString(e) + ")" : "");
-  if (index >= count) return "CUDA device " + std::to_string(index) + " requested but " + std::to_string(count) + " present";
+    return std::string("no CUDA device present") +
+           (e != cudaSuccess ? std::string(" (") + cudaGetErrorString(e) + ")" : "");
+  if (index >= count)
+    return "CUDA device " + std::to_string(index) + " requested but " + std::to_string(count) + " present";
   cudaDeviceProp prop{};
   if (cudaGetDeviceProperties(&prop, index) != cudaSuccess) return "cannot query CUDA device " + std::to_string(index);
   if (prop.major * 10 + prop.minor < 75)
@@ -317,11 +327,10 @@ void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tan
                                   const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
                                   const Buffer& mask) {
   flush();
-  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), img(slot(data.iu).dev, data.iu),
-                                     img(slot(data.iz).dev, data.iz), img(slot(tangent).dev, tangent),
-                                     img(slot(i0).dev, i0), img(slot(i1).dev, i1),
-                                     img(slot(trajectory).dev, trajectory), img(slot(w).dev, w), img(slot(u).dev, u),
-                                     img(slot(mask).dev, mask)),
+  check(cudak::launchWarpDerivatives(
+            stream_, img(slot(data.u0).dev, data.u0), img(slot(data.iu).dev, data.iu), img(slot(data.iz).dev, data.iz),
+            img(slot(tangent).dev, tangent), img(slot(i0).dev, i0), img(slot(i1).dev, i1),
+            img(slot(trajectory).dev, trajectory), img(slot(w).dev, w), img(slot(u).dev, u), img(slot(mask).dev, mask)),
         "warpDerivatives");
 }
 
@@ -378,8 +387,6 @@ void CudaBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0,
         "accumulate");
 }
 
-
-
 void CudaBackend::synchronize() {
   flush();
   ok(cudaStreamSynchronize(stream_), "synchronize");
@@ -432,8 +439,10 @@ std::vector<StageTime> CudaBackend::takeStageTimes() {
       ok(cudaEventElapsedTime(&ms, stageMarks_[i].second, stageMarks_[i + 1].second), "cudaEventElapsedTime");
       const std::string& name = stageMarks_[i].first;
       auto it = std::find_if(out.begin(), out.end(), [&](const StageTime& s) { return s.name == name; });
-      if (it == out.end()) out.push_back({name, double(ms)});
-      else it->ms += ms;
+      if (it == out.end())
+        out.push_back({name, double(ms)});
+      else
+        it->ms += ms;
     }
   }
   stageMarks_.clear();

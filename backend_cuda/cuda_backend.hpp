@@ -51,8 +51,8 @@ class CudaBackend final : public Backend {
                        const TensorParams& params) override;
   void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
                        const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) override;
-  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
-                  const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) override;
+  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+                  const Buffer& mask, const PrimalDualParams& params) override;
   void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;
@@ -87,7 +87,7 @@ class CudaBackend final : public Backend {
  private:
   struct Slot {
     float* dev = nullptr;
-    float* pinned = nullptr;  // host staging, allocated at the first transfer
+    float* pinned = nullptr;       // host staging, allocated at the first transfer
     CUevent_st* staged = nullptr;  // completes when the last upload from `pinned` is done
     Buffer buffer;
   };
@@ -117,7 +117,7 @@ class CudaBackend final : public Backend {
   unsigned long long memoryBytes_ = 0;
   std::vector<Slot> slots_;
   std::map<std::pair<int, size_t>, float*> scratch_;  // (role, floats) -> device memory
-  std::map<int, PrimalDualScratch> pdScratch_;       // by the id of pd.p
+  std::map<int, PrimalDualScratch> pdScratch_;        // by the id of pd.p
   std::vector<PendingOp> pending_;
   int residentBlocks_ = 0;  // of the persistent primal-dual kernel
   bool persistentPrimalDual_ = true;

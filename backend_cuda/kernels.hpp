@@ -92,8 +92,8 @@ cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float 
 // tmpRows, tmpSmooth: scratch of image.width * image.height floats each.
 cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorDev& p,
                                   float* tmpRows, float* tmpSmooth);
-cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1,
-                                  Img trajectory, Img w, Img u, Img mask);
+cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory,
+                                  Img w, Img u, Img mask);
 // Blocks of the primal-dual kernel the device runs at once in one cooperative launch
 // (0: no cooperative launch).
 int primalDualResidentBlocks(int device);

@@ -60,8 +60,10 @@ struct SharedTile {
 // other blocks wrote before the last grid barrier: L2 (coherent), never the SM's L1.
 template <bool kCoherent, class T>
 __device__ __forceinline__ T loadState(const T* a) {
-  if constexpr (kCoherent) return __ldcg(a);
-  else return __ldg(a);
+  if constexpr (kCoherent)
+    return __ldcg(a);
+  else
+    return __ldg(a);
 }
 
 // One iteration over the block's tile (the dual pass over the tile and its halo into
@@ -262,7 +264,8 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
 }
 
 // One iteration per launch (levels with more tiles than the device holds at once).
-__global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(PrimalDualDev pd, StepDev step, int parity) {
+__global__ void __launch_bounds__(kTileW* kTileH, kMinBlocks)
+    primalDualKernel(PrimalDualDev pd, StepDev step, int parity) {
   __shared__ SharedTile s;
   iterateTile<false>(pd, step, parity, s);
 }
@@ -270,7 +273,7 @@ __global__ void __launch_bounds__(kTileW * kTileH, kMinBlocks) primalDualKernel(
 // All iterations of a schedule in one cooperative launch, one block per tile, a grid
 // barrier between iterations (levels whose tiles all fit on the device at once: the
 // coarse levels, where one launch per iteration costs more than the iteration).
-__global__ void __launch_bounds__(kTileW * kTileH, kMinBlocksPersistent)
+__global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
     primalDualPersistentKernel(PrimalDualDev pd, const __grid_constant__ PrimalDualSchedule schedule, int parity0) {
   __shared__ SharedTile s;
   cg::grid_group grid = cg::this_grid();
@@ -295,7 +298,8 @@ __global__ void copyBackKernel(PrimalDualDev pd) {
 
 int primalDualResidentBlocks(int device) {
   int sms = 0, perSm = 0, cooperative = 0;
-  if (cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device) != cudaSuccess || !cooperative) return 0;
+  if (cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device) != cudaSuccess || !cooperative)
+    return 0;
   if (cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device) != cudaSuccess) return 0;
   if (cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, primalDualPersistentKernel, kTileW * kTileH, 0) !=
       cudaSuccess)

@@ -33,9 +33,9 @@ namespace {
 // ---------------------------------------------------------------------------------------
 // Loader and function table.
 
-#define CS_VK_GLOBAL_FNS(X)               \
-  X(vkCreateInstance)                     \
-  X(vkEnumerateInstanceLayerProperties)   \
+#define CS_VK_GLOBAL_FNS(X)                 \
+  X(vkCreateInstance)                       \
+  X(vkEnumerateInstanceLayerProperties)     \
   X(vkEnumerateInstanceExtensionProperties) \
   X(vkEnumerateInstanceVersion)
 
@@ -149,19 +149,32 @@ T vkStruct(VkStructureType type) {
 
 std::string resultText(VkResult r) {
   switch (r) {
-    case VK_SUCCESS: return "success";
-    case VK_TIMEOUT: return "timeout";
-    case VK_ERROR_OUT_OF_HOST_MEMORY: return "out of host memory";
-    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "out of device memory";
-    case VK_ERROR_INITIALIZATION_FAILED: return "initialization failed";
-    case VK_ERROR_DEVICE_LOST: return "device lost";
-    case VK_ERROR_MEMORY_MAP_FAILED: return "memory map failed";
-    case VK_ERROR_LAYER_NOT_PRESENT: return "layer not present";
-    case VK_ERROR_EXTENSION_NOT_PRESENT: return "extension not present";
-    case VK_ERROR_FEATURE_NOT_PRESENT: return "feature not present";
-    case VK_ERROR_INCOMPATIBLE_DRIVER: return "incompatible driver (no Vulkan driver installed?)";
-    case VK_ERROR_TOO_MANY_OBJECTS: return "too many objects";
-    default: return "VkResult " + std::to_string(int(r));
+    case VK_SUCCESS:
+      return "success";
+    case VK_TIMEOUT:
+      return "timeout";
+    case VK_ERROR_OUT_OF_HOST_MEMORY:
+      return "out of host memory";
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY:
+      return "out of device memory";
+    case VK_ERROR_INITIALIZATION_FAILED:
+      return "initialization failed";
+    case VK_ERROR_DEVICE_LOST:
+      return "device lost";
+    case VK_ERROR_MEMORY_MAP_FAILED:
+      return "memory map failed";
+    case VK_ERROR_LAYER_NOT_PRESENT:
+      return "layer not present";
+    case VK_ERROR_EXTENSION_NOT_PRESENT:
+      return "extension not present";
+    case VK_ERROR_FEATURE_NOT_PRESENT:
+      return "feature not present";
+    case VK_ERROR_INCOMPATIBLE_DRIVER:
+      return "incompatible driver (no Vulkan driver installed?)";
+    case VK_ERROR_TOO_MANY_OBJECTS:
+      return "too many objects";
+    default:
+      return "VkResult " + std::to_string(int(r));
   }
 }
 
@@ -174,8 +187,8 @@ std::mutex gValidationMutex;
 std::string gLastValidationMessage;
 
 VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
-                                             VkDebugUtilsMessageTypeFlagsEXT, const VkDebugUtilsMessengerCallbackDataEXT* data,
-                                             void*) {
+                                             VkDebugUtilsMessageTypeFlagsEXT,
+                                             const VkDebugUtilsMessengerCallbackDataEXT* data, void*) {
   if (severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) {
     ++gValidationCount;
     const char* msg = data && data->pMessage ? data->pMessage : "(no message)";
@@ -208,7 +221,8 @@ struct Instance {
   Instance& operator=(const Instance&) = delete;
   ~Instance() {
     if (!instance) return;
-    if (messenger && fn.vkDestroyDebugUtilsMessengerEXT) fn.vkDestroyDebugUtilsMessengerEXT(instance, messenger, nullptr);
+    if (messenger && fn.vkDestroyDebugUtilsMessengerEXT)
+      fn.vkDestroyDebugUtilsMessengerEXT(instance, messenger, nullptr);
     fn.vkDestroyInstance(instance, nullptr);
   }
 
@@ -239,7 +253,8 @@ struct Instance {
         extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
       }
       gLayerActive = haveLayer && haveDebugUtils;
-      if (!gLayerActive) std::fprintf(stderr, "curvestereo: Vulkan validation asked for but %s is not installed\n", kValidationLayer);
+      if (!gLayerActive)
+        std::fprintf(stderr, "curvestereo: Vulkan validation asked for but %s is not installed\n", kValidationLayer);
     }
 
     auto app = vkStruct<VkApplicationInfo>(VK_STRUCTURE_TYPE_APPLICATION_INFO);
@@ -253,7 +268,8 @@ struct Instance {
     ci.enabledExtensionCount = uint32_t(extensions.size());
     ci.ppEnabledExtensionNames = extensions.data();
     auto dci = vkStruct<VkDebugUtilsMessengerCreateInfoEXT>(VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT);
-    dci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    dci.messageSeverity =
+        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
     dci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
                       VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
     dci.pfnUserCallback = debugCallback;
@@ -264,28 +280,39 @@ struct Instance {
       return r == VK_ERROR_INCOMPATIBLE_DRIVER ? "no Vulkan driver" : "vkCreateInstance failed: " + resultText(r);
     }
     fn.load(instance);
-    if (!layers.empty() && fn.vkCreateDebugUtilsMessengerEXT) fn.vkCreateDebugUtilsMessengerEXT(instance, &dci, nullptr, &messenger);
+    if (!layers.empty() && fn.vkCreateDebugUtilsMessengerEXT)
+      fn.vkCreateDebugUtilsMessengerEXT(instance, &dci, nullptr, &messenger);
     return "";
   }
 };
 
 const char* typeName(VkPhysicalDeviceType t) {
   switch (t) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "CPU";
-    default: return "other";
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+      return "discrete GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+      return "integrated GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+      return "virtual GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+      return "CPU";
+    default:
+      return "other";
   }
 }
 
 int typeRank(VkPhysicalDeviceType t) {
   switch (t) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
-    default: return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+      return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+      return 1;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+      return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+      return 3;
+    default:
+      return 4;
   }
 }
 
@@ -325,24 +352,30 @@ std::vector<Candidate> candidates(const Instance& inst) {
     bool compute = false;
     for (uint32_t i = 0; i < nq && !compute; ++i)
       if (qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT) compute = true, c.queueFamily = i;
-    if (c.props.apiVersion < VK_API_VERSION_1_2) c.unusable = "supports only Vulkan < 1.2";
-    else if (!f12.bufferDeviceAddress) c.unusable = "lacks bufferDeviceAddress";
-    else if (!compute) c.unusable = "has no compute queue";
-    else if (c.props.limits.maxPushConstantsSize < 128) c.unusable = "has < 128 bytes of push constants";
+    if (c.props.apiVersion < VK_API_VERSION_1_2)
+      c.unusable = "supports only Vulkan < 1.2";
+    else if (!f12.bufferDeviceAddress)
+      c.unusable = "lacks bufferDeviceAddress";
+    else if (!compute)
+      c.unusable = "has no compute queue";
+    else if (c.props.limits.maxPushConstantsSize < 128)
+      c.unusable = "has < 128 bytes of push constants";
     out.push_back(c);
   }
   return out;
 }
 
 // The device `spec` selects, or an error. autoMode: refuse devices that are not GPUs.
-const Candidate* selectDevice(const std::vector<Candidate>& all, const std::string& spec, bool autoMode, std::string& why) {
+const Candidate* selectDevice(const std::vector<Candidate>& all, const std::string& spec, bool autoMode,
+                              std::string& why) {
   if (all.empty()) {
     why = "no Vulkan device";
     return nullptr;
   }
   std::string list;
   for (size_t i = 0; i < all.size(); ++i)
-    list += (i ? ", " : "") + std::to_string(i) + ": " + all[i].props.deviceName + " (" + typeName(all[i].props.deviceType) + ")";
+    list += (i ? ", " : "") + std::to_string(i) + ": " + all[i].props.deviceName + " (" +
+            typeName(all[i].props.deviceType) + ")";
   const Candidate* pick = nullptr;
   if (spec.empty()) {
     for (const Candidate& c : all)
@@ -351,7 +384,8 @@ const Candidate* selectDevice(const std::vector<Candidate>& all, const std::stri
       why = "no usable Vulkan device (" + std::string(all[0].props.deviceName) + " " + all[0].unusable + ")";
       return nullptr;
     }
-  } else if (std::all_of(spec.begin(), spec.end(), [](char ch) { return std::isdigit(static_cast<unsigned char>(ch)); })) {
+  } else if (std::all_of(spec.begin(), spec.end(),
+                         [](char ch) { return std::isdigit(static_cast<unsigned char>(ch)); })) {
     const size_t index = std::stoul(spec);
     if (index >= all.size()) {
       why = "no Vulkan device " + spec + " (devices: " + list + ")";
@@ -441,11 +475,19 @@ VkCam<S> toVkCam(const CameraParams& c) {
       out.d[1] = m.radiusMax;
       break;
     }
-    case CameraModel::Unified: out.d[0] = models::Unified<S>(p).w; break;
-    case CameraModel::ExtendedUnified: out.d[0] = models::ExtendedUnified<S>(p).w; break;
-    case CameraModel::DoubleSphere: out.d[0] = models::DoubleSphere<S>(p).w2; break;
-    case CameraModel::PinholeRadtan: break;
-    default: throw Error("vulkan backend: unknown camera model " + std::to_string(c.model));
+    case CameraModel::Unified:
+      out.d[0] = models::Unified<S>(p).w;
+      break;
+    case CameraModel::ExtendedUnified:
+      out.d[0] = models::ExtendedUnified<S>(p).w;
+      break;
+    case CameraModel::DoubleSphere:
+      out.d[0] = models::DoubleSphere<S>(p).w2;
+      break;
+    case CameraModel::PinholeRadtan:
+      break;
+    default:
+      throw Error("vulkan backend: unknown camera model " + std::to_string(c.model));
   }
   return out;
 }
@@ -471,10 +513,21 @@ enum Shader {
   kTriangulate64,
   kShaderCount
 };
-const char* const kShaderNames[kShaderCount] = {"warp",           "downsample",       "upsample",       "structure_tensor_blur",
-                                                "structure_tensor", "structure_tensor_steps", "warp_derivatives",
-                                                "primal_dual_dual", "primal_dual_primal", "median",         "accumulate",
-                                                "fields_f32",     "fields_f64",       "triangulate_f32", "triangulate_f64"};
+const char* const kShaderNames[kShaderCount] = {"warp",
+                                                "downsample",
+                                                "upsample",
+                                                "structure_tensor_blur",
+                                                "structure_tensor",
+                                                "structure_tensor_steps",
+                                                "warp_derivatives",
+                                                "primal_dual_dual",
+                                                "primal_dual_primal",
+                                                "median",
+                                                "accumulate",
+                                                "fields_f32",
+                                                "fields_f64",
+                                                "triangulate_f32",
+                                                "triangulate_f64"};
 
 constexpr uint32_t kPushBytes = 128;
 constexpr uint32_t kGroup = 16;
@@ -569,8 +622,8 @@ class VulkanBackend final : public Backend {
                        const TensorParams& params) override;
   void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
                        const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) override;
-  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
-                  const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) override;
+  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+                  const Buffer& mask, const PrimalDualParams& params) override;
   void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;
@@ -672,7 +725,8 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
   queueFamily_ = c->queueFamily;
   const char* forceFloat = std::getenv("CURVESTEREO_VULKAN_FLOAT_MODELS");
   float64_ = c->float64 && !(forceFloat && *forceFloat && std::string(forceFloat) != "0");
-  if (const char* t = std::getenv("CURVESTEREO_VULKAN_TIMEOUT_S")) timeoutNs_ = uint64_t(std::max(1.0, std::atof(t)) * 1e9);
+  if (const char* t = std::getenv("CURVESTEREO_VULKAN_TIMEOUT_S"))
+    timeoutNs_ = uint64_t(std::max(1.0, std::atof(t)) * 1e9);
   inst_.fn.vkGetPhysicalDeviceMemoryProperties(phys_, &memProps_);
 
   auto driver = vkStruct<VkPhysicalDeviceDriverProperties>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES);
@@ -769,7 +823,8 @@ unsigned long long VulkanBackend::memoryBytes() const {
   return best;
 }
 
-uint32_t VulkanBackend::memoryType(uint32_t bits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const {
+uint32_t VulkanBackend::memoryType(uint32_t bits, VkMemoryPropertyFlags required,
+                                   VkMemoryPropertyFlags preferred) const {
   int best = -1;
   for (uint32_t i = 0; i < memProps_.memoryTypeCount; ++i) {
     const VkMemoryPropertyFlags f = memProps_.memoryTypes[i].propertyFlags;
@@ -798,9 +853,10 @@ VulkanBackend::Arena VulkanBackend::makeBuffer(VkDeviceSize bytes, bool hostVisi
   mai.pNext = &flags;
   mai.allocationSize = req.size;
   mai.memoryTypeIndex =
-      hostVisible ? memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                               VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
-                  : memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+      hostVisible
+          ? memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                       VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
+          : memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
   VkResult r = inst_.fn.vkAllocateMemory(dev_, &mai, nullptr, &a.memory);
   if (r != VK_SUCCESS) {
     inst_.fn.vkDestroyBuffer(dev_, a.buffer, nullptr);
@@ -834,9 +890,9 @@ Buffer VulkanBackend::create(int width, int height, int channels) {
   const VkDeviceSize aligned = (bytes + 15) & ~VkDeviceSize(15);
   const unsigned long long heap = memoryBytes();
   if (heap && allocatedBytes_ + aligned > heap)
-    throw Error("vulkan backend: out of device memory: a " + std::to_string(width) + "x" + std::to_string(height) + "x" +
-                std::to_string(channels) + " buffer (" + std::to_string(bytes >> 20) + " MiB) does not fit in the " +
-                std::to_string(heap >> 20) + " MiB of " + props_.deviceName);
+    throw Error("vulkan backend: out of device memory: a " + std::to_string(width) + "x" + std::to_string(height) +
+                "x" + std::to_string(channels) + " buffer (" + std::to_string(bytes >> 20) +
+                " MiB) does not fit in the " + std::to_string(heap >> 20) + " MiB of " + props_.deviceName);
   allocatedBytes_ += aligned;
   if (arenas_.empty() || arenas_.back().used + aligned > arenas_.back().size)
     arenas_.push_back(makeBuffer(std::max<VkDeviceSize>(VkDeviceSize(64) << 20, aligned), false));
@@ -851,7 +907,8 @@ const VulkanBackend::Alloc& VulkanBackend::alloc(const Buffer& b) const {
   if (b.id < 0 || size_t(b.id) >= allocs_.size()) throw Error("vulkan backend: unknown buffer");
   const Alloc& a = allocs_[size_t(b.id)];
   if (b.width <= 0 || b.height <= 0 || b.channels <= 0 || b.count() * sizeof(float) > a.bytes)
-    throw Error("vulkan backend: buffer " + std::to_string(b.id) + " used with a shape larger than it was created with");
+    throw Error("vulkan backend: buffer " + std::to_string(b.id) +
+                " used with a shape larger than it was created with");
   return a;
 }
 
@@ -933,8 +990,8 @@ void VulkanBackend::waitFence(VkFence fence, const char* what) {
   VkResult r = inst_.fn.vkWaitForFences(dev_, 1, &fence, VK_TRUE, timeoutNs_);
   if (r == VK_TIMEOUT) {
     hung_ = true;
-    throw Error(std::string("vulkan backend: ") + what + " did not finish within " + std::to_string(timeoutNs_ / 1000000000ull) +
-                " s (device hung?)");
+    throw Error(std::string("vulkan backend: ") + what + " did not finish within " +
+                std::to_string(timeoutNs_ / 1000000000ull) + " s (device hung?)");
   }
   check(r, what);
   check(inst_.fn.vkResetFences(dev_, 1, &fence), "vkResetFences");
@@ -1058,8 +1115,10 @@ std::vector<StageTime> VulkanBackend::takeStageTimes() {
     const uint64_t a = ticks[i] & timestampMask_, b = ticks[i + 1] & timestampMask_;
     const double ms = double((b - a) & timestampMask_) * msPerTick;
     auto it = std::find_if(out.begin(), out.end(), [&](const StageTime& s) { return s.name == stampNames_[i]; });
-    if (it == out.end()) out.push_back({stampNames_[i], ms});
-    else it->ms += ms;
+    if (it == out.end())
+      out.push_back({stampNames_[i], ms});
+    else
+      it->ms += ms;
   }
   queryCount_ = 0;
   stampNames_.clear();
@@ -1099,8 +1158,8 @@ void VulkanBackend::download(const Buffer& src, float* host) {
   auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
   mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
   mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-  inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0,
-                                nullptr);
+  inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr,
+                                0, nullptr);
   flush();
   std::memcpy(host, staging_.mapped, bytes);
 }
@@ -1213,7 +1272,8 @@ void VulkanBackend::downsample(const Buffer& dst, const Buffer& src, float scale
   if (dst.channels != src.channels) throw Error("vulkan backend: downsample: channel mismatch");
   const float sigma = 0.5f * scale;  // resample.cpp decimationSigma
   const int radius = int(std::ceil(2.f * sigma));
-  PcDownsample pc{addr(dst), addr(src), dst.width, dst.height, dst.channels, src.width, src.height, radius, scale, sigma};
+  PcDownsample pc{addr(dst), addr(src),  dst.width, dst.height, dst.channels,
+                  src.width, src.height, radius,    scale,      sigma};
   dispatch(kDownsample, pc, dst.width, dst.height);
 }
 
@@ -1246,24 +1306,24 @@ void VulkanBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& t
                                     const Buffer& mask) {
   for (const Buffer* b : {&data.u0, &data.iu, &data.iz, &tangent, &i0, &i1, &trajectory, &w, &u})
     requireSameSize(*b, mask, "warpDerivatives");
-  PcWarpDerivatives pc{addr(data.u0), addr(data.iu), addr(data.iz), addr(tangent), addr(i0), addr(i1),
-                       addr(trajectory), addr(w),     addr(u),      addr(mask),    mask.width, mask.height};
+  PcWarpDerivatives pc{addr(data.u0),    addr(data.iu), addr(data.iz), addr(tangent), addr(i0),   addr(i1),
+                       addr(trajectory), addr(w),       addr(u),       addr(mask),    mask.width, mask.height};
   dispatch(kWarpDerivatives, pc, mask.width, mask.height);
 }
 
 void VulkanBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
                                const Buffer& steps, const Buffer& mask, const PrimalDualParams& prm) {
-  for (const Buffer* b : {&pd.u, &pd.uBar, &pd.v, &pd.vBar, &pd.p, &pd.q, &data.u0, &data.iu, &data.iz, &tensor, &steps})
+  for (const Buffer* b :
+       {&pd.u, &pd.uBar, &pd.v, &pd.vBar, &pd.p, &pd.q, &data.u0, &data.iu, &data.iz, &tensor, &steps})
     requireSameSize(*b, mask, "primalDual");
   const int w = mask.width, h = mask.height;
   for (const PrimalDualStep& step : prm.schedule) {
-    PcDual dual{addr(pd.uBar), addr(pd.vBar), addr(pd.p), addr(pd.q), addr(tensor), addr(steps), addr(mask),
-                w,             h,             step.sigmaScale, prm.alpha0, prm.alpha1};
+    PcDual dual{addr(pd.uBar),   addr(pd.vBar), addr(pd.p), addr(pd.q), addr(tensor), addr(steps), addr(mask), w, h,
+                step.sigmaScale, prm.alpha0,    prm.alpha1};
     dispatch(kDual, dual, w, h);
-    PcPrimal primal{addr(pd.u),   addr(pd.uBar), addr(pd.v),     addr(pd.vBar), addr(pd.p),
-                    addr(pd.q),   addr(data.u0), addr(data.iu),  addr(data.iz), addr(tensor),
-                    addr(steps),  addr(mask),    w,              h,             step.tauScale,
-                    step.theta,   prm.lambda,    prm.alpha0,     prm.alpha1};
+    PcPrimal primal{addr(pd.u),    addr(pd.uBar), addr(pd.v),   addr(pd.vBar), addr(pd.p), addr(pd.q), addr(data.u0),
+                    addr(data.iu), addr(data.iz), addr(tensor), addr(steps),   addr(mask), w,          h,
+                    step.tauScale, step.theta,    prm.lambda,   prm.alpha0,    prm.alpha1};
     dispatch(kPrimal, primal, w, h);
   }
 }
@@ -1286,7 +1346,9 @@ void VulkanBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u
 std::string probeVulkan(const std::string& device) { return probe(device, false); }
 std::string probeVulkanAuto(const std::string& device) { return probe(device, true); }
 
-std::unique_ptr<Backend> createVulkanBackend(const std::string& device) { return std::make_unique<VulkanBackend>(device); }
+std::unique_ptr<Backend> createVulkanBackend(const std::string& device) {
+  return std::make_unique<VulkanBackend>(device);
+}
 
 long long vulkanValidationMessageCount() { return gValidationCount.load(); }
 std::string vulkanValidationLastMessage() {

@@ -221,11 +221,16 @@ std::vector<Output> triangulateCase(Backend& b) {
 }  // namespace
 
 const std::vector<KernelCase>& kernelCases() {
-  static const std::vector<KernelCase> cases = {
-      {"fields", fieldsCase},   {"triangulate", triangulateCase},
-      {"warp", warpCase},       {"downsample", downsampleCase},         {"upsample", upsampleCase},
-      {"structureTensor", structureTensorCase}, {"warpDerivatives", warpDerivativesCase},
-      {"primalDual", primalDualCase}, {"median", medianCase},           {"accumulate", accumulateCase}};
+  static const std::vector<KernelCase> cases = {{"fields", fieldsCase},
+                                                {"triangulate", triangulateCase},
+                                                {"warp", warpCase},
+                                                {"downsample", downsampleCase},
+                                                {"upsample", upsampleCase},
+                                                {"structureTensor", structureTensorCase},
+                                                {"warpDerivatives", warpDerivativesCase},
+                                                {"primalDual", primalDualCase},
+                                                {"median", medianCase},
+                                                {"accumulate", accumulateCase}};
   return cases;
 }
 

@@ -45,8 +45,8 @@ struct SolveInputs {
   Rig rig;
   ImageF left, right;
 };
-SolveInputs renderSolveInputs();                             // used by the generator only
-SolveInputs loadSolveInputs(const std::string& dir);         // from the golden folder
+SolveInputs renderSolveInputs();                      // used by the generator only
+SolveInputs loadSolveInputs(const std::string& dir);  // from the golden folder
 void saveSolveInputs(const SolveInputs& in, const std::string& dir);
 std::vector<Output> runSolve(const SolveInputs& in, const std::string& backend);
 

@@ -21,7 +21,9 @@ using namespace cs;
 
 #ifndef CS_HAVE_VULKAN
 
-TEST_CASE("vulkan backend") { MESSAGE("SKIPPED: this build has no Vulkan backend (Vulkan or glslangValidator not found)"); }
+TEST_CASE("vulkan backend") {
+  MESSAGE("SKIPPED: this build has no Vulkan backend (Vulkan or glslangValidator not found)");
+}
 
 #else
 
@@ -80,23 +82,27 @@ class GuardedBackend final : public Backend {
   void download(const Buffer& s, float* h) override { b_.download(s, h); }
   void fill(const Buffer& d, float v) override { b_.fill(d, v); }
   void copy(const Buffer& d, const Buffer& s) override { b_.copy(d, s); }
-  void fields(const Buffer& m, const Buffer& c, const Buffer& t, const FieldsParams& p) override { b_.fields(m, c, t, p); }
+  void fields(const Buffer& m, const Buffer& c, const Buffer& t, const FieldsParams& p) override {
+    b_.fields(m, c, t, p);
+  }
   void warp(const Buffer& d, const Buffer& s, const Buffer& f) override { b_.warp(d, s, f); }
   void downsample(const Buffer& d, const Buffer& s, float sc) override { b_.downsample(d, s, sc); }
   void upsample(const Buffer& d, const Buffer& s, float sc, float v) override { b_.upsample(d, s, sc, v); }
-  void structureTensor(const Buffer& t, const Buffer& s, const Buffer& i, const Buffer& m, const TensorParams& p) override {
+  void structureTensor(const Buffer& t, const Buffer& s, const Buffer& i, const Buffer& m,
+                       const TensorParams& p) override {
     b_.structureTensor(t, s, i, m, p);
   }
   void warpDerivatives(const DataTermBuffers& d, const Buffer& t, const Buffer& i0, const Buffer& i1, const Buffer& tr,
                        const Buffer& w, const Buffer& u, const Buffer& m) override {
     b_.warpDerivatives(d, t, i0, i1, tr, w, u, m);
   }
-  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& d, const Buffer& t, const Buffer& s, const Buffer& m,
-                  const PrimalDualParams& p) override {
+  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& d, const Buffer& t, const Buffer& s,
+                  const Buffer& m, const PrimalDualParams& p) override {
     b_.primalDual(pd, d, t, s, m, p);
   }
   void median(const Buffer& d, const Buffer& s, const Buffer& m) override { b_.median(d, s, m); }
-  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& t, const Buffer& m, float d) override {
+  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& t, const Buffer& m,
+                  float d) override {
     b_.accumulate(u, w, u0, t, m, d);
   }
   void triangulate(const Buffer& r, const Buffer& p, const Buffer& w, const Buffer& m, const CameraParams& c,

@@ -20,7 +20,7 @@ struct Tolerance {
 // Float kernels on GPUs differ from the oracle by rounding (fused multiply-adds,
 // reordered sums, device exp/pow): a few ulps of values of order 1.
 Tolerance toleranceFor(const std::string& output) {
-  if (output.rfind("fields_", 0) == 0) return {2e-3, 1e-9};   // float camera models vs double
+  if (output.rfind("fields_", 0) == 0) return {2e-3, 1e-9};       // float camera models vs double
   if (output.rfind("triangulate_", 0) == 0) return {1e-2, 1e-8};  // metres; far points amplify rounding
   if (output.rfind("tensor_", 0) == 0) return {2e-4, 1e-9};
   return {1e-4, 1e-9};

@@ -40,7 +40,8 @@ Rig fisheyeRig(int n, const Eigen::Vector3d& centre1, double rotDeg) {
 // Smooth, dense procedural texture on a plane (features ~5-30 cm).
 double texture(double u, double v) {
   double s = 0.5;
-  const double dirs[6][3] = {{0.8, 0.6, 31}, {-0.3, 0.95, 23}, {0.5, -0.87, 41}, {0.99, 0.1, 17}, {0.2, 0.98, 53}, {-0.7, -0.7, 37}};
+  const double dirs[6][3] = {{0.8, 0.6, 31},  {-0.3, 0.95, 23}, {0.5, -0.87, 41},
+                             {0.99, 0.1, 17}, {0.2, 0.98, 53},  {-0.7, -0.7, 37}};
   for (const auto& d : dirs) s += 0.07 * std::sin(d[2] * (d[0] * u + d[1] * v) + d[2]);
   return std::min(1.0, std::max(0.0, s));
 }

@@ -226,7 +226,7 @@ TEST_CASE("maxAngle is where the valid region ends") {
     REQUIRE(maxAngle > 0);
     REQUIRE(maxAngle <= kPi);
     if (cam.model == cs::CameraModel::PinholeRadtan) continue;  // its maxAngle is the image corner
-    if (maxAngle >= kPi - 1e-9) continue;                        // the whole sphere but the back axis
+    if (maxAngle >= kPi - 1e-9) continue;                       // the whole sphere but the back axis
     Vec2<double> px;
     for (double phi : {0.3, 2.0, -1.2}) {
       CHECK(cam.project(rayAt(maxAngle - 1e-6, phi), px));
@@ -282,8 +282,8 @@ TEST_CASE("unified family and pinhole: invalid regions") {
   CHECK_FALSE(ds.project(Vec3<double>(0.1, 0, -1), px));
   CHECK_FALSE(ds.unproject(Vec2<double>(254.9 + 158.3 * 2.5, 256.9), ray));  // r^2 > 1/(2 alpha - 1)
 
-  const Camera pin = Camera::pinholeRadtan(752, 480, 458.654, 457.296, 367.215, 248.375, -0.28340811,
-                                           0.07395907, 0.00019359, 1.76187114e-05);
+  const Camera pin = Camera::pinholeRadtan(752, 480, 458.654, 457.296, 367.215, 248.375, -0.28340811, 0.07395907,
+                                           0.00019359, 1.76187114e-05);
   CHECK_FALSE(pin.project(Vec3<double>(0.1, 0.1, 0), px));
   CHECK_FALSE(pin.project(Vec3<double>(0.1, 0.1, -1), px));
 
@@ -293,8 +293,7 @@ TEST_CASE("unified family and pinhole: invalid regions") {
 }
 
 TEST_CASE("scaled() keeps the image of every ray at the scaled pixel") {
-  const Camera cam =
-      Camera::kannalaBrandt4(848, 800, 285.7, 286.8, 420.1, 403.4, -0.0066, 0.0473, -0.0458, 0.0090);
+  const Camera cam = Camera::kannalaBrandt4(848, 800, 285.7, 286.8, 420.1, 403.4, -0.0066, 0.0473, -0.0458, 0.0090);
   const Camera half = cam.scaled(0.5);
   CHECK(half.width == 424);
   CHECK(half.height == 400);

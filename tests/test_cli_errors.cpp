@@ -46,8 +46,8 @@ struct Outcome {
 };
 
 Outcome runCli(const fs::path& dir, const std::string& args) {
-  const std::string cmd = "cd '" + dir.string() + "' && '" + cliPath().string() + "' " + args +
-                          " > stdout.txt 2> stderr.txt";
+  const std::string cmd =
+      "cd '" + dir.string() + "' && '" + cliPath().string() + "' " + args + " > stdout.txt 2> stderr.txt";
   const int status = std::system(cmd.c_str());
   Outcome o;
   o.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -193,7 +193,7 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
     writeText(dir / "flipped.png", bad);
     cases.refused("PNG with a corrupted byte in IDAT", pair("flipped.png", "r.png"), "corrupt PNG");
     std::string header = png;
-    header[18] = char(0x9c), header[19] = char(0x40);  // IHDR width 40000, with a correct CRC
+    header[18] = char(0x9c), header[19] = char(0x40);    // IHDR width 40000, with a correct CRC
     const uint32_t crc = crc32(header.data() + 12, 17);  // chunk type + IHDR data
     for (int i = 0; i < 4; ++i) header[29 + i] = char(crc >> (24 - 8 * i));
     writeText(dir / "huge.png", header);
@@ -247,16 +247,18 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
                 "missing key \"cam0.intrinsics\"");
   cases.refused("cam1 missing", rig("nocam1.yaml", camchain().substr(0, camchain().find("cam1:"))),
                 "missing key \"cam1\"");
-  cases.refused("T_cn_cnm1 missing",
-                rig("noT.yaml", replaceFirst(camchain(), "  T_cn_cnm1:", "  T_typo:")), "T_cn_cnm1");
+  cases.refused("T_cn_cnm1 missing", rig("noT.yaml", replaceFirst(camchain(), "  T_cn_cnm1:", "  T_typo:")),
+                "T_cn_cnm1");
   cases.refused("intrinsics with a word in it", rig("word.yaml", replaceFirst(camchain(), "[20.", "[twenty, 20.")),
                 "is not a number ('twenty')");
   cases.refused("intrinsics with 5 values",
                 rig("five.yaml", replaceFirst(camchain(), "intrinsics: [", "intrinsics: [1.0, ")),
                 "needs 4 [fu fv pu pv]");
-  cases.refused("fx = .nan", rig("nan.yaml", replaceFirst(camchain(), "intrinsics: [", "intrinsics: [.nan, 1, 1, 1] #")),
+  cases.refused("fx = .nan",
+                rig("nan.yaml", replaceFirst(camchain(), "intrinsics: [", "intrinsics: [.nan, 1, 1, 1] #")),
                 "fx is not finite");
-  cases.refused("fy = .inf", rig("inf.yaml", replaceFirst(camchain(), "intrinsics: [", "intrinsics: [20, .inf, 31.5, 31.5] #")),
+  cases.refused("fy = .inf",
+                rig("inf.yaml", replaceFirst(camchain(), "intrinsics: [", "intrinsics: [20, .inf, 31.5, 31.5] #")),
                 "fy is not finite");
   cases.refused("negative focal length",
                 rig("negf.yaml", replaceFirst(camchain(), "intrinsics: [", "intrinsics: [-20, 20, 31.5, 31.5] #")),
@@ -288,8 +290,8 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
   cases.refused("rotation is a reflection (det = -1)",
                 rig("reflect.yaml", replaceFirst(camchain(), "- [0.0, 0.0, 1.0, 0.0]", "- [0.0, 0.0, -1.0, 0.0]")),
                 "rotation is not a rotation (det=-1");
-  cases.refused("T_cn_cnm1 is 3x4",
-                rig("t34.yaml", replaceFirst(camchain(), "  - [0.0, 0.0, 0.0, 1.0]\n", "")), "must be a 4x4 matrix");
+  cases.refused("T_cn_cnm1 is 3x4", rig("t34.yaml", replaceFirst(camchain(), "  - [0.0, 0.0, 0.0, 1.0]\n", "")),
+                "must be a 4x4 matrix");
   cases.refused("T_cn_cnm1 last row [0, 0, 0, 2]",
                 rig("lastrow.yaml", replaceFirst(camchain(), "- [0.0, 0.0, 0.0, 1.0]", "- [0.0, 0.0, 0.0, 2.0]")),
                 "last row must be [0, 0, 0, 1]");

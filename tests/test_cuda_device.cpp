@@ -97,8 +97,8 @@ TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream")
         }
         ++validCount;
         // Same backend, same kernels: the same numbers as the host API.
-        mismatches += u[i] != ref.disparity.data[i] || warp[2 * i] != ref.warp.data[i].x ||
-                      warp[2 * i + 1] != ref.warp.data[i].y;
+        mismatches +=
+            u[i] != ref.disparity.data[i] || warp[2 * i] != ref.warp.data[i].x || warp[2 * i + 1] != ref.warp.data[i].y;
         mismatches += !(radial[i] == ref.depth.radial.data[i]);
         close += std::abs(u[i] - cpu.disparity.data[i]) <= 0.05f;
       }
@@ -183,7 +183,7 @@ TEST_CASE("CUDA primal-dual: the persistent and the per-iteration kernels match 
       scale *= theta;
     }
     b.primalDual(pd, data, put(tensor, 4), put(steps, 4), put(mask, 1), prm);
-    std::vector<std::vector<float>> out;
+    std::vector<std::vector<float> > out;
     for (const Buffer& buf : {pd.u, pd.uBar, pd.v, pd.vBar, pd.p, pd.q}) {
       out.emplace_back(buf.count());
       b.download(buf, out.back().data());
@@ -200,12 +200,14 @@ TEST_CASE("CUDA primal-dual: the persistent and the per-iteration kernels match 
       long long nonFinite = 0;
       for (size_t b = 0; b < out.size(); ++b)
         for (size_t i = 0; i < out[b].size(); ++i) {
-          if (!std::isfinite(out[b][i])) ++nonFinite;
-          else maxAbs = std::max(maxAbs, double(std::abs(out[b][i] - ref[b][i])));
+          if (!std::isfinite(out[b][i]))
+            ++nonFinite;
+          else
+            maxAbs = std::max(maxAbs, double(std::abs(out[b][i] - ref[b][i])));
         }
       const std::string path = persistent ? "persistent" : "per iteration";
-      MESSAGE("primal-dual " << path << ", " << iterations
-                             << " iterations: max abs " << maxAbs << " against the oracle");
+      MESSAGE("primal-dual " << path << ", " << iterations << " iterations: max abs " << maxAbs
+                             << " against the oracle");
       CHECK(nonFinite == 0);
       CHECK(maxAbs <= 1e-4);
     }

@@ -81,14 +81,14 @@ TEST_CASE("forward motion: the epipole region is masked, the rest is valid") {
   CHECK(f.mask(50, 50) == 0);  // the focus of expansion
   CHECK(f.mask(51, 50) == 0);  // within 3 degrees of it (1 px = 1.8 deg here)
   CHECK(f.mask(50, 30) == 1);
-  CHECK(f.mask(0, 0) == 0);    // outside the 180 degree circle
+  CHECK(f.mask(0, 0) == 0);  // outside the 180 degree circle
 }
 
 TEST_CASE("field of view limit masks rays beyond half the angle") {
   Camera cam = Camera::kannalaBrandt4(101, 101, 101 / M_PI, 101 / M_PI, 50, 50);
   RigFields wide = computeFields(cam, cam, Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.1, 0, 0), {180.0, 3.0});
   RigFields narrow = computeFields(cam, cam, Eigen::Matrix3d::Identity(), Eigen::Vector3d(-0.1, 0, 0), {90.0, 3.0});
-  CHECK(wide.mask(50, 5) == 1);    // 81 degrees off axis
+  CHECK(wide.mask(50, 5) == 1);  // 81 degrees off axis
   CHECK(narrow.mask(50, 5) == 0);
   CHECK(narrow.mask(50, 30) == 1);  // 36 degrees off axis
 }

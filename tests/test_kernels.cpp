@@ -29,7 +29,8 @@ TEST_CASE("warp by a constant flow shifts a linear ramp exactly (inside the imag
     }
   warp(dst.view(), src.view(), flow.view());
   for (int y = 1; y < 17; ++y)
-    for (int x = 0; x < 21; ++x) CHECK(dst.at(x, y) == doctest::Approx(0.1f * (x + 1.25f) + 0.03f * (y - 0.5f)).epsilon(1e-5));
+    for (int x = 0; x < 21; ++x)
+      CHECK(dst.at(x, y) == doctest::Approx(0.1f * (x + 1.25f) + 0.03f * (y - 0.5f)).epsilon(1e-5));
   // Beyond the edge the sample clamps to the border value.
   CHECK(dst.at(22, 5) == doctest::Approx(src.at(22, 5) - 0.03f * 0.5f).epsilon(1e-5));
 }
@@ -48,7 +49,8 @@ TEST_CASE("downsample keeps constants and the mean of a ramp; upsample scales va
   for (int y = 0; y < 9; ++y)
     for (int x = 0; x < 11; ++x) coarse.at(x, y, 0) = coarse.at(x, y, 1) = float(x);
   upsample(fine.view(), coarse.view(), 2.f, 2.f);
-  for (int x = 2; x < 19; ++x) CHECK(fine.at(x, 4, 1) == doctest::Approx(2.f * ((x + 0.5f) / 2.f - 0.5f)).epsilon(1e-5));
+  for (int x = 2; x < 19; ++x)
+    CHECK(fine.at(x, 4, 1) == doctest::Approx(2.f * ((x + 0.5f) / 2.f - 0.5f)).epsilon(1e-5));
 }
 
 TEST_CASE("median removes an isolated spike and respects the mask") {

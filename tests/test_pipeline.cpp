@@ -46,8 +46,8 @@ void checkFiniteWhereValid(const DepthResult& r) {
       continue;
     }
     ++valid;
-    bad += !std::isfinite(r.disparity.data[i]) || !std::isfinite(r.warp.data[i].x) ||
-           std::isnan(r.depth.radial.data[i]);
+    bad +=
+        !std::isfinite(r.disparity.data[i]) || !std::isfinite(r.warp.data[i].x) || std::isnan(r.depth.radial.data[i]);
   }
   CHECK(valid > 0);
   CHECK(bad == 0);

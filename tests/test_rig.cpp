@@ -113,11 +113,13 @@ TEST_CASE("pinhole + none is radtan with zero distortion") {
   // distortion_coeffs are non-zero in the template: refused for "none".
   checkError(path, {"cam0.distortion_coeffs", "none"});
 
-  const std::string ok = writeText("rig_pinhole_none_ok", "cam0:\n  camera_model: pinhole\n  distortion_model: none\n"
-                                   "  distortion_coeffs: []\n  intrinsics: [400, 400, 320, 240]\n  resolution: [640, 480]\n"
-                                   "cam1:\n  T_cn_cnm1:\n  - [1, 0, 0, -0.1]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n"
-                                   "  - [0, 0, 0, 1]\n  camera_model: omni\n  distortion_model: none\n"
-                                   "  intrinsics: [0.9, 400, 400, 320, 240]\n  resolution: [640, 480]\n");
+  const std::string ok =
+      writeText("rig_pinhole_none_ok",
+                "cam0:\n  camera_model: pinhole\n  distortion_model: none\n"
+                "  distortion_coeffs: []\n  intrinsics: [400, 400, 320, 240]\n  resolution: [640, 480]\n"
+                "cam1:\n  T_cn_cnm1:\n  - [1, 0, 0, -0.1]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n"
+                "  - [0, 0, 0, 1]\n  camera_model: omni\n  distortion_model: none\n"
+                "  intrinsics: [0.9, 400, 400, 320, 240]\n  resolution: [640, 480]\n");
   const Rig rig = cs::loadKalibr(ok);
   CHECK(rig.cam0.model == cs::CameraModel::PinholeRadtan);
   CHECK(rig.cam0.params == std::vector<double>{400, 400, 320, 240, 0, 0, 0, 0});

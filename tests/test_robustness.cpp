@@ -11,8 +11,8 @@
 
 #include "cpu_backend.hpp"
 #include "curvestereo/stereo.hpp"
-#include "synth/scene.hpp"
 #include "golden_cases.hpp"  // hash01
+#include "synth/scene.hpp"
 #include "test_util.hpp"
 
 using namespace cs;
@@ -65,7 +65,8 @@ Census checkContract(const DepthResult& r, const Camera* cam0 = nullptr) {
         ++c.infinite;
         broken += d < 0.f;
       } else {
-        broken += !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(r.depth.z.data[i]);
+        broken +=
+            !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(r.depth.z.data[i]);
       }
       if (cam0) {
         Vec3<double> ray;
@@ -166,7 +167,7 @@ TEST_CASE("fields of view beyond 180 degrees: 220-degree Kannala-Brandt and 195-
       const Census census = checkContract(stereo.compute(pair.left, pair.right), &pair.rig.cam0);
       CHECK(census.valid > 1000);
       MESSAGE(name << " " << motion << ": " << census.valid << " valid, " << census.behind
-                     << " behind the image plane, " << census.infinite << " at infinity");
+                   << " behind the image plane, " << census.infinite << " at infinity");
       if (motion == "binocular") CHECK(census.behind > 0);  // the solve really reaches past 90 deg
     }
   }

@@ -52,8 +52,11 @@ Vector3d pixelRay(const Camera& cam, double x, double y) {
 double bilinear(const ImageF& img, double x, double y) {
   const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
   const double fx = x - x0, fy = y - y0;
-  auto at = [&](int xi, int yi) { return double(img(std::clamp(xi, 0, img.width - 1), std::clamp(yi, 0, img.height - 1))); };
-  return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) + fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+  auto at = [&](int xi, int yi) {
+    return double(img(std::clamp(xi, 0, img.width - 1), std::clamp(yi, 0, img.height - 1)));
+  };
+  return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
+         fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
 }
 
 // Distance along the ray to the first surface found by sphere tracing the scene's
@@ -141,8 +144,9 @@ Consistency viewConsistency(const SynthPair& p) {
       if (!visible) continue;
       const double residual = p.left(x, y) - bilinear(p.right, px.x(), px.y());
       c.matched += std::abs(residual);
-      const Eigen::Vector2d gradient(0.5 * (bilinear(p.right, px.x() + 1, px.y()) - bilinear(p.right, px.x() - 1, px.y())),
-                                     0.5 * (bilinear(p.right, px.x(), px.y() + 1) - bilinear(p.right, px.x(), px.y() - 1)));
+      const Eigen::Vector2d gradient(
+          0.5 * (bilinear(p.right, px.x() + 1, px.y()) - bilinear(p.right, px.x() - 1, px.y())),
+          0.5 * (bilinear(p.right, px.x(), px.y() + 1) - bilinear(p.right, px.x(), px.y() - 1)));
       normal += gradient * gradient.transpose();
       rhs += gradient * residual;
       const int rx = pick.integer(0, p.right.width - 1), ry = pick.integer(0, p.right.height - 1);
@@ -166,8 +170,8 @@ bool skyAround(const ImageF& depth, int x, int y) {
 }
 
 void checkConsistency(const Consistency& c) {
-  INFO("mean |I0 - I1|: matched " << c.matched << ", random " << c.random << " over " << c.count
-                                  << " pixels; shift " << c.shift.transpose() << " px");
+  INFO("mean |I0 - I1|: matched " << c.matched << ", random " << c.random << " over " << c.count << " pixels; shift "
+                                  << c.shift.transpose() << " px");
   CHECK(c.count > 3000);
   CHECK(c.matched < 0.1 * c.random);
   CHECK(c.shift.norm() < 0.05);

@@ -83,8 +83,8 @@ TEST_CASE("metrics: a perfect estimate has no error; missing and wrong pixels co
   CHECK(m.absRel < 1e-6);
 
   FlowImage est = gt;
-  est(50, 50) = {NAN, NAN};             // missing: an error in tau, not in the mean
-  est(51, 50).x += 2.0f;                // wrong by 2 px: > 1, not > 3
+  est(50, 50) = {NAN, NAN};  // missing: an error in tau, not in the mean
+  est(51, 50).x += 2.0f;     // wrong by 2 px: > 1, not > 3
   m = evaluate(rig, est, estDepth, depth, nullptr);
   CHECK(m.tau1 == doctest::Approx(100.0 * 2 / m.evaluated));
   CHECK(m.tau3 == doctest::Approx(100.0 * 1 / m.evaluated));

@@ -66,13 +66,15 @@ int cmdBench(const Args& args) {
   // By default a frame is what a depth application needs: images up, depth + valid mask
   // back. --outputs all adds disparity, warp and points (and their transfers).
   const std::string outputs = args.get("outputs", "depth");
-  if (outputs != "depth" && outputs != "all") throw Error("option --outputs expects depth or all, got '" + outputs + "'");
+  if (outputs != "depth" && outputs != "all")
+    throw Error("option --outputs expects depth or all, got '" + outputs + "'");
   if (outputs == "depth") stereo.setOutputs({false, false, false});
 
   std::printf("device:   %s (backend %s)\n", stereo.deviceName().c_str(), stereo.backendName().c_str());
   std::printf("input:    %s, %dx%d\n", in.what.c_str(), in.left.width, in.left.height);
   std::printf("settings: %s\n", describe(params).c_str());
-  std::printf("outputs:  %s\n", outputs == "depth" ? "radial depth + valid mask" : "all (depth, disparity, warp, points)");
+  std::printf("outputs:  %s\n",
+              outputs == "depth" ? "radial depth + valid mask" : "all (depth, disparity, warp, points)");
   std::printf("runs:     %d after 1 warm-up frame\n", runs);
   stereo.compute(in.left, in.right);  // warm-up: first-touch allocation, caches
 
@@ -95,8 +97,9 @@ int cmdBench(const Args& args) {
   }
   progress.done();
   Summary t = summarize(totals), tp = summarize(profiledTotals);
-  std::printf("\nframe:    median %.2f ms  min %.2f  max %.2f  (%.1f fps), end to end incl. upload, download, triangulation\n",
-              t.median, t.min, t.max, 1000.0 / t.median);
+  std::printf(
+      "\nframe:    median %.2f ms  min %.2f  max %.2f  (%.1f fps), end to end incl. upload, download, triangulation\n",
+      t.median, t.min, t.max, 1000.0 / t.median);
   std::printf("profiled: median %.2f ms (synchronised at each stage)\n", tp.median);
   std::printf("%-20s %10s %10s %10s\n", "stage", "median ms", "min", "max");
   for (const std::string& name : order) {

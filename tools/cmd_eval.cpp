@@ -129,7 +129,8 @@ std::vector<double> numberList(const std::string& s, const char* option) {
   for (const std::string& item : splitList(s)) {
     char* end = nullptr;
     const double v = std::strtod(item.c_str(), &end);
-    if (!end || *end || !std::isfinite(v)) throw Error(std::string("option --") + option + " expects numbers, got '" + item + "'");
+    if (!end || *end || !std::isfinite(v))
+      throw Error(std::string("option --") + option + " expects numbers, got '" + item + "'");
     out.push_back(v);
   }
   if (out.empty()) throw Error(std::string("option --") + option + " is empty");
@@ -164,7 +165,9 @@ Plan makePlan(const Args& args) {
       if (baselines::sgbmAvailable()) {
         for (double f : sgbmFovs) add("opencv-sgbm-" + fovName(f));
       } else {
-        std::fprintf(stderr, "eval: opencv-sgbm is unavailable (built without OpenCV: install libopencv-dev and re-run cmake); skipped\n");
+        std::fprintf(stderr,
+                     "eval: opencv-sgbm is unavailable (built without OpenCV: install libopencv-dev and re-run cmake); "
+                     "skipped\n");
       }
     }
     const bool known = m == "all" || m == "ours" || m == "rectified-tgv" || m == "planesweep" ||
@@ -176,10 +179,12 @@ Plan makePlan(const Args& args) {
       } else if (m.rfind("opencv-sgbm-", 0) == 0) {
         numberList(m.substr(12), "methods");
         if (!baselines::sgbmAvailable())
-          throw Error("method " + m + " is unavailable: curvestereo was built without OpenCV (install libopencv-dev and re-run cmake)");
+          throw Error("method " + m +
+                      " is unavailable: curvestereo was built without OpenCV (install libopencv-dev and re-run cmake)");
         add(m);
       } else {
-        throw Error("unknown method '" + m + "' (known: ours, rectified-tgv[-FOV], planesweep, planesweep-valid, opencv-sgbm[-FOV], all)");
+        throw Error("unknown method '" + m +
+                    "' (known: ours, rectified-tgv[-FOV], planesweep, planesweep-valid, opencv-sgbm[-FOV], all)");
       }
     }
   }
@@ -299,8 +304,8 @@ std::string markdown(const std::vector<Row>& rows, const Params& params, const A
     if (std::find(methods.begin(), methods.end(), r.method) == methods.end()) methods.push_back(r.method);
     at[{r.pair, r.method}] = &r;
   }
-  std::string s = "Settings (ours and rectified-tgv): " + describe(params) + "; backend " +
-                  args.get("backend", "auto") + "\n\n";
+  std::string s =
+      "Settings (ours and rectified-tgv): " + describe(params) + "; backend " + args.get("backend", "auto") + "\n\n";
   struct Col {
     const char* title;
     double (*get)(const Row&);
@@ -330,7 +335,8 @@ std::string markdown(const std::vector<Row>& rows, const Params& params, const A
       s += "| " + p + " |";
       double best = c.lowerBetter ? 1e300 : -1e300;
       for (auto& m : methods)
-        if (at.count({p, m})) best = c.lowerBetter ? std::min(best, c.get(*at[{p, m}])) : std::max(best, c.get(*at[{p, m}]));
+        if (at.count({p, m}))
+          best = c.lowerBetter ? std::min(best, c.get(*at[{p, m}])) : std::max(best, c.get(*at[{p, m}]));
       for (auto& m : methods) {
         if (!at.count({p, m})) {
           s += " - |";
@@ -375,7 +381,8 @@ int runSweep(const Args& args, const Params& base, const std::string& backend) {
   const std::string what = spec.substr(0, eq);
   const double a = numberList(spec.substr(eq + 1, dots - eq - 1), "sweep")[0];
   const double b = numberList(spec.substr(dots + 2), "sweep")[0];
-  if (what != "warps" && what != "dumax") throw Error("option --sweep: unknown parameter '" + what + "' (warps, dumax)");
+  if (what != "warps" && what != "dumax")
+    throw Error("option --sweep: unknown parameter '" + what + "' (warps, dumax)");
   if (!(b >= a)) throw Error("option --sweep: empty range");
   std::vector<int> warpsList;
   std::vector<double> duList;
@@ -416,7 +423,8 @@ int runSweep(const Args& args, const Params& base, const std::string& backend) {
       std::vector<std::string> c = splitList(line);
       if (c.size() < 10) continue;
       SweepPoint sp{std::stoi(c[1]), std::stod(c[2]), c[3], Metrics{}, std::stod(c[6]), std::stod(c[9])};
-      sp.m.tau1 = std::stod(c[4]), sp.m.tau3 = std::stod(c[5]), sp.m.epe = std::stod(c[7]), sp.m.density = std::stod(c[8]);
+      sp.m.tau1 = std::stod(c[4]), sp.m.tau3 = std::stod(c[5]), sp.m.epe = std::stod(c[7]),
+      sp.m.density = std::stod(c[8]);
       points.push_back(sp);
       names.insert(c[3]);
     }
@@ -433,10 +441,11 @@ int runSweep(const Args& args, const Params& base, const std::string& backend) {
         Stereo stereo(pr.rig, p, backend);
         DepthResult r = stereo.compute(pr.left, pr.right);
         ImageF error;
-        Metrics m = evaluate(pr.rig, r.warp, r.depth.radial, pr.depthLeft, pr.depthRight.empty() ? nullptr : &pr.depthRight, &error);
+        Metrics m = evaluate(pr.rig, r.warp, r.depth.radial, pr.depthLeft,
+                             pr.depthRight.empty() ? nullptr : &pr.depthRight, &error);
         points.push_back({n, du, pr.name, m, tauFromError(error, 5.0), r.totalMs});
-        std::printf("%s N=%d du_max=%.2f  tau>1 %.2f %%  tau>3 %.2f %%  tau>5 %.2f %%  %.0f ms\n", pr.name.c_str(), n, du,
-                    m.tau1, m.tau3, points.back().tau5, r.totalMs);
+        std::printf("%s N=%d du_max=%.2f  tau>1 %.2f %%  tau>3 %.2f %%  tau>5 %.2f %%  %.0f ms\n", pr.name.c_str(), n,
+                    du, m.tau1, m.tau3, points.back().tau5, r.totalMs);
         std::fflush(stdout);
         flush();
       }
@@ -467,7 +476,7 @@ int runSweep(const Args& args, const Params& base, const std::string& backend) {
     }
     series = {t5, t1, tm};
     plotSpec.title = "error and time vs warping iterations (du_max " + fovName(duList[0]) + " px, " +
-                 std::to_string(pairs.size()) + " pairs)";
+                     std::to_string(pairs.size()) + " pairs)";
     plotSpec.xLabel = "warping iterations N";
     plotSpec.yLabel = "% erroneous pixels";
     plotSpec.yLabelRight = "time (ms)";
@@ -516,8 +525,9 @@ int cmdEval(const Args& args) {
     const Pair pair = loadPair(dir);
     for (const Row& r : evaluatePair(pair, plan, args, params, backend, args.get("maps", ""))) {
       rows.push_back(r);
-      std::printf("%-22s %-18s tau>1 %6.2f %%  tau>3 %6.2f %%  EPE %7.3f px  abs-rel %5.2f %%  density %5.1f %%  %6.0f ms\n",
-                  r.pair.c_str(), r.method.c_str(), r.m.tau1, r.m.tau3, r.m.epe, 100 * r.m.absRel, r.m.density, r.ms);
+      std::printf(
+          "%-22s %-18s tau>1 %6.2f %%  tau>3 %6.2f %%  EPE %7.3f px  abs-rel %5.2f %%  density %5.1f %%  %6.0f ms\n",
+          r.pair.c_str(), r.method.c_str(), r.m.tau1, r.m.tau3, r.m.epe, 100 * r.m.absRel, r.m.density, r.ms);
     }
     std::fflush(stdout);
     writeCsv(csv, rows);  // rewritten after each pair so a long run leaves partial results

@@ -26,8 +26,8 @@ int cmdRun(const Args& args) {
   if (args.positional().size() != 2) throw Error("run needs exactly two images: LEFT RIGHT");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   const Params params = paramsFromArgs(args);
-  const StereoInputs in = loadStereoInputs(args.require("calib"), args.positional()[0], args.positional()[1],
-                                           args.has("scale-intrinsics"));
+  const StereoInputs in =
+      loadStereoInputs(args.require("calib"), args.positional()[0], args.positional()[1], args.has("scale-intrinsics"));
   const Rig& rig = in.rig;
   const ImageF& left = in.left;
   const ImageF& right = in.right;

@@ -91,8 +91,8 @@ void printSummary(const synth::SynthConfig& cfg, const synth::SynthPair& pair, d
   std::printf("%s scene, seed %u, %s %dx%d, %d x %d samples per pixel\n", cfg.scene.c_str(), cfg.seed,
               pair.rig.cam0.modelName().c_str(), pair.rig.cam0.width, pair.rig.cam0.height, cfg.samplesPerAxis,
               cfg.samplesPerAxis);
-  std::printf("camera 1 centre in camera 0: (%.3f, %.3f, %.3f) m (baseline %.3f m), rotation %.2f deg\n",
-              centre1.x(), centre1.y(), centre1.z(), centre1.norm(), angle);
+  std::printf("camera 1 centre in camera 0: (%.3f, %.3f, %.3f) m (baseline %.3f m), rotation %.2f deg\n", centre1.x(),
+              centre1.y(), centre1.z(), centre1.norm(), angle);
   std::printf("depth (left): %.2f .. %.1f m, sky %.1f %% of valid pixels\n", left.nearest, left.farthest,
               100.0 * left.skyFraction);
   std::printf("rendered in %.1f s; wrote %s/{left,right}.png depth_{left,right}.exr camchain.yaml\n", seconds,

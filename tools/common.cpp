@@ -12,8 +12,8 @@
 
 namespace cs::cli {
 
-const std::set<std::string> kSolverOptions = {"preset", "warps",   "iterations", "levels",  "lambda", "du-max",
-                                              "alpha0", "alpha1",  "max-fov",    "gamma",   "median", "backend",
+const std::set<std::string> kSolverOptions = {"preset", "warps",   "iterations", "levels", "lambda", "du-max",
+                                              "alpha0", "alpha1",  "max-fov",    "gamma",  "median", "backend",
                                               "mask",   "epipole", "beta",       "eta",    "device"};
 
 std::string backendFromArgs(const Args& args) {
@@ -92,7 +92,8 @@ StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftP
   const std::string mismatch = "left image '" + leftPath + "' is " + sizeText(l.width, l.height) +
                                " but the calibration '" + calib + "' is for " + sizeText(cam.width, cam.height);
   if (!uniform)
-    throw Error(mismatch + " (not a uniform rescale, so the intrinsics cannot be scaled: calibrate at this resolution)");
+    throw Error(mismatch +
+                " (not a uniform rescale, so the intrinsics cannot be scaled: calibrate at this resolution)");
   const std::string ratio = ratioText(l.width, cam.width);
   if (!scaleIntrinsics)
     throw Error(mismatch + " (an exact " + ratio + " rescale: pass --scale-intrinsics to scale the calibration)");

@@ -43,8 +43,10 @@ void Backend::beginStage(const std::string& name) {
   const double t = nowMs();
   if (!currentStage_.empty()) {
     auto it = std::find_if(stages_.begin(), stages_.end(), [&](const StageTime& s) { return s.name == currentStage_; });
-    if (it == stages_.end()) stages_.push_back({currentStage_, t - stageStartMs_});
-    else it->ms += t - stageStartMs_;
+    if (it == stages_.end())
+      stages_.push_back({currentStage_, t - stageStartMs_});
+    else
+      it->ms += t - stageStartMs_;
   }
   currentStage_ = name;
   stageStartMs_ = t;

@@ -61,7 +61,9 @@ std::unique_ptr<Backend> createBackend(const std::string& spec, std::string* why
     const std::string reason = name == "auto" && e.probeAuto ? e.probeAuto(device) : e.probe(device);
     if (reason.empty()) {
       std::unique_ptr<Backend> b = e.create(device);
-      if (why) *why = name == "auto" ? "auto: using " + e.name + (skipped.empty() ? "" : " (" + skipped + ")") : e.name + ": requested";
+      if (why)
+        *why = name == "auto" ? "auto: using " + e.name + (skipped.empty() ? "" : " (" + skipped + ")")
+                              : e.name + ": requested";
       return b;
     }
     if (name != "auto") throw Error("backend '" + spec + "' is not usable: " + reason);

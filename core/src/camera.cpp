@@ -25,8 +25,8 @@ bool hasModelParams(const Camera& cam) { return int(cam.params.size()) == models
 
 }  // namespace
 
-Camera Camera::kannalaBrandt4(int w, int h, double fx, double fy, double cx, double cy, double k1, double k2,
-                              double k3, double k4) {
+Camera Camera::kannalaBrandt4(int w, int h, double fx, double fy, double cx, double cy, double k1, double k2, double k3,
+                              double k4) {
   return makeCamera(CameraModel::KannalaBrandt4, w, h, {fx, fy, cx, cy, k1, k2, k3, k4});
 }
 
@@ -34,8 +34,7 @@ Camera Camera::unified(int w, int h, double fx, double fy, double cx, double cy,
   return makeCamera(CameraModel::Unified, w, h, {fx, fy, cx, cy, xi});
 }
 
-Camera Camera::extendedUnified(int w, int h, double fx, double fy, double cx, double cy, double alpha,
-                               double beta) {
+Camera Camera::extendedUnified(int w, int h, double fx, double fy, double cx, double cy, double alpha, double beta) {
   return makeCamera(CameraModel::ExtendedUnified, w, h, {fx, fy, cx, cy, alpha, beta});
 }
 
@@ -43,8 +42,8 @@ Camera Camera::doubleSphere(int w, int h, double fx, double fy, double cx, doubl
   return makeCamera(CameraModel::DoubleSphere, w, h, {fx, fy, cx, cy, xi, alpha});
 }
 
-Camera Camera::pinholeRadtan(int w, int h, double fx, double fy, double cx, double cy, double k1, double k2,
-                             double p1, double p2) {
+Camera Camera::pinholeRadtan(int w, int h, double fx, double fy, double cx, double cy, double k1, double k2, double p1,
+                             double p2) {
   return makeCamera(CameraModel::PinholeRadtan, w, h, {fx, fy, cx, cy, k1, k2, p1, p2});
 }
 
@@ -92,11 +91,16 @@ Camera Camera::scaled(double s) const {
 
 std::string Camera::modelName() const {
   switch (model) {
-    case CameraModel::KannalaBrandt4: return "kannala-brandt4";
-    case CameraModel::Unified: return "unified";
-    case CameraModel::ExtendedUnified: return "extended-unified";
-    case CameraModel::DoubleSphere: return "double-sphere";
-    case CameraModel::PinholeRadtan: return "pinhole-radtan";
+    case CameraModel::KannalaBrandt4:
+      return "kannala-brandt4";
+    case CameraModel::Unified:
+      return "unified";
+    case CameraModel::ExtendedUnified:
+      return "extended-unified";
+    case CameraModel::DoubleSphere:
+      return "double-sphere";
+    case CameraModel::PinholeRadtan:
+      return "pinhole-radtan";
   }
   return "unknown";
 }
@@ -124,11 +128,16 @@ const char* paramName(CameraModel model, size_t i) {
   static const char* const radtan[] = {"k1", "k2", "p1", "p2"};
   if (i < 4) return common[i];
   switch (model) {
-    case CameraModel::KannalaBrandt4: return kb4[i - 4];
-    case CameraModel::Unified: return "xi";
-    case CameraModel::ExtendedUnified: return i == 4 ? "alpha" : "beta";
-    case CameraModel::DoubleSphere: return i == 4 ? "xi" : "alpha";
-    case CameraModel::PinholeRadtan: return radtan[i - 4];
+    case CameraModel::KannalaBrandt4:
+      return kb4[i - 4];
+    case CameraModel::Unified:
+      return "xi";
+    case CameraModel::ExtendedUnified:
+      return i == 4 ? "alpha" : "beta";
+    case CameraModel::DoubleSphere:
+      return i == 4 ? "xi" : "alpha";
+    case CameraModel::PinholeRadtan:
+      return radtan[i - 4];
   }
   return "?";
 }
@@ -150,7 +159,8 @@ void checkModelParameters(const Camera& cam) {
       if (p[5] < 0 || p[5] > 1) fail(cam, "alpha = " + str(p[5]) + " is outside [0, 1]");
       break;
     case CameraModel::KannalaBrandt4:
-    case CameraModel::PinholeRadtan: break;
+    case CameraModel::PinholeRadtan:
+      break;
   }
 }
 

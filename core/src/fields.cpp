@@ -20,8 +20,8 @@ double angleToBaseline(const Vec3<double>& ray, const Eigen::Vector3d& baselineD
 
 }  // namespace
 
-PixelFields fieldsAtPixel(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R,
-                          const Eigen::Vector3d& t, const FieldOptions& opt, int x, int y) {
+PixelFields fieldsAtPixel(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                          const FieldOptions& opt, int x, int y) {
   const Eigen::Vector3d tPrime = R.transpose() * t;
   PixelFields f;
   Vec2<double> px(x, y);
@@ -49,8 +49,8 @@ PixelFields fieldsAtPixel(const Camera& cam0, const Camera& cam1, const Eigen::M
   return f;
 }
 
-RigFields computeFields(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R,
-                        const Eigen::Vector3d& t, const FieldOptions& options) {
+RigFields computeFields(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                        const FieldOptions& options) {
   RigFields out;
   out.mask = ImageU8(cam0.width, cam0.height, 0);
   out.calibration = FlowImage(cam0.width, cam0.height);

@@ -244,8 +244,8 @@ bool decodePngRows(png_structp png, const PngLayout* layout, png_byte* buffer, f
   return true;
 }
 
-bool encodePng(png_structp png, png_infop info, std::FILE* file, int width, int height, int bitDepth,
-               int colorType, png_bytepp rows) {
+bool encodePng(png_structp png, png_infop info, std::FILE* file, int width, int height, int bitDepth, int colorType,
+               png_bytepp rows) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_init_io(png, file);
   png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), bitDepth, colorType, PNG_INTERLACE_NONE,
@@ -425,12 +425,8 @@ Rgb flowWheel(float turn) {  // turn in [0, 1)
     float share;
     Rgb to;
   };
-  static const std::array<Leg, 6> legs = {{{15.f, {1, 1, 0}},
-                                           {6.f, {0, 1, 0}},
-                                           {4.f, {0, 1, 1}},
-                                           {11.f, {0, 0, 1}},
-                                           {13.f, {1, 0, 1}},
-                                           {6.f, {1, 0, 0}}}};
+  static const std::array<Leg, 6> legs = {
+      {{15.f, {1, 1, 0}}, {6.f, {0, 1, 0}}, {4.f, {0, 1, 1}}, {11.f, {0, 0, 1}}, {13.f, {1, 0, 1}}, {6.f, {1, 0, 0}}}};
   const float total = 55.f;
   float along = std::clamp(turn, 0.f, 1.f) * total;
   Rgb from{1, 0, 0};
@@ -476,8 +472,7 @@ ImageF readPngGray(const std::string& path, PngFormat* format) {
   if (!handle.valid()) throw Error("cannot read PNG " + quoted(path) + ": libpng initialisation failed");
 
   png_uint_32 width = 0, height = 0;
-  if (!readPngInfo(handle.png(), handle.info(), file.get(), &width, &height))
-    throwCorruptPng(path, file.get(), errors);
+  if (!readPngInfo(handle.png(), handle.info(), file.get(), &width, &height)) throwCorruptPng(path, file.get(), errors);
   if (width == 0 || height == 0 || !plausibleSize(width, height))
     throw Error("PNG " + quoted(path) + " has an implausible size " + std::to_string(width) + "x" +
                 std::to_string(height));
@@ -486,7 +481,8 @@ ImageF readPngGray(const std::string& path, PngFormat* format) {
     const int colorType = png_get_color_type(handle.png(), handle.info());
     format->bitDepth = png_get_bit_depth(handle.png(), handle.info());
     format->colour = (colorType & PNG_COLOR_MASK_COLOR) != 0;
-    format->alpha = (colorType & PNG_COLOR_MASK_ALPHA) != 0 || png_get_valid(handle.png(), handle.info(), PNG_INFO_tRNS);
+    format->alpha =
+        (colorType & PNG_COLOR_MASK_ALPHA) != 0 || png_get_valid(handle.png(), handle.info(), PNG_INFO_tRNS);
   }
   PngLayout layout;
   if (!applyGrayTransforms(handle.png(), handle.info(), &layout)) throwCorruptPng(path, file.get(), errors);
@@ -584,8 +580,7 @@ FlowImage readFlo(const std::string& path) {
   if (std::fread(bytes.data(), 1, bytes.size(), file.get()) != bytes.size())
     throw Error("truncated .flo " + quoted(path) + ": flow data ends early");
   FlowImage flow(width, height);
-  for (size_t i = 0; i < flow.size(); ++i)
-    flow.data[i] = {readF32LE(&bytes[8 * i]), readF32LE(&bytes[8 * i + 4])};
+  for (size_t i = 0; i < flow.size(); ++i) flow.data[i] = {readF32LE(&bytes[8 * i]), readF32LE(&bytes[8 * i + 4])};
   return flow;
 }
 
@@ -608,8 +603,7 @@ void writeFlo(const std::string& path, const FlowImage& flow) {
 
 void writePly(const std::string& path, const std::vector<PlyPoint>& points) {
   // Gray is stored as red = green = blue: viewers understand colour, not "gray".
-  const std::string header = "ply\nformat binary_little_endian 1.0\nelement vertex " +
-                             std::to_string(points.size()) +
+  const std::string header = "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(points.size()) +
                              "\nproperty float x\nproperty float y\nproperty float z\n"
                              "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
   std::vector<uint8_t> bytes(header.begin(), header.end());

@@ -68,8 +68,7 @@ std::string describe(const Params& p) {
   std::ostringstream s;
   s << "levels=" << p.levels << " scale=" << p.scale << " warps=" << p.warps << " iterations=" << p.iterations
     << " du_max=" << p.duMax << " lambda=" << p.lambda << " alpha0=" << p.alpha0 << " alpha1=" << p.alpha1
-    << " beta=" << p.beta << " eta=" << p.eta << " median=" << (p.medianFilter ? "on" : "off")
-    << " gamma=" << p.gamma;
+    << " beta=" << p.beta << " eta=" << p.eta << " median=" << (p.medianFilter ? "on" : "off") << " gamma=" << p.gamma;
   return s.str();
 }
 

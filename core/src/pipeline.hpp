@@ -47,7 +47,7 @@ class Pipeline {
   // the frame with no host transfer and no synchronisation, and read the results from
   // the other buffers on the device.
   struct DeviceIO {
-    Buffer left, right;                            // 1 ch, full resolution
+    Buffer left, right;                             // 1 ch, full resolution
     Buffer valid, disparity, warp, radial, points;  // 1, 1, 2, 1, 3 ch
   };
   DeviceIO deviceIO() const;

@@ -67,8 +67,7 @@ void Rig::validate() const {
     throw Error("T_cn_cnm1 rotation is not a rotation (det=" + formatNumber(det, 10) +
                 ", |R^T R - I|=" + formatNumber(orthoError, 3) + ")");
   // Depth from stereo needs a baseline; a zero t is usually a missing or mis-read pose.
-  if (t.norm() < 1e-6)
-    throw Error("zero baseline (|t| = " + formatNumber(t.norm(), 3) + " m in T_cn_cnm1)");
+  if (t.norm() < 1e-6) throw Error("zero baseline (|t| = " + formatNumber(t.norm(), 3) + " m in T_cn_cnm1)");
 }
 
 // ------------------------------------------------------------------------------------------
@@ -157,9 +156,9 @@ class KalibrReader {
     // Kalibr always writes distortion_model; other tools omit it for omni/eucm/ds.
     const std::string distortion =
         node["distortion_model"] ? text(node["distortion_model"], name + ".distortion_model") : "none";
-    const std::vector<double> coeffs =
-        node["distortion_coeffs"] ? numbers(node["distortion_coeffs"], name + ".distortion_coeffs")
-                                  : std::vector<double>();
+    const std::vector<double> coeffs = node["distortion_coeffs"]
+                                           ? numbers(node["distortion_coeffs"], name + ".distortion_coeffs")
+                                           : std::vector<double>();
     const std::vector<double> intrinsics = numbers(require(node, "intrinsics", name), name + ".intrinsics");
     const std::vector<double> resolution = numbers(require(node, "resolution", name), name + ".resolution");
     if (resolution.size() != 2) fail(name + ".resolution must be [width, height]");
@@ -175,8 +174,7 @@ class KalibrReader {
     return cam;
   }
 
-  CameraModel modelFor(const std::string& name, const std::string& cameraModel,
-                       const std::string& distortion) const {
+  CameraModel modelFor(const std::string& name, const std::string& cameraModel, const std::string& distortion) const {
     static const char* supported =
         "supported: pinhole+equidistant, pinhole+radtan, pinhole+none, omni+none, eucm+none, ds+none";
     const bool none = distortion == "none";
@@ -217,8 +215,7 @@ class KalibrReader {
       return;
     }
     if (coeffs.size() != 4)
-      fail(key + " has " + std::to_string(coeffs.size()) + " values but distortion_model " + distortion +
-           " needs 4");
+      fail(key + " has " + std::to_string(coeffs.size()) + " values but distortion_model " + distortion + " needs 4");
     params.insert(params.end(), coeffs.begin(), coeffs.end());
   }
 
@@ -233,8 +230,8 @@ class KalibrReader {
       for (int c = 0; c < 4; ++c) T(r, c) = row[size_t(c)];
     }
     if ((T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9)
-      fail(key + " last row must be [0, 0, 0, 1], got [" + formatNumber(T(3, 0)) + ", " + formatNumber(T(3, 1)) +
-           ", " + formatNumber(T(3, 2)) + ", " + formatNumber(T(3, 3)) + "]");
+      fail(key + " last row must be [0, 0, 0, 1], got [" + formatNumber(T(3, 0)) + ", " + formatNumber(T(3, 1)) + ", " +
+           formatNumber(T(3, 2)) + ", " + formatNumber(T(3, 3)) + "]");
     rig.R = T.topLeftCorner<3, 3>();
     rig.t = T.topRightCorner<3, 1>();
   }
@@ -266,11 +263,16 @@ KalibrCamera toKalibr(const Camera& cam) {
     return v;
   };
   switch (cam.model) {
-    case CameraModel::KannalaBrandt4: return {"pinhole", "equidistant", pinhole, extra};
-    case CameraModel::PinholeRadtan: return {"pinhole", "radtan", pinhole, extra};
-    case CameraModel::Unified: return {"omni", "none", modelFirst(), {}};
-    case CameraModel::ExtendedUnified: return {"eucm", "none", modelFirst(), {}};
-    case CameraModel::DoubleSphere: return {"ds", "none", modelFirst(), {}};
+    case CameraModel::KannalaBrandt4:
+      return {"pinhole", "equidistant", pinhole, extra};
+    case CameraModel::PinholeRadtan:
+      return {"pinhole", "radtan", pinhole, extra};
+    case CameraModel::Unified:
+      return {"omni", "none", modelFirst(), {}};
+    case CameraModel::ExtendedUnified:
+      return {"eucm", "none", modelFirst(), {}};
+    case CameraModel::DoubleSphere:
+      return {"ds", "none", modelFirst(), {}};
   }
   throw Error("saveKalibr: unknown camera model");
 }
@@ -302,8 +304,7 @@ void saveKalibr(const Rig& rig, const std::string& path) {
   os << "cam0:\n";
   writeCamera(os, rig.cam0);
   os << "cam1:\n  T_cn_cnm1:\n";
-  for (int r = 0; r < 3; ++r)
-    os << "  - " << list({rig.R(r, 0), rig.R(r, 1), rig.R(r, 2), rig.t(r)}) << "\n";
+  for (int r = 0; r < 3; ++r) os << "  - " << list({rig.R(r, 0), rig.R(r, 1), rig.R(r, 2), rig.t(r)}) << "\n";
   os << "  - [0.0, 0.0, 0.0, 1.0]\n";
   writeCamera(os, rig.cam1);
 

@@ -43,8 +43,7 @@ bool warpFromDepth(const Camera& cam0, const Eigen::Vector3d& tPrime, const Vec2
   return true;
 }
 
-DepthMaps triangulate(const Camera& cam0, const Eigen::Vector3d& tPrime, const FlowImage& w,
-                      const ImageU8& valid) {
+DepthMaps triangulate(const Camera& cam0, const Eigen::Vector3d& tPrime, const FlowImage& w, const ImageU8& valid) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   DepthMaps out;
   out.radial = ImageF(w.width, w.height, nan);

@@ -22,7 +22,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (const cs::Camera* cam : {&rig.cam0, &rig.cam1}) {
     const double w = cam->width, h = cam->height;
     for (const cs::Vec2<double>& px : {cs::Vec2<double>(0, 0), cs::Vec2<double>(w - 1, h - 1),
-                                      cs::Vec2<double>(0.5 * (w - 1), 0.5 * (h - 1)), cs::Vec2<double>(w - 1, 0)}) {
+                                       cs::Vec2<double>(0.5 * (w - 1), 0.5 * (h - 1)), cs::Vec2<double>(w - 1, 0)}) {
       cs::Vec3<double> ray;
       if (!cam->unproject(px, ray)) continue;
       cs::Vec2<double> back;

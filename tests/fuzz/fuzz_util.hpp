@@ -12,9 +12,9 @@ namespace cs::fuzz {
 
 inline const std::string& scratchPath(const char* suffix) {
   static const std::string path = [&] {
-    const std::filesystem::path dir =
-        std::filesystem::is_directory("/dev/shm") ? std::filesystem::path("/dev/shm")
-                                                  : std::filesystem::temp_directory_path();
+    const std::filesystem::path dir = std::filesystem::is_directory("/dev/shm")
+                                          ? std::filesystem::path("/dev/shm")
+                                          : std::filesystem::temp_directory_path();
     return (dir / ("curvestereo_fuzz_" + std::to_string(getpid()) + suffix)).string();
   }();
   return path;

@@ -6,18 +6,25 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
-#include <ImfTiledOutputFile.h>
 #include <ImfRgbaFile.h>
-#include <vector>
+#include <ImfTiledOutputFile.h>
 #include <string>
+#include <vector>
 int main(int, char** argv) {
   std::string dir = argv[1];
   const int w = 7, h = 5;
   std::vector<Imf::Rgba> px(w * h);
   for (int i = 0; i < w * h; ++i) px[i] = Imf::Rgba(i * 0.1f, 1.f - i * 0.02f, 0.5f, 1.f);
-  struct C { Imf::Compression c; const char* n; } cs[] = {{Imf::NO_COMPRESSION, "rgba_half_none"}, {Imf::RLE_COMPRESSION, "rgba_half_rle"}, {Imf::PIZ_COMPRESSION, "rgba_half_piz"}, {Imf::ZIPS_COMPRESSION, "rgba_half_zips"}, {Imf::PXR24_COMPRESSION, "rgba_half_pxr24"}, {Imf::B44_COMPRESSION, "rgba_half_b44"}, {Imf::DWAA_COMPRESSION, "rgba_half_dwaa"}};
+  struct C {
+    Imf::Compression c;
+    const char* n;
+  } cs[] = {{Imf::NO_COMPRESSION, "rgba_half_none"},     {Imf::RLE_COMPRESSION, "rgba_half_rle"},
+            {Imf::PIZ_COMPRESSION, "rgba_half_piz"},     {Imf::ZIPS_COMPRESSION, "rgba_half_zips"},
+            {Imf::PXR24_COMPRESSION, "rgba_half_pxr24"}, {Imf::B44_COMPRESSION, "rgba_half_b44"},
+            {Imf::DWAA_COMPRESSION, "rgba_half_dwaa"}};
   for (auto& c : cs) {
-    Imf::RgbaOutputFile f((dir + "/" + c.n + ".exr").c_str(), w, h, Imf::WRITE_RGBA, 1, Imath::V2f(0, 0), 1, Imf::INCREASING_Y, c.c);
+    Imf::RgbaOutputFile f((dir + "/" + c.n + ".exr").c_str(), w, h, Imf::WRITE_RGBA, 1, Imath::V2f(0, 0), 1,
+                          Imf::INCREASING_Y, c.c);
     f.setFrameBuffer(px.data(), 1, w);
     f.writePixels(h);
   }

@@ -11,9 +11,9 @@
 namespace cs::baselines {
 
 struct MethodResult {
-  FlowImage warp;   // w into the rotation-compensated image 1; NaN where there is no estimate
-  ImageF depth;     // radial depth of camera 0 (metres); NaN none, +inf at infinity
-  double ms = 0;    // wall time of the method (rectification and mapping back included)
+  FlowImage warp;  // w into the rotation-compensated image 1; NaN where there is no estimate
+  ImageF depth;    // radial depth of camera 0 (metres); NaN none, +inf at infinity
+  double ms = 0;   // wall time of the method (rectification and mapping back included)
 };
 
 // w(x) = pi0(depth(x) pi0^-1(x) + t') - x for every pixel of camera 0 (NaN where depth is
@@ -29,4 +29,3 @@ float sampleBilinear(const ImageF& img, double x, double y);
 double msSince(const std::chrono::steady_clock::time_point& start);
 
 }  // namespace cs::baselines
-

@@ -21,9 +21,9 @@ MethodResult runRectifiedTgv(const Rig& rig, const ImageF& left, const ImageF& r
 // only those passing the left-right check and the distinctiveness test.
 struct PlaneSweepOptions {
   SweepParams sweep;
-  double lrTolPx = 1.0;        // left-right tolerance (level px)
-  float minDistinct = 0.02f;   // second-best minus best cost
-  float maxCost = 0.7f;        // 1 - ZNCC of the winner
+  double lrTolPx = 1.0;       // left-right tolerance (level px)
+  float minDistinct = 0.02f;  // second-best minus best cost
+  float maxCost = 0.7f;       // 1 - ZNCC of the winner
 };
 void runPlaneSweep(const Rig& rig, const ImageF& left, const ImageF& right, const PlaneSweepOptions& options,
                    MethodResult& all, MethodResult& valid);
@@ -35,11 +35,11 @@ struct SgbmOptions {
   int speckleWindow = 100;
   int speckleRange = 2;
   int disp12MaxDiff = 1;
-  double minDepth = 0.8;   // sets numDisparities = f B / minDepth (rounded up to 16)
+  double minDepth = 0.8;  // sets numDisparities = f B / minDepth (rounded up to 16)
 };
 bool sgbmAvailable();
 // Throws cs::Error when built without OpenCV.
-MethodResult runSgbm(const Rig& rig, const ImageF& left, const ImageF& right, const SgbmOptions& options,
-                     double fovDeg, int size);
+MethodResult runSgbm(const Rig& rig, const ImageF& left, const ImageF& right, const SgbmOptions& options, double fovDeg,
+                     int size);
 
 }  // namespace cs::baselines

@@ -28,9 +28,9 @@ float bilinear(const ImageF& img, float x, float y) {
 // Per-pixel state of the streaming winner-take-all (no cost volume is stored).
 struct Track {
   float best = kBad, before = kBad, after = kBad;  // winner and its two neighbours' costs
-  float second = kBad;                              // best cost not adjacent to the winner
-  float last = kBad;                                // cost at k - 1
-  float minTo1 = kBad, minTo2 = kBad;               // min cost over 0..k-1 and 0..k-2
+  float second = kBad;                             // best cost not adjacent to the winner
+  float last = kBad;                               // cost at k - 1
+  float minTo1 = kBad, minTo2 = kBad;              // min cost over 0..k-1 and 0..k-2
   int k = -1;
 };
 
@@ -202,7 +202,8 @@ SweepResult planeSweep(const Rig& rig, const ImageF& img0Full, const ImageF& img
         std::fill(cok.begin(), cok.end(), 0.f);
         for (int j = y - r; j <= y + r; ++j) {
           const size_t b = size_t(j - ya) * W;
-          for (int x = 0; x < W; ++x) c1[x] += h1[b + x], c11[x] += h11[b + x], c01[x] += h01[b + x], cok[x] += hok[b + x];
+          for (int x = 0; x < W; ++x)
+            c1[x] += h1[b + x], c11[x] += h11[b + x], c01[x] += h01[b + x], cok[x] += hok[b + x];
         }
         for (int x = r; x < W - r; ++x) {
           const size_t idx = size_t(y) * W + x;
@@ -220,8 +221,10 @@ SweepResult planeSweep(const Rig& rig, const ImageF& img0Full, const ImageF& img
             tr.second = tr.minTo2;  // exactly the costs 0..k-2 are not adjacent to k
             tr.best = cost, tr.k = k, tr.before = tr.last, tr.after = kBad;
           } else {
-            if (k == tr.k + 1) tr.after = cost;
-            else tr.second = std::min(tr.second, cost);
+            if (k == tr.k + 1)
+              tr.after = cost;
+            else
+              tr.second = std::min(tr.second, cost);
           }
           tr.minTo2 = tr.minTo1;
           tr.minTo1 = std::min(tr.minTo1, cost);

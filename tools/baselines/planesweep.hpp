@@ -24,12 +24,12 @@ struct SweepParams {
 };
 
 struct SweepResult {
-  Camera cam;          // the reference camera at the working level
-  ImageF invDepth;     // 1 / radial depth (1/m), sub-hypothesis refined; NaN where nothing scored
-  ImageF cost;         // 1 - ZNCC of the winner (0 = perfect match, 2 = inverted)
-  ImageF distinct;     // best non-adjacent other cost minus the winner's (>= 0; 0 = ambiguous)
+  Camera cam;       // the reference camera at the working level
+  ImageF invDepth;  // 1 / radial depth (1/m), sub-hypothesis refined; NaN where nothing scored
+  ImageF cost;      // 1 - ZNCC of the winner (0 = perfect match, 2 = inverted)
+  ImageF distinct;  // best non-adjacent other cost minus the winner's (>= 0; 0 = ambiguous)
   int planes = 0;
-  double qMax = 0;     // inverse depth of the nearest hypothesis
+  double qMax = 0;  // inverse depth of the nearest hypothesis
 };
 
 // Sweep with rig.cam0 as the reference. Images at the rig's resolution, gray [0, 1].

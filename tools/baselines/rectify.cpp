@@ -92,7 +92,8 @@ ImageF remap(const ImageF& img, const FlowImage& map, ImageU8* valid) {
     const int y0 = std::min(int(y), img.height - 2 < 0 ? 0 : img.height - 2);
     const int x1 = std::min(x0 + 1, img.width - 1), y1 = std::min(y0 + 1, img.height - 1);
     const float fx = float(x - x0), fy = float(y - y0);
-    out.data[i] = (1 - fy) * ((1 - fx) * img(x0, y0) + fx * img(x1, y0)) + fy * ((1 - fx) * img(x0, y1) + fx * img(x1, y1));
+    out.data[i] =
+        (1 - fy) * ((1 - fx) * img(x0, y0) + fx * img(x1, y0)) + fy * ((1 - fx) * img(x0, y1) + fx * img(x1, y1));
     if (valid) valid->data[i] = 1;
   }
   return out;

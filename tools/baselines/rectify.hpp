@@ -17,10 +17,10 @@
 namespace cs::baselines {
 
 struct Rectification {
-  Rig rectified;            // pinhole rig, R = I, t = (-B, 0, 0)
-  Eigen::Matrix3d rot0;     // X_rect0 = rot0 * X_cam0
-  Eigen::Matrix3d rot1;     // X_rect1 = rot1 * X_cam1
-  FlowImage map0, map1;     // rectified pixel -> source pixel of camera 0 / 1 (NaN: no source)
+  Rig rectified;         // pinhole rig, R = I, t = (-B, 0, 0)
+  Eigen::Matrix3d rot0;  // X_rect0 = rot0 * X_cam0
+  Eigen::Matrix3d rot1;  // X_rect1 = rot1 * X_cam1
+  FlowImage map0, map1;  // rectified pixel -> source pixel of camera 0 / 1 (NaN: no source)
   double fovDeg = 0;
 };
 

@@ -37,8 +37,8 @@ MethodResult runSgbm(const Rig& rig, const ImageF& left, const ImageF& right, co
   const int bs = o.blockSize;
   // P1 / P2 as OpenCV's documentation recommends for one channel (8 and 32 times the
   // block area); 3-way mode is OpenCV's faster variant with the same energy.
-  auto sgbm = cv::StereoSGBM::create(0, numDisp, bs, 8 * bs * bs, 32 * bs * bs, o.disp12MaxDiff, 0,
-                                     o.uniquenessRatio, o.speckleWindow, o.speckleRange, cv::StereoSGBM::MODE_SGBM_3WAY);
+  auto sgbm = cv::StereoSGBM::create(0, numDisp, bs, 8 * bs * bs, 32 * bs * bs, o.disp12MaxDiff, 0, o.uniquenessRatio,
+                                     o.speckleWindow, o.speckleRange, cv::StereoSGBM::MODE_SGBM_3WAY);
   cv::Mat disp;
   sgbm->compute(L, Rm, disp);
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -59,7 +59,8 @@ MethodResult runSgbm(const Rig& rig, const ImageF& left, const ImageF& right, co
 bool sgbmAvailable() { return false; }
 
 MethodResult runSgbm(const Rig&, const ImageF&, const ImageF&, const SgbmOptions&, double, int) {
-  throw Error("opencv-sgbm is unavailable: curvestereo was built without OpenCV (install libopencv-dev and re-run cmake)");
+  throw Error(
+      "opencv-sgbm is unavailable: curvestereo was built without OpenCV (install libopencv-dev and re-run cmake)");
 }
 
 #endif

@@ -16,8 +16,8 @@ class Random {
 
   // Uniform in [0, 1) with 53 random bits (two engine outputs).
   double unit() {
-    const uint64_t high = engine_() >> 5;  // 27 bits
-    const uint64_t low = engine_() >> 6;   // 26 bits
+    const uint64_t high = engine_() >> 5;                            // 27 bits
+    const uint64_t low = engine_() >> 6;                             // 26 bits
     return double((high << 26) | low) * (1.0 / 9007199254740992.0);  // / 2^53
   }
   double uniform(double lo, double hi) { return lo + (hi - lo) * unit(); }

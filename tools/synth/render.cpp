@@ -107,8 +107,8 @@ void checkConfig(const SynthConfig& cfg) {
 
 }  // namespace
 
-void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options,
-                ImageF& image, ImageF& depth, const ProgressCallback& progress) {
+void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options, ImageF& image,
+                ImageF& depth, const ProgressCallback& progress) {
   if (camera.width <= 0 || camera.height <= 0) throw Error("synth: the camera has no image size");
   const int samples = std::max(1, options.samplesPerAxis);
   image = ImageF(camera.width, camera.height, 0.f);
@@ -147,8 +147,8 @@ Rig makeRig(const SynthConfig& cfg) {
   const Eigen::Matrix3d axes1 = Eigen::AngleAxisd(cfg.rotationDeg * M_PI / 180.0, Vector3d::UnitY()).toRotationMatrix();
   Rig rig;
   rig.cam0 = rig.cam1 = cfg.camera;
-  rig.R = axes1.transpose();   // X1 = R X0 + t
-  rig.t = -rig.R * centre1;    // so that camera 1's centre, -R^T t, is centre1
+  rig.R = axes1.transpose();  // X1 = R X0 + t
+  rig.t = -rig.R * centre1;   // so that camera 1's centre, -R^T t, is centre1
   return rig;
 }
 

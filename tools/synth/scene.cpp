@@ -110,10 +110,14 @@ bool intersectCylinder(const Shape& s, const Ray& ray, double tMax, double& t, V
 
 bool intersectShape(const Shape& s, const Ray& ray, double tMax, double& t, Vector3d& normal) {
   switch (s.kind) {
-    case ShapeKind::Plane: return intersectPlane(s, ray, tMax, t, normal);
-    case ShapeKind::Box: return intersectBox(s, ray, tMax, t, normal);
-    case ShapeKind::Sphere: return intersectSphere(s, ray, tMax, t, normal);
-    case ShapeKind::Cylinder: return intersectCylinder(s, ray, tMax, t, normal);
+    case ShapeKind::Plane:
+      return intersectPlane(s, ray, tMax, t, normal);
+    case ShapeKind::Box:
+      return intersectBox(s, ray, tMax, t, normal);
+    case ShapeKind::Sphere:
+      return intersectSphere(s, ray, tMax, t, normal);
+    case ShapeKind::Cylinder:
+      return intersectCylinder(s, ray, tMax, t, normal);
   }
   return false;
 }
@@ -129,7 +133,8 @@ double signedDistance(const Shape& s, const Vector3d& p) {
       if (!(beyondRim > 0.0)) return height;
       return std::copysign(std::hypot(beyondRim, height), height);
     }
-    case ShapeKind::Sphere: return (p - s.centre).norm() - s.halfSize.x();
+    case ShapeKind::Sphere:
+      return (p - s.centre).norm() - s.halfSize.x();
     case ShapeKind::Box: {
       const Vector3d q = toBoxFrame(s, p - s.centre).cwiseAbs() - s.halfSize;
       return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);

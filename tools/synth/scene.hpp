@@ -30,7 +30,7 @@ struct Shape {
   // Plane: a point on it. Box, sphere: the centre. Cylinder (vertical): the centre
   // of its axis.
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // plane only (unit)
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();        // plane only (unit)
   double extent = std::numeric_limits<double>::infinity();  // plane only: a disc of this radius around centre
   // Box: half extents in its own frame. Sphere: x = radius. Cylinder: x = radius,
   // z = half height.
@@ -58,8 +58,7 @@ struct Pose {
 
 // A plane through point; with a finite extent, only the disc of that radius around point.
 Shape makePlane(const Eigen::Vector3d& point, const Eigen::Vector3d& normal, const Material& m,
-                const std::string& name = "plane",
-                double extent = std::numeric_limits<double>::infinity());
+                const std::string& name = "plane", double extent = std::numeric_limits<double>::infinity());
 Shape makeBox(const Eigen::Vector3d& centre, const Eigen::Vector3d& halfSize, double yawRad, const Material& m,
               const std::string& name = "box");
 Shape makeSphere(const Eigen::Vector3d& centre, double radius, const Material& m, const std::string& name = "sphere");
@@ -89,7 +88,7 @@ class Scene {
 
   const std::vector<Shape>& shapes() const { return shapes_; }
   Eigen::Vector3d lightDir = Eigen::Vector3d(0.3, -0.4, 0.866).normalized();  // unit, world
-  Pose viewpoint;  // where the generator put camera 0
+  Pose viewpoint;                                                             // where the generator put camera 0
 
  private:
   std::vector<Shape> shapes_;
@@ -123,8 +122,8 @@ struct RenderOptions {
 // image: average brightness of the sub-pixel rays (those outside the valid region count
 // as black), 0 where the pixel centre is invalid. depth: radial distance of the surface
 // hit by the ray through the pixel centre; +inf for sky; 0 where the centre is invalid.
-void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options,
-                ImageF& image, ImageF& depth, const ProgressCallback& progress = {});
+void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options, ImageF& image,
+                ImageF& depth, const ProgressCallback& progress = {});
 
 // Equidistant Kannala-Brandt (k = 0), size x size, f = size / pi, c = (size - 1) / 2:
 // a 180 deg image circle touching the borders, like the dev data set.

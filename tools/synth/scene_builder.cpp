@@ -71,8 +71,8 @@ class Builder {
   void chooseLight(double minElevationDeg, double maxElevationDeg) {
     const double elevation = degrees(random_.uniform(minElevationDeg, maxElevationDeg));
     const double azimuth = random_.uniform(0.0, 2.0 * M_PI);
-    scene_.lightDir = Vector3d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
-                               std::sin(elevation));
+    scene_.lightDir =
+        Vector3d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
   }
 
   Material material(double patternScale) { return randomMaterial(random_, patternScale); }
@@ -126,8 +126,8 @@ class Builder {
   Shape nearShape(bool box, const std::string& name) {
     const double n = spec_.nearest;
     if (box) {
-      const Vector3d size = n * Vector3d{random_.uniform(0.12, 0.3), random_.uniform(0.12, 0.3),
-                                         random_.uniform(0.2, 0.5)};
+      const Vector3d size =
+          n * Vector3d{random_.uniform(0.12, 0.3), random_.uniform(0.12, 0.3), random_.uniform(0.2, 0.5)};
       const double yaw = random_.uniform(0.0, M_PI);
       return makeBox(Vector3d::Zero(), size, yaw, material(0.08 * n), name);
     }

@@ -43,18 +43,30 @@ double lerp(double a, double b, double t) { return a + (b - a) * t; }
 // edge midpoints of a cube (Perlin's choice: no axis is preferred).
 double cornerDot(uint32_t h, double x, double y, double z) {
   switch (h % 12u) {
-    case 0: return x + y;
-    case 1: return -x + y;
-    case 2: return x - y;
-    case 3: return -x - y;
-    case 4: return x + z;
-    case 5: return -x + z;
-    case 6: return x - z;
-    case 7: return -x - z;
-    case 8: return y + z;
-    case 9: return -y + z;
-    case 10: return y - z;
-    default: return -y - z;
+    case 0:
+      return x + y;
+    case 1:
+      return -x + y;
+    case 2:
+      return x - y;
+    case 3:
+      return -x - y;
+    case 4:
+      return x + z;
+    case 5:
+      return -x + z;
+    case 6:
+      return x - z;
+    case 7:
+      return -x - z;
+    case 8:
+      return y + z;
+    case 9:
+      return -y + z;
+    case 10:
+      return y - z;
+    default:
+      return -y - z;
   }
 }
 
@@ -137,17 +149,19 @@ double stripes(const Vector3d& q, uint32_t seed) {
 }
 
 // Soft-edged blobs: thresholded noise.
-double blobs(const Vector3d& q, uint32_t seed) {
-  return 1.6 * smoothstep(-0.15, 0.15, gradientNoise(q, seed)) - 0.8;
-}
+double blobs(const Vector3d& q, uint32_t seed) { return 1.6 * smoothstep(-0.15, 0.15, gradientNoise(q, seed)) - 0.8; }
 
 // One pattern evaluation at unit feature size.
 double patternAt(Pattern pattern, const Vector3d& q, uint32_t seed) {
   switch (pattern) {
-    case Pattern::Cells: return cells(q, seed);
-    case Pattern::Checker: return checker(q);
-    case Pattern::Stripes: return stripes(q, seed);
-    case Pattern::Blobs: break;
+    case Pattern::Cells:
+      return cells(q, seed);
+    case Pattern::Checker:
+      return checker(q);
+    case Pattern::Stripes:
+      return stripes(q, seed);
+    case Pattern::Blobs:
+      break;
   }
   return blobs(q, seed);
 }

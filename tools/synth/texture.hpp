@@ -19,10 +19,10 @@ enum class Pattern { Blobs, Cells, Checker, Stripes };
 struct Material {
   uint32_t seed = 1;
   Pattern pattern = Pattern::Blobs;
-  double noiseScale = 1.0;    // wavelength of the coarsest noise octave (m)
-  double patternScale = 0.3;  // blob / cell / checker / stripe size at the finest level (m)
-  double bias = 0.0;          // shifts the mean albedo (tanh domain)
-  double contrast = 1.2;      // gain of the texture signal (tanh domain)
+  double noiseScale = 1.0;                              // wavelength of the coarsest noise octave (m)
+  double patternScale = 0.3;                            // blob / cell / checker / stripe size at the finest level (m)
+  double bias = 0.0;                                    // shifts the mean albedo (tanh domain)
+  double contrast = 1.2;                                // gain of the texture signal (tanh domain)
   Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  // rotates the texture lattice
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();
 };

@@ -102,20 +102,19 @@ class Backend {
   virtual void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) = 0;
   // tensor (4 ch: d11 d12 d22, unused) and preconditioned steps (4 ch: tau_u tau_v sigma_p1
   // sigma_p2) from the image and mask.
-  virtual void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image,
-                               const Buffer& mask, const TensorParams& params) = 0;
+  virtual void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                               const TensorParams& params) = 0;
   // tangent g = normalize(T(x + w)) (2 ch) and the data term at x + w.
-  virtual void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
-                               const Buffer& i1, const Buffer& trajectory, const Buffer& w,
-                               const Buffer& u, const Buffer& mask) = 0;
+  virtual void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                               const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) = 0;
   // schedule.size() primal-dual iterations (Jacobi-parallel over pixels).
   virtual void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
                           const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) = 0;
   // dst = 3x3 median of src over masked neighbours (dst != src).
   virtual void median(const Buffer& dst, const Buffer& src, const Buffer& mask) = 0;
   // du = clamp(u - u0, +-duMax); u = u0 + du; w += du * tangent (masked pixels only).
-  virtual void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
-                          const Buffer& mask, float duMax) = 0;
+  virtual void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                          float duMax) = 0;
 
   // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w where mask
   // is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.

@@ -29,14 +29,13 @@ class Camera {
   int height = 0;
   std::vector<double> params;
 
-  static Camera kannalaBrandt4(int w, int h, double fx, double fy, double cx, double cy, double k1 = 0,
-                               double k2 = 0, double k3 = 0, double k4 = 0);
+  static Camera kannalaBrandt4(int w, int h, double fx, double fy, double cx, double cy, double k1 = 0, double k2 = 0,
+                               double k3 = 0, double k4 = 0);
   static Camera unified(int w, int h, double fx, double fy, double cx, double cy, double xi);
-  static Camera extendedUnified(int w, int h, double fx, double fy, double cx, double cy, double alpha,
-                                double beta);
+  static Camera extendedUnified(int w, int h, double fx, double fy, double cx, double cy, double alpha, double beta);
   static Camera doubleSphere(int w, int h, double fx, double fy, double cx, double cy, double xi, double alpha);
-  static Camera pinholeRadtan(int w, int h, double fx, double fy, double cx, double cy, double k1 = 0,
-                              double k2 = 0, double p1 = 0, double p2 = 0);
+  static Camera pinholeRadtan(int w, int h, double fx, double fy, double cx, double cy, double k1 = 0, double k2 = 0,
+                              double p1 = 0, double p2 = 0);
 
   // False when p lies outside the model's valid region (then px/J are unspecified).
   // J (optional) is d(px)/d(p), 2x3.

@@ -75,8 +75,7 @@ struct KannalaBrandt4 {
   S thetaMax;   // first angle where theta_d stops increasing (or pi)
   S radiusMax;  // theta_d(thetaMax): the image of the valid region is rd < radiusMax
 
-  explicit KannalaBrandt4(const double* p)
-      : in(p), k1(S(p[4])), k2(S(p[5])), k3(S(p[6])), k4(S(p[7])) {
+  explicit KannalaBrandt4(const double* p) : in(p), k1(S(p[4])), k2(S(p[5])), k3(S(p[6])), k4(S(p[7])) {
     const double tm = turningAngle(p[4], p[5], p[6], p[7]);
     thetaMax = S(tm);
     radiusMax = S(tm * (1 + tm * tm * (p[4] + tm * tm * (p[5] + tm * tm * (p[6] + tm * tm * p[7])))));
@@ -361,7 +360,7 @@ struct PinholeRadtan {
     const Vec2<S> out(x * radial + S(2) * p1 * x * y + p2 * (r2 + S(2) * x * x),
                       y * radial + p1 * (r2 + S(2) * y * y) + S(2) * p2 * x * y);
     if (Jd) {
-      const S dRadial = S(2) * (k1 + S(2) * k2 * r2);  // d(radial)/d(x) = dRadial * x
+      const S dRadial = S(2) * (k1 + S(2) * k2 * r2);                   // d(radial)/d(x) = dRadial * x
       *Jd << radial + x * x * dRadial + S(2) * p1 * y + S(6) * p2 * x,  //
           x * y * dRadial + S(2) * p1 * x + S(2) * p2 * y,              //
           x * y * dRadial + S(2) * p1 * x + S(2) * p2 * y,              //
@@ -426,11 +425,16 @@ struct PinholeRadtan {
 // Number of entries of Camera::params for a model.
 inline int paramCount(CameraModel model) {
   switch (model) {
-    case CameraModel::KannalaBrandt4: return KannalaBrandt4<double>::kNumParams;
-    case CameraModel::Unified: return Unified<double>::kNumParams;
-    case CameraModel::ExtendedUnified: return ExtendedUnified<double>::kNumParams;
-    case CameraModel::DoubleSphere: return DoubleSphere<double>::kNumParams;
-    case CameraModel::PinholeRadtan: return PinholeRadtan<double>::kNumParams;
+    case CameraModel::KannalaBrandt4:
+      return KannalaBrandt4<double>::kNumParams;
+    case CameraModel::Unified:
+      return Unified<double>::kNumParams;
+    case CameraModel::ExtendedUnified:
+      return ExtendedUnified<double>::kNumParams;
+    case CameraModel::DoubleSphere:
+      return DoubleSphere<double>::kNumParams;
+    case CameraModel::PinholeRadtan:
+      return PinholeRadtan<double>::kNumParams;
   }
   return -1;
 }
@@ -441,11 +445,16 @@ template <class S, class Fn>
 decltype(auto) visitModel(const Camera& cam, Fn&& fn) {
   const double* p = cam.params.data();
   switch (cam.model) {
-    case CameraModel::Unified: return std::forward<Fn>(fn)(Unified<S>(p));
-    case CameraModel::ExtendedUnified: return std::forward<Fn>(fn)(ExtendedUnified<S>(p));
-    case CameraModel::DoubleSphere: return std::forward<Fn>(fn)(DoubleSphere<S>(p));
-    case CameraModel::PinholeRadtan: return std::forward<Fn>(fn)(PinholeRadtan<S>(p, cam.width, cam.height));
-    case CameraModel::KannalaBrandt4: break;
+    case CameraModel::Unified:
+      return std::forward<Fn>(fn)(Unified<S>(p));
+    case CameraModel::ExtendedUnified:
+      return std::forward<Fn>(fn)(ExtendedUnified<S>(p));
+    case CameraModel::DoubleSphere:
+      return std::forward<Fn>(fn)(DoubleSphere<S>(p));
+    case CameraModel::PinholeRadtan:
+      return std::forward<Fn>(fn)(PinholeRadtan<S>(p, cam.width, cam.height));
+    case CameraModel::KannalaBrandt4:
+      break;
   }
   return std::forward<Fn>(fn)(KannalaBrandt4<S>(p));
 }

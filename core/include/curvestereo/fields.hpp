@@ -13,7 +13,7 @@ struct FieldOptions {
 };
 
 struct RigFields {
-  ImageU8 mask;          // 1 where the pixel takes part in the solve
+  ImageU8 mask;           // 1 where the pixel takes part in the solve
   FlowImage calibration;  // c(x) = pi1(R pi0^-1(x)) - x
   FlowImage trajectory;   // unit tangent of the epipolar curve (towards decreasing depth)
 };
@@ -24,12 +24,12 @@ struct PixelFields {
 };
 
 // The fields of one pixel (x, y) of cam0 for X1 = R X0 + t.
-PixelFields fieldsAtPixel(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R,
-                          const Eigen::Vector3d& t, const FieldOptions& options, int x, int y);
+PixelFields fieldsAtPixel(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                          const FieldOptions& options, int x, int y);
 
 // Fields on cam0's pixel grid for the relative pose X1 = R X0 + t. `cam0Grid` may be a
 // scaled copy of cam0 (a pyramid level); cam1 is then scaled alike by the caller.
-RigFields computeFields(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R,
-                        const Eigen::Vector3d& t, const FieldOptions& options);
+RigFields computeFields(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                        const FieldOptions& options);
 
 }  // namespace cs

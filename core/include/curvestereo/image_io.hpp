@@ -19,8 +19,8 @@ struct PngFormat {
 // luma (Rec. 601 weights), alpha dropped. Values scaled to [0, 1]. `format` (optional)
 // receives what the file held.
 ImageF readPngGray(const std::string& path, PngFormat* format = nullptr);
-void writePngGray(const std::string& path, const ImageF& img);       // clamps to [0,1], 8-bit
-void writePngGray16(const std::string& path, const ImageF& img);     // clamps to [0,1], 16-bit
+void writePngGray(const std::string& path, const ImageF& img);          // clamps to [0,1], 8-bit
+void writePngGray16(const std::string& path, const ImageF& img);        // clamps to [0,1], 16-bit
 void writePngRgb(const std::string& path, const Image<uint32_t>& rgb);  // 0x00RRGGBB per pixel
 
 // Single-channel float EXR. The reader takes channel "Y" if present, else "R", else the

@@ -15,7 +15,7 @@ struct Params {
   // Warping (outer) and primal-dual (inner) iterations per level.
   int warps = 30;
   int iterations = 10;
-  float duMax = 0.2f;       // clamp of the disparity increment per warp (px of that level)
+  float duMax = 0.2f;        // clamp of the disparity increment per warp (px of that level)
   bool medianFilter = true;  // 3x3 median of u after each warp's iterations
 
   // Energy: lambda |rho| + alpha0 |grad v| + alpha1 |D grad u - v|

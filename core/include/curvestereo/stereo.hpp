@@ -24,10 +24,10 @@ class Pipeline;
 // or +inf (zero disparity: a point at infinity; depth.z is +inf too). Where valid is 0,
 // every output is NaN.
 struct DepthResult {
-  ImageU8 valid;          // 1 where the pixel was solved
-  ImageF disparity;       // u: px along the epipolar curve (NaN where invalid)
-  FlowImage warp;         // w: 2-D displacement into the calibrated image 1 (NaN where invalid)
-  DepthMaps depth;        // radial / z depth and 3-D points
+  ImageU8 valid;                  // 1 where the pixel was solved
+  ImageF disparity;               // u: px along the epipolar curve (NaN where invalid)
+  FlowImage warp;                 // w: 2-D displacement into the calibrated image 1 (NaN where invalid)
+  DepthMaps depth;                // radial / z depth and 3-D points
   std::vector<StageTime> stages;  // time of each stage of this frame (when profiling)
   double totalMs = 0;
 };

@@ -28,7 +28,6 @@ double triangulateRadial(const Camera& cam0, const Eigen::Vector3d& tPrime, cons
 bool warpFromDepth(const Camera& cam0, const Eigen::Vector3d& tPrime, const Vec2<double>& x, double radial,
                    Vec2<double>& w);
 
-DepthMaps triangulate(const Camera& cam0, const Eigen::Vector3d& tPrime, const FlowImage& w,
-                      const ImageU8& valid);
+DepthMaps triangulate(const Camera& cam0, const Eigen::Vector3d& tPrime, const FlowImage& w, const ImageU8& valid);
 
 }  // namespace cs
