@@ -134,6 +134,8 @@ CudaBackend::~CudaBackend() {
     cudaFree(kv.second.vBar);
     cudaFree(kv.second.p);
     cudaFree(kv.second.q);
+    cudaFree(kv.second.u);
+    cudaFree(kv.second.v);
   }
   for (CUevent_st* e : eventPool_) cudaEventDestroy(e);
   if (ownsStream_) cudaStreamDestroy(stream_);
@@ -345,10 +347,12 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
     ok(cudaMalloc(&b.vBar, 2 * n * sizeof(float)), "cudaMalloc (primal-dual)");
     ok(cudaMalloc(&b.p, 2 * n * sizeof(float)), "cudaMalloc (primal-dual)");
     ok(cudaMalloc(&b.q, 4 * n * sizeof(float)), "cudaMalloc (primal-dual)");
+    ok(cudaMalloc(&b.u, n * sizeof(float)), "cudaMalloc (primal-dual)");
+    ok(cudaMalloc(&b.v, 2 * n * sizeof(float)), "cudaMalloc (primal-dual)");
   }
   cudak::PrimalDualDev d{};
-  d.u = slot(pd.u).dev;
-  d.v = slot(pd.v).dev;
+  d.u[0] = slot(pd.u).dev, d.u[1] = b.u;
+  d.v[0] = slot(pd.v).dev, d.v[1] = b.v;
   d.uBar[0] = slot(pd.uBar).dev, d.uBar[1] = b.uBar;
   d.vBar[0] = slot(pd.vBar).dev, d.vBar[1] = b.vBar;
   d.p[0] = slot(pd.p).dev, d.p[1] = b.p;

@@ -92,7 +92,7 @@ class CudaBackend final : public Backend {
     Buffer buffer;
   };
   struct PrimalDualScratch {
-    float *uBar = nullptr, *vBar = nullptr, *p = nullptr, *q = nullptr;
+    float *uBar = nullptr, *vBar = nullptr, *p = nullptr, *q = nullptr, *u = nullptr, *v = nullptr;
   };
   // copy() and fill() are queued and run together as one launch (fewer graph nodes);
   // every other call runs the queue first (flush) so that the stream order is kept.

@@ -46,8 +46,8 @@ struct StepDev {
 // (set B) that iterations ping-pong with, so that one launch can run the dual and the
 // primal pass of an iteration without racing with neighbouring blocks.
 struct PrimalDualDev {
-  float* u;
-  float* v;  // 2 ch
+  float* u[2];  // set B's u and v: written by the per-iteration path only (out of place)
+  float* v[2];  // 2 ch
   float* uBar[2];
   float* vBar[2];  // 2 ch
   float* p[2];     // 2 ch

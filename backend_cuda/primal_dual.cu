@@ -83,6 +83,12 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   const float4* __restrict__ tensor = reinterpret_cast<const float4*>(pd.tensor);
   const float4* __restrict__ steps = reinterpret_cast<const float4*>(pd.steps);
   const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+  // u and v: in place (set A) in the persistent kernel, from set parity to the other one
+  // in the per-iteration kernel (so that it can alternate with the two-iteration kernel).
+  float* uIn = pd.u[kCoherent ? 0 : parity];
+  float* uOutP = pd.u[kCoherent ? 0 : 1 - parity];
+  float2* vIn = reinterpret_cast<float2*>(pd.v[kCoherent ? 0 : parity]);
+  float2* vOutP = reinterpret_cast<float2*>(pd.v[kCoherent ? 0 : 1 - parity]);
 
   // The primal pass's own-pixel inputs: loaded up front on the latency-bound path so that
   // they arrive while the dual pass runs.
@@ -93,8 +99,8 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
     if (x < w && y < h) {
       const int idx = y * w + x;
       tau = __ldg(reinterpret_cast<const float2*>(steps + idx));
-      uOld = pd.u[idx];
-      vOld = reinterpret_cast<const float2*>(pd.v)[idx];
+      uOld = uIn[idx];
+      vOld = vIn[idx];
       u0 = __ldg(&pd.u0[idx]);
       iu = __ldg(&pd.iu[idx]);
       iz = __ldg(&pd.iz[idx]);
@@ -218,6 +224,10 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   if (!(f & kMasked)) {
     uBarOut[idx] = loadState<kCoherent>(&uBarIn[idx]);
     vBarOut[idx] = loadState<kCoherent>(&vBarIn[idx]);
+    if constexpr (!kCoherent) {
+      uOutP[idx] = uIn[idx];
+      vOutP[idx] = vIn[idx];
+    }
     return;
   }
   const bool ex = f & kLinkX, ey = f & kLinkY;
@@ -233,14 +243,14 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   if (eyUp) divDp -= s.dp[ly - 1][lx].y;
   // u and v: read and written by this thread alone, at its own pixel.
   if constexpr (!kCoherent) {
-    uOld = pd.u[idx];
+    uOld = uIn[idx];
     u0 = __ldg(&pd.u0[idx]);
     iu = __ldg(&pd.iu[idx]);
     iz = __ldg(&pd.iz[idx]);
   }
   const float uHat = uOld + tauU * alpha1 * divDp;
   const float uNew = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
-  pd.u[idx] = uNew;
+  uOutP[idx] = uNew;
   uBarOut[idx] = uNew + step.theta * (uNew - uOld);
 
   const float4 q = s.q[ly][lx], qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
@@ -254,12 +264,11 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   if (ey) div1 += q.w;
   if (eyUp) div1 -= qUp.w;
   const float2 p = s.p[ly][lx];
-  float2* v = reinterpret_cast<float2*>(pd.v);
-  if constexpr (!kCoherent) vOld = v[idx];
+  if constexpr (!kCoherent) vOld = vIn[idx];
   float2 vNew;
   vNew.x = vOld.x + tauV * (alpha1 * p.x + alpha0 * div0);
   vNew.y = vOld.y + tauV * (alpha1 * p.y + alpha0 * div1);
-  v[idx] = vNew;
+  vOutP[idx] = vNew;
   vBarOut[idx] = make_float2(vNew.x + step.theta * (vNew.x - vOld.x), vNew.y + step.theta * (vNew.y - vOld.y));
 }
 
@@ -283,8 +292,265 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
   }
 }
 
-// Odd schedules end in set 1: copy it back to set 0, one launch for the four buffers.
-__global__ void copyBackKernel(PrimalDualDev pd) {
+// Two iterations per launch (temporal blocking) on the large levels: a block computes the
+// first iteration on its tile widened by a halo (duals: two pixels left / up and one right /
+// down; primals: one pixel all around), keeps it in shared memory, and runs the second
+// iteration on the tile from there. The state is read and written once per two iterations.
+// Every per-pixel expression is the one of iterateTile, in the same order.
+constexpr int kPairW = 32, kPairH = 16;
+constexpr int kPairAW = kPairW + 3, kPairAH = kPairH + 3;  // x, y in [-2, tile]
+constexpr int kPairThreads = kPairW * kPairH;
+// 3 blocks of 512 threads on sm_80 / sm_86+ (42 registers), 2 on Turing's 1024 threads.
+constexpr int kMinBlocksPair = kMinBlocks >= 6 ? 3 : 2;
+
+struct PairTile {
+  float2 p[kPairAH][kPairAW];
+  float2 dp[kPairAH][kPairAW];
+  float4 q[kPairAH][kPairAW];
+  float uBar[kPairAH][kPairAW];
+  float2 vBar[kPairAH][kPairAW];
+  float u[kPairH][kPairW];
+  float2 v[kPairH][kPairW];
+  unsigned char flags[kPairAH][kPairAW];
+};
+
+__device__ __forceinline__ void dualPixel(float2& p, float4& q, const float4 t, const float2 sigmaP, bool ex, bool ey,
+                                          float ub, float ur, float ud, float2 vb, float2 vr, float2 vd,
+                                          const StepDev step, float alpha0, float alpha1) {
+  float gx = 0.f, gy = 0.f;
+  float2 vgx = make_float2(0.f, 0.f), vgy = make_float2(0.f, 0.f);
+  if (ex) {
+    gx = ur - ub;
+    vgx = make_float2(vr.x - vb.x, vr.y - vb.y);
+  }
+  if (ey) {
+    gy = ud - ub;
+    vgy = make_float2(vd.x - vb.x, vd.y - vb.y);
+  }
+  const float a1 = t.x * gx + t.y * gy - vb.x;
+  const float a2 = t.y * gx + t.z * gy - vb.y;
+  p.x = p.x + step.sigmaScale * sigmaP.x * alpha1 * a1;
+  p.y = p.y + step.sigmaScale * sigmaP.y * alpha1 * a2;
+  {
+    float sum = 0.f;
+    sum += p.x * p.x;
+    sum += p.y * p.y;
+    const float norm = sqrtf(sum);
+    if (norm > 1.f) {
+      p.x /= norm;
+      p.y /= norm;
+    }
+  }
+  const float sigmaQ = step.sigmaScale * 0.5f / alpha0;
+  q.x = q.x + sigmaQ * alpha0 * vgx.x;
+  q.y = q.y + sigmaQ * alpha0 * vgy.x;
+  q.z = q.z + sigmaQ * alpha0 * vgx.y;
+  q.w = q.w + sigmaQ * alpha0 * vgy.y;
+  {
+    float sum = 0.f;
+    sum += q.x * q.x;
+    sum += q.y * q.y;
+    sum += q.z * q.z;
+    sum += q.w * q.w;
+    const float norm = sqrtf(sum);
+    if (norm > 1.f) {
+      q.x /= norm;
+      q.y /= norm;
+      q.z /= norm;
+      q.w /= norm;
+    }
+  }
+}
+
+// The primal update of the masked pixel at (lx, ly) of the shared tile (its duals and
+// those left and above it there). Returns u, v; uBar, vBar through the references.
+__device__ __forceinline__ void primalPixel(const PrimalDualDev& pd, const PairTile& s, int lx, int ly, int idx,
+                                            const StepDev step, float uOld, float2 vOld, float& uNew, float2& vNew,
+                                            float& uBar, float2& vBar) {
+  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+  const unsigned char f = s.flags[ly][lx];
+  const bool ex = f & kLinkX, ey = f & kLinkY;
+  const bool exLeft = s.flags[ly][lx - 1] & kLinkX, eyUp = s.flags[ly - 1][lx] & kLinkY;
+  const float2 tau = __ldg(reinterpret_cast<const float2*>(reinterpret_cast<const float4*>(pd.steps) + idx));
+  const float tauU = step.tauScale * tau.x;
+  const float tauV = step.tauScale * tau.y;
+  float divDp = 0.f;
+  if (ex) divDp += s.dp[ly][lx].x;
+  if (exLeft) divDp -= s.dp[ly][lx - 1].x;
+  if (ey) divDp += s.dp[ly][lx].y;
+  if (eyUp) divDp -= s.dp[ly - 1][lx].y;
+  const float u0 = __ldg(&pd.u0[idx]), iu = __ldg(&pd.iu[idx]), iz = __ldg(&pd.iz[idx]);
+  const float uHat = uOld + tauU * alpha1 * divDp;
+  uNew = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
+  uBar = uNew + step.theta * (uNew - uOld);
+  const float4 q = s.q[ly][lx], qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
+  float div0 = 0.f, div1 = 0.f;
+  if (ex) div0 += q.x;
+  if (exLeft) div0 -= qLeft.x;
+  if (ey) div0 += q.y;
+  if (eyUp) div0 -= qUp.y;
+  if (ex) div1 += q.z;
+  if (exLeft) div1 -= qLeft.z;
+  if (ey) div1 += q.w;
+  if (eyUp) div1 -= qUp.w;
+  const float2 p = s.p[ly][lx];
+  vNew.x = vOld.x + tauV * (alpha1 * p.x + alpha0 * div0);
+  vNew.y = vOld.y + tauV * (alpha1 * p.y + alpha0 * div1);
+  vBar = make_float2(vNew.x + step.theta * (vNew.x - vOld.x), vNew.y + step.theta * (vNew.y - vOld.y));
+}
+
+__global__ void __launch_bounds__(kPairThreads, kMinBlocksPair)
+    primalDualPairKernel(PrimalDualDev pd, StepDev stepA, StepDev stepB, int parity) {
+  __shared__ PairTile s;
+  const int w = pd.width, h = pd.height;
+  const int x0 = blockIdx.x * kPairW, y0 = blockIdx.y * kPairH;
+  const int tid = threadIdx.y * kPairW + threadIdx.x;
+  const float* uBarIn = pd.uBar[parity];
+  const float2* vBarIn = reinterpret_cast<const float2*>(pd.vBar[parity]);
+  const float2* pIn = reinterpret_cast<const float2*>(pd.p[parity]);
+  const float4* qIn = reinterpret_cast<const float4*>(pd.q[parity]);
+  const float* uIn = pd.u[parity];
+  const float2* vIn = reinterpret_cast<const float2*>(pd.v[parity]);
+  const float4* __restrict__ tensor = reinterpret_cast<const float4*>(pd.tensor);
+  const float4* __restrict__ steps = reinterpret_cast<const float4*>(pd.steps);
+  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+
+  // --- first iteration, dual pass: x, y in [-2, tile] ---
+  for (int k = tid; k < kPairAW * kPairAH; k += kPairThreads) {
+    const int lx = k % kPairAW, ly = k / kPairAW;
+    const int i = x0 - 2 + lx, j = y0 - 2 + ly;
+    float2 p = make_float2(0.f, 0.f);
+    float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
+    float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
+    unsigned char flags = 0;
+    if (i >= 0 && j >= 0 && i < w && j < h) {
+      const int idx = j * w + i;
+      p = __ldg(&pIn[idx]);
+      q = __ldg(&qIn[idx]);
+      if (__ldg(&pd.mask[idx]) != 0.f) {
+        const bool ex = isMasked(pd.mask, w, h, i + 1, j);
+        const bool ey = isMasked(pd.mask, w, h, i, j + 1);
+        t = __ldg(&tensor[idx]);
+        const float2 sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
+        const float ub = __ldg(&uBarIn[idx]);
+        const float2 vb = __ldg(&vBarIn[idx]);
+        float ur = 0.f, ud = 0.f;
+        float2 vr = make_float2(0.f, 0.f), vd = vr;
+        if (ex) {
+          ur = __ldg(&uBarIn[idx + 1]);
+          vr = __ldg(&vBarIn[idx + 1]);
+        }
+        if (ey) {
+          ud = __ldg(&uBarIn[idx + w]);
+          vd = __ldg(&vBarIn[idx + w]);
+        }
+        flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
+        dualPixel(p, q, t, sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, stepA, alpha0, alpha1);
+      }
+    }
+    s.p[ly][lx] = p;
+    s.q[ly][lx] = q;
+    s.dp[ly][lx] = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
+    s.flags[ly][lx] = flags;
+  }
+  __syncthreads();
+
+  // --- first iteration, primal pass: x, y in [-1, tile] ---
+  constexpr int kPW = kPairW + 2, kPH = kPairH + 2;
+  for (int k = tid; k < kPW * kPH; k += kPairThreads) {
+    const int lx = k % kPW + 1, ly = k / kPW + 1;
+    const int i = x0 - 2 + lx, j = y0 - 2 + ly;
+    float uBar = 0.f, uNew = 0.f;
+    float2 vBar = make_float2(0.f, 0.f), vNew = vBar;
+    if (i >= 0 && j >= 0 && i < w && j < h) {
+      const int idx = j * w + i;
+      const float uOld = uIn[idx];
+      const float2 vOld = vIn[idx];
+      if (s.flags[ly][lx] & kMasked) {
+        primalPixel(pd, s, lx, ly, idx, stepA, uOld, vOld, uNew, vNew, uBar, vBar);
+      } else {
+        uNew = uOld, vNew = vOld;
+        uBar = __ldg(&uBarIn[idx]);
+        vBar = __ldg(&vBarIn[idx]);
+      }
+    }
+    s.uBar[ly][lx] = uBar;
+    s.vBar[ly][lx] = vBar;
+    if (lx >= 2 && ly >= 2 && lx < kPairW + 2 && ly < kPairH + 2) {
+      s.u[ly - 2][lx - 2] = uNew;
+      s.v[ly - 2][lx - 2] = vNew;
+    }
+  }
+  __syncthreads();
+
+  // --- second iteration, dual pass: x, y in [-1, tile) (in place in shared memory) ---
+  float2* pOut = reinterpret_cast<float2*>(pd.p[1 - parity]);
+  float4* qOut = reinterpret_cast<float4*>(pd.q[1 - parity]);
+  constexpr int kDW = kPairW + 1, kDH = kPairH + 1;
+  for (int k = tid; k < kDW * kDH; k += kPairThreads) {
+    const int lx = k % kDW + 1, ly = k / kDW + 1;
+    const int i = x0 - 2 + lx, j = y0 - 2 + ly;
+    if (i < 0 || j < 0 || i >= w || j >= h) continue;
+    const int idx = j * w + i;
+    float2 p = s.p[ly][lx];
+    float4 q = s.q[ly][lx];
+    const unsigned char f = s.flags[ly][lx];
+    if (f & kMasked) {
+      const bool ex = f & kLinkX, ey = f & kLinkY;
+      const float4 t = __ldg(&tensor[idx]);
+      const float2 sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
+      float ur = 0.f, ud = 0.f;
+      float2 vr = make_float2(0.f, 0.f), vd = vr;
+      if (ex) {
+        ur = s.uBar[ly][lx + 1];
+        vr = s.vBar[ly][lx + 1];
+      }
+      if (ey) {
+        ud = s.uBar[ly + 1][lx];
+        vd = s.vBar[ly + 1][lx];
+      }
+      dualPixel(p, q, t, sigmaP, ex, ey, s.uBar[ly][lx], ur, ud, s.vBar[ly][lx], vr, vd, stepB, alpha0, alpha1);
+      s.p[ly][lx] = p;
+      s.q[ly][lx] = q;
+      s.dp[ly][lx] = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
+    }
+    if (lx >= 2 && ly >= 2) {  // the tile's own pixels
+      pOut[idx] = p;
+      qOut[idx] = q;
+    }
+  }
+  __syncthreads();
+
+  // --- second iteration, primal pass over the tile ---
+  const int x = x0 + threadIdx.x, y = y0 + threadIdx.y;
+  if (x >= w || y >= h) return;
+  const int idx = y * w + x;
+  const int lx = threadIdx.x + 2, ly = threadIdx.y + 2;
+  float* uOut = pd.u[1 - parity];
+  float2* vOut = reinterpret_cast<float2*>(pd.v[1 - parity]);
+  float* uBarOut = pd.uBar[1 - parity];
+  float2* vBarOut = reinterpret_cast<float2*>(pd.vBar[1 - parity]);
+  const float uOld = s.u[threadIdx.y][threadIdx.x];
+  const float2 vOld = s.v[threadIdx.y][threadIdx.x];
+  if (!(s.flags[ly][lx] & kMasked)) {
+    uOut[idx] = uOld;
+    vOut[idx] = vOld;
+    uBarOut[idx] = s.uBar[ly][lx];
+    vBarOut[idx] = s.vBar[ly][lx];
+    return;
+  }
+  float uNew, uBar;
+  float2 vNew, vBar;
+  primalPixel(pd, s, lx, ly, idx, stepB, uOld, vOld, uNew, vNew, uBar, vBar);
+  uOut[idx] = uNew;
+  vOut[idx] = vNew;
+  uBarOut[idx] = uBar;
+  vBarOut[idx] = vBar;
+}
+
+// Schedules of an odd number of launches end in set 1: copy it back to set 0, one launch
+// for the buffers (u and v too where the launches moved them: the per-iteration path).
+__global__ void copyBackKernel(PrimalDualDev pd, bool uv) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= pd.width || y >= pd.height) return;
   const size_t idx = size_t(y) * pd.width + x;
@@ -292,6 +558,10 @@ __global__ void copyBackKernel(PrimalDualDev pd) {
   reinterpret_cast<float2*>(pd.vBar[0])[idx] = reinterpret_cast<const float2*>(pd.vBar[1])[idx];
   reinterpret_cast<float2*>(pd.p[0])[idx] = reinterpret_cast<const float2*>(pd.p[1])[idx];
   reinterpret_cast<float4*>(pd.q[0])[idx] = reinterpret_cast<const float4*>(pd.q[1])[idx];
+  if (uv) {
+    pd.u[0][idx] = pd.u[1][idx];
+    reinterpret_cast<float2*>(pd.v[0])[idx] = reinterpret_cast<const float2*>(pd.v[1])[idx];
+  }
 }
 
 }  // namespace
@@ -327,10 +597,20 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
       const cudaError_t e = cudaLaunchKernelEx(&config, primalDualPersistentKernel, pd, schedule, k0 & 1);
       if (e != cudaSuccess) return e;
     }
+    if (count % 2 == 1) copyBackKernel<<<grid, block, 0, s>>>(pd, false);
   } else {
-    for (int k = 0; k < count; ++k) primalDualKernel<<<grid, block, 0, s>>>(pd, steps[k], k & 1);
+    // Two iterations per launch, the odd one last; every launch goes from one set to the other.
+    const dim3 pairBlock(kPairW, kPairH), pairGrid = grid2d(pd.width, pd.height, pairBlock);
+    int parity = 0;
+    int k = 0;
+    for (; k + 1 < count; k += 2, parity ^= 1)
+      primalDualPairKernel<<<pairGrid, pairBlock, 0, s>>>(pd, steps[k], steps[k + 1], parity);
+    if (k < count) {
+      primalDualKernel<<<grid, block, 0, s>>>(pd, steps[k], parity);
+      parity ^= 1;
+    }
+    if (parity == 1) copyBackKernel<<<grid, block, 0, s>>>(pd, true);
   }
-  if (count % 2 == 1) copyBackKernel<<<grid, block, 0, s>>>(pd);
   return cudaGetLastError();
 }
 

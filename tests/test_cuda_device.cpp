@@ -190,7 +190,7 @@ TEST_CASE("CUDA primal-dual: the persistent and the per-iteration kernels match 
     }
     return out;
   };
-  for (int iterations : {5, 6, 70}) {
+  for (int iterations : {3, 5, 6, 70}) {
     const auto ref = solve(*cpu, iterations);
     for (bool persistent : {true, false}) {
       cuda::CudaBackend cuda(0);
