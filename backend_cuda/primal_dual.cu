@@ -28,9 +28,10 @@ constexpr int kMinBlocks = 6;
 #else
 constexpr int kMinBlocks = 4;
 #endif
-// The persistent kernel keeps more values live (the schedule loop, the grid barrier): it
-// asks for 4 blocks per SM (64 registers), enough for the levels it runs (~500 tiles).
-constexpr int kMinBlocksPersistent = kMinBlocks > 4 ? 4 : kMinBlocks;
+// The persistent kernel keeps its pixel's constants and state and those of its halo pixels
+// in registers across the iterations: 3 blocks per SM (80 registers, no spills; 64 spill),
+// enough for the levels it runs (~400 tiles on an H100 / H200).
+constexpr int kMinBlocksPersistent = kMinBlocks > 3 ? 3 : kMinBlocks;
 constexpr int kDualW = kTileW + 1, kDualH = kTileH + 1;  // tile plus the left / upper halo
 
 __device__ __forceinline__ float dataProx(float uHat, float u0, float iu, float iz, float tauLambda) {
@@ -277,19 +278,6 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocks)
     primalDualKernel(PrimalDualDev pd, StepDev step, int parity) {
   __shared__ SharedTile s;
   iterateTile<false>(pd, step, parity, s);
-}
-
-// All iterations of a schedule in one cooperative launch, one block per tile, a grid
-// barrier between iterations (levels whose tiles all fit on the device at once: the
-// coarse levels, where one launch per iteration costs more than the iteration).
-__global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
-    primalDualPersistentKernel(PrimalDualDev pd, const __grid_constant__ PrimalDualSchedule schedule, int parity0) {
-  __shared__ SharedTile s;
-  cg::grid_group grid = cg::this_grid();
-  for (int k = 0; k < schedule.count; ++k) {
-    if (k > 0) grid.sync();
-    iterateTile<true>(pd, schedule.steps[k], (parity0 + k) & 1, s);
-  }
 }
 
 // Two iterations per launch (temporal blocking) on the large levels: a block computes the
@@ -548,6 +536,224 @@ __global__ void __launch_bounds__(kPairThreads, kMinBlocksPair)
   vBarOut[idx] = vBar;
 }
 
+// All iterations of a schedule in one cooperative launch, one block per tile, a grid
+// barrier between iterations (levels whose tiles all fit on the device at once: the
+// coarse levels, where one launch per iteration costs more than the iteration). Each
+// thread keeps its own pixel's constants and state (u, v, uBar, vBar, p, q) in registers
+// across the iterations; thread (tx, 0) also owns the halo pixel above it and thread
+// (0, ty) the one left of it (their constants; their duals are recomputed from the
+// exchanged values). An iteration exchanges only the tile's border through global memory
+// (one L2 round trip): uBar, vBar of the border pixels, p, q of the right column and the
+// bottom row, ping-ponging between the two buffer sets. The state starts in set 0 and
+// ends there. Every per-pixel expression is the one of iterateTile, in the same order.
+struct PersistentTile {
+  float2 p[kDualH][kDualW];  // [ly + 1][lx + 1]: the tile and its left / upper halo
+  float2 dp[kDualH][kDualW];
+  float4 q[kDualH][kDualW];
+  float uBar[kTileH][kTileW];  // the tile's uBar, vBar of the last iteration
+  float2 vBar[kTileH][kTileW];
+};
+
+struct HaloPixel {
+  float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
+  float2 sigmaP = make_float2(0.f, 0.f);
+  int idx = 0;
+  unsigned char flags = 0;  // kMasked, kLinkX, kLinkY; 0 outside the image
+  bool inside = false;
+};
+
+__device__ __forceinline__ HaloPixel loadHalo(const PrimalDualDev& pd, int i, int j) {
+  HaloPixel hp;
+  const int w = pd.width, h = pd.height;
+  if (i < 0 || j < 0 || i >= w || j >= h) return hp;
+  hp.inside = true;
+  hp.idx = j * w + i;
+  if (__ldg(&pd.mask[hp.idx]) != 0.f) {
+    const bool ex = isMasked(pd.mask, w, h, i + 1, j), ey = isMasked(pd.mask, w, h, i, j + 1);
+    hp.flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
+    hp.t = __ldg(reinterpret_cast<const float4*>(pd.tensor) + hp.idx);
+    hp.sigmaP = __ldg(reinterpret_cast<const float2*>(reinterpret_cast<const float4*>(pd.steps) + hp.idx) + 1);
+  }
+  return hp;
+}
+
+// The halo pixel's new duals (from the set `in`) into the shared tile at (lx, ly).
+__device__ __forceinline__ void haloDual(const PrimalDualDev& pd, const HaloPixel& hp, int in, const StepDev step,
+                                         float2* sp, float2* sdp, float4* sq) {
+  float2 p = make_float2(0.f, 0.f);
+  float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
+  if (hp.inside) {
+    p = __ldcg(reinterpret_cast<const float2*>(pd.p[in]) + hp.idx);
+    q = __ldcg(reinterpret_cast<const float4*>(pd.q[in]) + hp.idx);
+    if (hp.flags & kMasked) {
+      const float* uBarIn = pd.uBar[in];
+      const float2* vBarIn = reinterpret_cast<const float2*>(pd.vBar[in]);
+      const bool ex = hp.flags & kLinkX, ey = hp.flags & kLinkY;
+      const float ub = __ldcg(&uBarIn[hp.idx]);
+      const float2 vb = __ldcg(&vBarIn[hp.idx]);
+      float ur = 0.f, ud = 0.f;
+      float2 vr = make_float2(0.f, 0.f), vd = vr;
+      if (ex) {
+        ur = __ldcg(&uBarIn[hp.idx + 1]);
+        vr = __ldcg(&vBarIn[hp.idx + 1]);
+      }
+      if (ey) {
+        ud = __ldcg(&uBarIn[hp.idx + pd.width]);
+        vd = __ldcg(&vBarIn[hp.idx + pd.width]);
+      }
+      dualPixel(p, q, hp.t, hp.sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, step, pd.alpha0, pd.alpha1);
+    }
+  }
+  *sp = p;
+  *sq = q;
+  *sdp = make_float2(hp.t.x * p.x + hp.t.y * p.y, hp.t.y * p.x + hp.t.z * p.y);
+}
+
+__global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
+    primalDualPersistentKernel(PrimalDualDev pd, const __grid_constant__ PrimalDualSchedule schedule) {
+  __shared__ PersistentTile s;
+  cg::grid_group grid = cg::this_grid();
+  const int w = pd.width, h = pd.height;
+  const int tx = threadIdx.x, ty = threadIdx.y;
+  const int x0 = blockIdx.x * kTileW, y0 = blockIdx.y * kTileH;
+  const int x = x0 + tx, y = y0 + ty;
+  const bool own = x < w && y < h;
+  const int idx = own ? y * w + x : 0;
+  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+
+  // The own pixel: constants and the initial state (set 0).
+  float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
+  float2 sigmaP = make_float2(0.f, 0.f), tau = sigmaP;
+  float u0 = 0.f, iu = 0.f, iz = 0.f;
+  bool masked = false, ex = false, ey = false, exLeft = false, eyUp = false;
+  float u = 0.f, uBar = 0.f;
+  float2 v = make_float2(0.f, 0.f), vBar = v, p = v;
+  float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
+  if (own) {
+    masked = __ldg(&pd.mask[idx]) != 0.f;
+    if (masked) {
+      ex = isMasked(pd.mask, w, h, x + 1, y);
+      ey = isMasked(pd.mask, w, h, x, y + 1);
+      exLeft = isMasked(pd.mask, w, h, x - 1, y);
+      eyUp = isMasked(pd.mask, w, h, x, y - 1);
+      t = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);
+      const float4 st = __ldg(reinterpret_cast<const float4*>(pd.steps) + idx);
+      tau = make_float2(st.x, st.y);
+      sigmaP = make_float2(st.z, st.w);
+      u0 = __ldg(&pd.u0[idx]);
+      iu = __ldg(&pd.iu[idx]);
+      iz = __ldg(&pd.iz[idx]);
+    }
+    u = pd.u[0][idx];
+    v = reinterpret_cast<const float2*>(pd.v[0])[idx];
+    uBar = pd.uBar[0][idx];
+    vBar = reinterpret_cast<const float2*>(pd.vBar[0])[idx];
+    p = reinterpret_cast<const float2*>(pd.p[0])[idx];
+    q = reinterpret_cast<const float4*>(pd.q[0])[idx];
+  }
+  // The halo pixels this thread recomputes the duals of.
+  const HaloPixel up = ty == 0 ? loadHalo(pd, x, y0 - 1) : HaloPixel{};
+  const HaloPixel left = tx == 0 ? loadHalo(pd, x0 - 1, y) : HaloPixel{};
+  // The border pixels whose values the neighbouring blocks read.
+  const bool borderBar = tx == 0 || ty == 0 || tx == kTileW - 1 || ty == kTileH - 1;
+  const bool borderDual = tx == kTileW - 1 || ty == kTileH - 1;
+  s.uBar[ty][tx] = uBar;
+  s.vBar[ty][tx] = vBar;
+  __syncthreads();
+
+  const int count = schedule.count;
+  for (int k = 0; k < count; ++k) {
+    const StepDev step = schedule.steps[k];
+    const int in = k & 1, out = 1 - in;
+    if (k > 0) grid.sync();
+    // --- dual pass: the own pixel (neighbours in the tile from shared memory, beyond it
+    // from the set `in`) and the halo pixels ---
+    if (own && masked) {
+      float ur = 0.f, ud = 0.f;
+      float2 vr = make_float2(0.f, 0.f), vd = vr;
+      if (ex) {
+        if (tx + 1 < kTileW) {
+          ur = s.uBar[ty][tx + 1];
+          vr = s.vBar[ty][tx + 1];
+        } else {
+          ur = __ldcg(&pd.uBar[in][idx + 1]);
+          vr = __ldcg(reinterpret_cast<const float2*>(pd.vBar[in]) + idx + 1);
+        }
+      }
+      if (ey) {
+        if (ty + 1 < kTileH) {
+          ud = s.uBar[ty + 1][tx];
+          vd = s.vBar[ty + 1][tx];
+        } else {
+          ud = __ldcg(&pd.uBar[in][idx + w]);
+          vd = __ldcg(reinterpret_cast<const float2*>(pd.vBar[in]) + idx + w);
+        }
+      }
+      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, step, alpha0, alpha1);
+    }
+    if (ty == 0) haloDual(pd, up, in, step, &s.p[0][tx + 1], &s.dp[0][tx + 1], &s.q[0][tx + 1]);
+    if (tx == 0) haloDual(pd, left, in, step, &s.p[ty + 1][0], &s.dp[ty + 1][0], &s.q[ty + 1][0]);
+    const float2 dp = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
+    s.p[ty + 1][tx + 1] = p;
+    s.q[ty + 1][tx + 1] = q;
+    s.dp[ty + 1][tx + 1] = dp;
+    const bool last = k + 1 == count;
+    if (own && borderDual && !last) {
+      reinterpret_cast<float2*>(pd.p[out])[idx] = p;
+      reinterpret_cast<float4*>(pd.q[out])[idx] = q;
+    }
+    __syncthreads();
+
+    // --- primal pass over the own pixel ---
+    if (own && masked) {
+      const int lx = tx + 1, ly = ty + 1;
+      const float tauU = step.tauScale * tau.x;
+      const float tauV = step.tauScale * tau.y;
+      float divDp = 0.f;
+      if (ex) divDp += dp.x;
+      if (exLeft) divDp -= s.dp[ly][lx - 1].x;
+      if (ey) divDp += dp.y;
+      if (eyUp) divDp -= s.dp[ly - 1][lx].y;
+      const float uOld = u;
+      const float uHat = uOld + tauU * alpha1 * divDp;
+      u = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
+      uBar = u + step.theta * (u - uOld);
+
+      const float4 qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
+      float div0 = 0.f, div1 = 0.f;
+      if (ex) div0 += q.x;
+      if (exLeft) div0 -= qLeft.x;
+      if (ey) div0 += q.y;
+      if (eyUp) div0 -= qUp.y;
+      if (ex) div1 += q.z;
+      if (exLeft) div1 -= qLeft.z;
+      if (ey) div1 += q.w;
+      if (eyUp) div1 -= qUp.w;
+      const float2 vOld = v;
+      v.x = vOld.x + tauV * (alpha1 * p.x + alpha0 * div0);
+      v.y = vOld.y + tauV * (alpha1 * p.y + alpha0 * div1);
+      vBar = make_float2(v.x + step.theta * (v.x - vOld.x), v.y + step.theta * (v.y - vOld.y));
+    }
+    // Read in this iteration's dual pass only, before the barrier above.
+    s.uBar[ty][tx] = uBar;
+    s.vBar[ty][tx] = vBar;
+    if (own && borderBar && !last) {
+      pd.uBar[out][idx] = uBar;
+      reinterpret_cast<float2*>(pd.vBar[out])[idx] = vBar;
+    }
+  }
+  // The final state into set 0 (after a barrier where the last iteration read set 0).
+  if (count % 2 == 1) grid.sync();
+  if (own) {
+    pd.u[0][idx] = u;
+    reinterpret_cast<float2*>(pd.v[0])[idx] = v;
+    pd.uBar[0][idx] = uBar;
+    reinterpret_cast<float2*>(pd.vBar[0])[idx] = vBar;
+    reinterpret_cast<float2*>(pd.p[0])[idx] = p;
+    reinterpret_cast<float4*>(pd.q[0])[idx] = q;
+  }
+}
+
 // Schedules of an odd number of launches end in set 1: copy it back to set 0, one launch
 // for the buffers (u and v too where the launches moved them: the per-iteration path).
 __global__ void copyBackKernel(PrimalDualDev pd, bool uv) {
@@ -594,10 +800,9 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
       attribute.val.cooperative = 1;
       config.attrs = &attribute;
       config.numAttrs = 1;
-      const cudaError_t e = cudaLaunchKernelEx(&config, primalDualPersistentKernel, pd, schedule, k0 & 1);
+      const cudaError_t e = cudaLaunchKernelEx(&config, primalDualPersistentKernel, pd, schedule);
       if (e != cudaSuccess) return e;
     }
-    if (count % 2 == 1) copyBackKernel<<<grid, block, 0, s>>>(pd, false);
   } else {
     // Two iterations per launch, the odd one last; every launch goes from one set to the other.
     const dim3 pairBlock(kPairW, kPairH), pairGrid = grid2d(pd.width, pd.height, pairBlock);
