@@ -56,21 +56,9 @@ struct SharedTile {
   unsigned char flags[kDualH][kDualW];
 };
 
-// Loads of the iterated state (p, q, uBar, vBar). A launch that runs one iteration reads
-// buffers no block of it writes: the read-only path. The persistent kernel reads what
-// other blocks wrote before the last grid barrier: L2 (coherent), never the SM's L1.
-template <bool kCoherent, class T>
-__device__ __forceinline__ T loadState(const T* a) {
-  if constexpr (kCoherent)
-    return __ldcg(a);
-  else
-    return __ldg(a);
-}
-
 // One iteration over the block's tile (the dual pass over the tile and its halo into
 // shared memory, a barrier, the primal pass). Pixels outside the mask keep their values
 // (copied from the read set to the written one).
-template <bool kCoherent>
 __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepDev step, int parity, SharedTile& s) {
   const int w = pd.width, h = pd.height;
   const int x0 = blockIdx.x * kTileW, y0 = blockIdx.y * kTileH;
@@ -84,29 +72,12 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   const float4* __restrict__ tensor = reinterpret_cast<const float4*>(pd.tensor);
   const float4* __restrict__ steps = reinterpret_cast<const float4*>(pd.steps);
   const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
-  // u and v: in place (set A) in the persistent kernel, from set parity to the other one
-  // in the per-iteration kernel (so that it can alternate with the two-iteration kernel).
-  float* uIn = pd.u[kCoherent ? 0 : parity];
-  float* uOutP = pd.u[kCoherent ? 0 : 1 - parity];
-  float2* vIn = reinterpret_cast<float2*>(pd.v[kCoherent ? 0 : parity]);
-  float2* vOutP = reinterpret_cast<float2*>(pd.v[kCoherent ? 0 : 1 - parity]);
-
-  // The primal pass's own-pixel inputs: loaded up front on the latency-bound path so that
-  // they arrive while the dual pass runs.
-  float2 tau = make_float2(0.f, 0.f), vOld = tau;
-  float uOld = 0.f, u0 = 0.f, iu = 0.f, iz = 0.f;
-  if constexpr (kCoherent) {
-    const int x = x0 + threadIdx.x, y = y0 + threadIdx.y;
-    if (x < w && y < h) {
-      const int idx = y * w + x;
-      tau = __ldg(reinterpret_cast<const float2*>(steps + idx));
-      uOld = uIn[idx];
-      vOld = vIn[idx];
-      u0 = __ldg(&pd.u0[idx]);
-      iu = __ldg(&pd.iu[idx]);
-      iz = __ldg(&pd.iz[idx]);
-    }
-  }
+  // u and v go from set `parity` to the other one, so that this kernel can alternate with
+  // the two-iteration kernel.
+  float* uIn = pd.u[parity];
+  float* uOutP = pd.u[1 - parity];
+  float2* vIn = reinterpret_cast<float2*>(pd.v[parity]);
+  float2* vOutP = reinterpret_cast<float2*>(pd.v[1 - parity]);
 
   // --- dual pass over the tile and its halo ---
   for (int k = tid; k < kDualW * kDualH; k += kTileW * kTileH) {
@@ -118,44 +89,26 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
     unsigned char flags = 0;
     if (i >= 0 && j >= 0 && i < w && j < h) {
       const int idx = j * w + i;  // 32-bit: fewer registers (a level has < 2^31 pixels)
-      p = loadState<kCoherent>(&pIn[idx]);
-      q = loadState<kCoherent>(&qIn[idx]);
+      p = __ldg(&pIn[idx]);
+      q = __ldg(&qIn[idx]);
       const float m = __ldg(&pd.mask[idx]);
       bool ex = false, ey = false;
       float2 sigmaP = make_float2(0.f, 0.f), vb = make_float2(0.f, 0.f), vr = vb, vd = vb;
       float ub = 0.f, ur = 0.f, ud = 0.f;
-      if constexpr (kCoherent) {
-        // Latency-bound small levels: every load of the pixel in one round trip (the
-        // neighbours' values are used only where the links below say so, as in the
-        // other path, which loads them only then).
-        const int iR = idx + (i + 1 < w ? 1 : 0), iD = idx + (j + 1 < h ? w : 0);
-        ex = i + 1 < w && __ldg(&pd.mask[iR]) != 0.f;
-        ey = j + 1 < h && __ldg(&pd.mask[iD]) != 0.f;
+      if (m != 0.f) {
+        ex = isMasked(pd.mask, w, h, i + 1, j);
+        ey = isMasked(pd.mask, w, h, i, j + 1);
         t = __ldg(&tensor[idx]);
         sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
-        ub = loadState<kCoherent>(&uBarIn[idx]);
-        vb = loadState<kCoherent>(&vBarIn[idx]);
-        ur = loadState<kCoherent>(&uBarIn[iR]);
-        vr = loadState<kCoherent>(&vBarIn[iR]);
-        ud = loadState<kCoherent>(&uBarIn[iD]);
-        vd = loadState<kCoherent>(&vBarIn[iD]);
-      }
-      if (m != 0.f) {
-        if constexpr (!kCoherent) {
-          ex = isMasked(pd.mask, w, h, i + 1, j);
-          ey = isMasked(pd.mask, w, h, i, j + 1);
-          t = __ldg(&tensor[idx]);
-          sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
-          ub = loadState<kCoherent>(&uBarIn[idx]);
-          vb = loadState<kCoherent>(&vBarIn[idx]);
-          if (ex) {
-            ur = loadState<kCoherent>(&uBarIn[idx + 1]);
-            vr = loadState<kCoherent>(&vBarIn[idx + 1]);
-          }
-          if (ey) {
-            ud = loadState<kCoherent>(&uBarIn[idx + w]);
-            vd = loadState<kCoherent>(&vBarIn[idx + w]);
-          }
+        ub = __ldg(&uBarIn[idx]);
+        vb = __ldg(&vBarIn[idx]);
+        if (ex) {
+          ur = __ldg(&uBarIn[idx + 1]);
+          vr = __ldg(&vBarIn[idx + 1]);
+        }
+        if (ey) {
+          ud = __ldg(&uBarIn[idx + w]);
+          vd = __ldg(&vBarIn[idx + w]);
         }
         flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
         float gx = 0.f, gy = 0.f;
@@ -223,17 +176,15 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   float2* vBarOut = reinterpret_cast<float2*>(pd.vBar[1 - parity]);
   const unsigned char f = s.flags[ly][lx];
   if (!(f & kMasked)) {
-    uBarOut[idx] = loadState<kCoherent>(&uBarIn[idx]);
-    vBarOut[idx] = loadState<kCoherent>(&vBarIn[idx]);
-    if constexpr (!kCoherent) {
-      uOutP[idx] = uIn[idx];
-      vOutP[idx] = vIn[idx];
-    }
+    uBarOut[idx] = __ldg(&uBarIn[idx]);
+    vBarOut[idx] = __ldg(&vBarIn[idx]);
+    uOutP[idx] = uIn[idx];
+    vOutP[idx] = vIn[idx];
     return;
   }
   const bool ex = f & kLinkX, ey = f & kLinkY;
   const bool exLeft = s.flags[ly][lx - 1] & kLinkX, eyUp = s.flags[ly - 1][lx] & kLinkY;
-  if constexpr (!kCoherent) tau = __ldg(reinterpret_cast<const float2*>(steps + idx));
+  const float2 tau = __ldg(reinterpret_cast<const float2*>(steps + idx));
   const float tauU = step.tauScale * tau.x;
   const float tauV = step.tauScale * tau.y;
 
@@ -243,12 +194,8 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   if (ey) divDp += s.dp[ly][lx].y;
   if (eyUp) divDp -= s.dp[ly - 1][lx].y;
   // u and v: read and written by this thread alone, at its own pixel.
-  if constexpr (!kCoherent) {
-    uOld = uIn[idx];
-    u0 = __ldg(&pd.u0[idx]);
-    iu = __ldg(&pd.iu[idx]);
-    iz = __ldg(&pd.iz[idx]);
-  }
+  const float uOld = uIn[idx];
+  const float u0 = __ldg(&pd.u0[idx]), iu = __ldg(&pd.iu[idx]), iz = __ldg(&pd.iz[idx]);
   const float uHat = uOld + tauU * alpha1 * divDp;
   const float uNew = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
   uOutP[idx] = uNew;
@@ -265,7 +212,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   if (ey) div1 += q.w;
   if (eyUp) div1 -= qUp.w;
   const float2 p = s.p[ly][lx];
-  if constexpr (!kCoherent) vOld = vIn[idx];
+  const float2 vOld = vIn[idx];
   float2 vNew;
   vNew.x = vOld.x + tauV * (alpha1 * p.x + alpha0 * div0);
   vNew.y = vOld.y + tauV * (alpha1 * p.y + alpha0 * div1);
@@ -277,7 +224,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
 __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocks)
     primalDualKernel(PrimalDualDev pd, StepDev step, int parity) {
   __shared__ SharedTile s;
-  iterateTile<false>(pd, step, parity, s);
+  iterateTile(pd, step, parity, s);
 }
 
 // Two iterations per launch (temporal blocking) on the large levels: a block computes the
