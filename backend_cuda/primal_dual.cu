@@ -56,6 +56,94 @@ struct SharedTile {
   unsigned char flags[kDualH][kDualW];
 };
 
+// The dual update of one masked pixel: p, q ascend and are projected onto the unit
+// balls; the same expressions, in the same order, as backend_cpu/primal_dual.cpp.
+__device__ __forceinline__ void dualPixel(float2& p, float4& q, const float4 t, const float2 sigmaP, bool ex, bool ey,
+                                          float ub, float ur, float ud, float2 vb, float2 vr, float2 vd,
+                                          const StepDev step, float alpha0, float alpha1) {
+  float gx = 0.f, gy = 0.f;
+  float2 vgx = make_float2(0.f, 0.f), vgy = make_float2(0.f, 0.f);
+  if (ex) {
+    gx = ur - ub;
+    vgx = make_float2(vr.x - vb.x, vr.y - vb.y);
+  }
+  if (ey) {
+    gy = ud - ub;
+    vgy = make_float2(vd.x - vb.x, vd.y - vb.y);
+  }
+  const float a1 = t.x * gx + t.y * gy - vb.x;
+  const float a2 = t.y * gx + t.z * gy - vb.y;
+  p.x = p.x + step.sigmaScale * sigmaP.x * alpha1 * a1;
+  p.y = p.y + step.sigmaScale * sigmaP.y * alpha1 * a2;
+  {
+    float sum = 0.f;
+    sum += p.x * p.x;
+    sum += p.y * p.y;
+    const float norm = sqrtf(sum);
+    if (norm > 1.f) {
+      p.x /= norm;
+      p.y /= norm;
+    }
+  }
+  const float sigmaQ = step.sigmaScale * 0.5f / alpha0;
+  q.x = q.x + sigmaQ * alpha0 * vgx.x;
+  q.y = q.y + sigmaQ * alpha0 * vgy.x;
+  q.z = q.z + sigmaQ * alpha0 * vgx.y;
+  q.w = q.w + sigmaQ * alpha0 * vgy.y;
+  {
+    float sum = 0.f;
+    sum += q.x * q.x;
+    sum += q.y * q.y;
+    sum += q.z * q.z;
+    sum += q.w * q.w;
+    const float norm = sqrtf(sum);
+    if (norm > 1.f) {
+      q.x /= norm;
+      q.y /= norm;
+      q.z /= norm;
+      q.w /= norm;
+    }
+  }
+}
+
+// The primal update of the masked pixel at (lx, ly) of the shared tile (its duals and
+// those left and above it there). Returns u, v; uBar, vBar through the references.
+template <class Tile>
+__device__ __forceinline__ void primalPixel(const PrimalDualDev& pd, const Tile& s, int lx, int ly, int idx,
+                                            const StepDev step, float uOld, float2 vOld, float& uNew, float2& vNew,
+                                            float& uBar, float2& vBar) {
+  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+  const unsigned char f = s.flags[ly][lx];
+  const bool ex = f & kLinkX, ey = f & kLinkY;
+  const bool exLeft = s.flags[ly][lx - 1] & kLinkX, eyUp = s.flags[ly - 1][lx] & kLinkY;
+  const float2 tau = __ldg(reinterpret_cast<const float2*>(reinterpret_cast<const float4*>(pd.steps) + idx));
+  const float tauU = step.tauScale * tau.x;
+  const float tauV = step.tauScale * tau.y;
+  float divDp = 0.f;
+  if (ex) divDp += s.dp[ly][lx].x;
+  if (exLeft) divDp -= s.dp[ly][lx - 1].x;
+  if (ey) divDp += s.dp[ly][lx].y;
+  if (eyUp) divDp -= s.dp[ly - 1][lx].y;
+  const float u0 = __ldg(&pd.u0[idx]), iu = __ldg(&pd.iu[idx]), iz = __ldg(&pd.iz[idx]);
+  const float uHat = uOld + tauU * alpha1 * divDp;
+  uNew = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
+  uBar = uNew + step.theta * (uNew - uOld);
+  const float4 q = s.q[ly][lx], qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
+  float div0 = 0.f, div1 = 0.f;
+  if (ex) div0 += q.x;
+  if (exLeft) div0 -= qLeft.x;
+  if (ey) div0 += q.y;
+  if (eyUp) div0 -= qUp.y;
+  if (ex) div1 += q.z;
+  if (exLeft) div1 -= qLeft.z;
+  if (ey) div1 += q.w;
+  if (eyUp) div1 -= qUp.w;
+  const float2 p = s.p[ly][lx];
+  vNew.x = vOld.x + tauV * (alpha1 * p.x + alpha0 * div0);
+  vNew.y = vOld.y + tauV * (alpha1 * p.y + alpha0 * div1);
+  vBar = make_float2(vNew.x + step.theta * (vNew.x - vOld.x), vNew.y + step.theta * (vNew.y - vOld.y));
+}
+
 // One iteration over the block's tile (the dual pass over the tile and its halo into
 // shared memory, a barrier, the primal pass). Pixels outside the mask keep their values
 // (copied from the read set to the written one).
@@ -111,49 +199,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
           vd = __ldg(&vBarIn[idx + w]);
         }
         flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
-        float gx = 0.f, gy = 0.f;
-        float2 vgx = make_float2(0.f, 0.f), vgy = make_float2(0.f, 0.f);
-        if (ex) {
-          gx = ur - ub;
-          vgx = make_float2(vr.x - vb.x, vr.y - vb.y);
-        }
-        if (ey) {
-          gy = ud - ub;
-          vgy = make_float2(vd.x - vb.x, vd.y - vb.y);
-        }
-        const float a1 = t.x * gx + t.y * gy - vb.x;
-        const float a2 = t.y * gx + t.z * gy - vb.y;
-        p.x = p.x + step.sigmaScale * sigmaP.x * alpha1 * a1;
-        p.y = p.y + step.sigmaScale * sigmaP.y * alpha1 * a2;
-        {
-          float sum = 0.f;
-          sum += p.x * p.x;
-          sum += p.y * p.y;
-          const float norm = sqrtf(sum);
-          if (norm > 1.f) {
-            p.x /= norm;
-            p.y /= norm;
-          }
-        }
-        const float sigmaQ = step.sigmaScale * 0.5f / alpha0;
-        q.x = q.x + sigmaQ * alpha0 * vgx.x;
-        q.y = q.y + sigmaQ * alpha0 * vgy.x;
-        q.z = q.z + sigmaQ * alpha0 * vgx.y;
-        q.w = q.w + sigmaQ * alpha0 * vgy.y;
-        {
-          float sum = 0.f;
-          sum += q.x * q.x;
-          sum += q.y * q.y;
-          sum += q.z * q.z;
-          sum += q.w * q.w;
-          const float norm = sqrtf(sum);
-          if (norm > 1.f) {
-            q.x /= norm;
-            q.y /= norm;
-            q.z /= norm;
-            q.w /= norm;
-          }
-        }
+        dualPixel(p, q, t, sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, step, alpha0, alpha1);
       }
       if (lx > 0 && ly > 0) {  // the tile's own pixels: write the new (or unchanged) duals
         pOut[idx] = p;
@@ -182,42 +228,16 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
     vOutP[idx] = vIn[idx];
     return;
   }
-  const bool ex = f & kLinkX, ey = f & kLinkY;
-  const bool exLeft = s.flags[ly][lx - 1] & kLinkX, eyUp = s.flags[ly - 1][lx] & kLinkY;
-  const float2 tau = __ldg(reinterpret_cast<const float2*>(steps + idx));
-  const float tauU = step.tauScale * tau.x;
-  const float tauV = step.tauScale * tau.y;
-
-  float divDp = 0.f;
-  if (ex) divDp += s.dp[ly][lx].x;
-  if (exLeft) divDp -= s.dp[ly][lx - 1].x;
-  if (ey) divDp += s.dp[ly][lx].y;
-  if (eyUp) divDp -= s.dp[ly - 1][lx].y;
   // u and v: read and written by this thread alone, at its own pixel.
   const float uOld = uIn[idx];
-  const float u0 = __ldg(&pd.u0[idx]), iu = __ldg(&pd.iu[idx]), iz = __ldg(&pd.iz[idx]);
-  const float uHat = uOld + tauU * alpha1 * divDp;
-  const float uNew = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
-  uOutP[idx] = uNew;
-  uBarOut[idx] = uNew + step.theta * (uNew - uOld);
-
-  const float4 q = s.q[ly][lx], qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
-  float div0 = 0.f, div1 = 0.f;
-  if (ex) div0 += q.x;
-  if (exLeft) div0 -= qLeft.x;
-  if (ey) div0 += q.y;
-  if (eyUp) div0 -= qUp.y;
-  if (ex) div1 += q.z;
-  if (exLeft) div1 -= qLeft.z;
-  if (ey) div1 += q.w;
-  if (eyUp) div1 -= qUp.w;
-  const float2 p = s.p[ly][lx];
   const float2 vOld = vIn[idx];
-  float2 vNew;
-  vNew.x = vOld.x + tauV * (alpha1 * p.x + alpha0 * div0);
-  vNew.y = vOld.y + tauV * (alpha1 * p.y + alpha0 * div1);
+  float uNew, uBar;
+  float2 vNew, vBar;
+  primalPixel(pd, s, lx, ly, idx, step, uOld, vOld, uNew, vNew, uBar, vBar);
+  uOutP[idx] = uNew;
+  uBarOut[idx] = uBar;
   vOutP[idx] = vNew;
-  vBarOut[idx] = make_float2(vNew.x + step.theta * (vNew.x - vOld.x), vNew.y + step.theta * (vNew.y - vOld.y));
+  vBarOut[idx] = vBar;
 }
 
 // One iteration per launch (levels with more tiles than the device holds at once).
@@ -248,91 +268,6 @@ struct PairTile {
   float2 v[kPairH][kPairW];
   unsigned char flags[kPairAH][kPairAW];
 };
-
-__device__ __forceinline__ void dualPixel(float2& p, float4& q, const float4 t, const float2 sigmaP, bool ex, bool ey,
-                                          float ub, float ur, float ud, float2 vb, float2 vr, float2 vd,
-                                          const StepDev step, float alpha0, float alpha1) {
-  float gx = 0.f, gy = 0.f;
-  float2 vgx = make_float2(0.f, 0.f), vgy = make_float2(0.f, 0.f);
-  if (ex) {
-    gx = ur - ub;
-    vgx = make_float2(vr.x - vb.x, vr.y - vb.y);
-  }
-  if (ey) {
-    gy = ud - ub;
-    vgy = make_float2(vd.x - vb.x, vd.y - vb.y);
-  }
-  const float a1 = t.x * gx + t.y * gy - vb.x;
-  const float a2 = t.y * gx + t.z * gy - vb.y;
-  p.x = p.x + step.sigmaScale * sigmaP.x * alpha1 * a1;
-  p.y = p.y + step.sigmaScale * sigmaP.y * alpha1 * a2;
-  {
-    float sum = 0.f;
-    sum += p.x * p.x;
-    sum += p.y * p.y;
-    const float norm = sqrtf(sum);
-    if (norm > 1.f) {
-      p.x /= norm;
-      p.y /= norm;
-    }
-  }
-  const float sigmaQ = step.sigmaScale * 0.5f / alpha0;
-  q.x = q.x + sigmaQ * alpha0 * vgx.x;
-  q.y = q.y + sigmaQ * alpha0 * vgy.x;
-  q.z = q.z + sigmaQ * alpha0 * vgx.y;
-  q.w = q.w + sigmaQ * alpha0 * vgy.y;
-  {
-    float sum = 0.f;
-    sum += q.x * q.x;
-    sum += q.y * q.y;
-    sum += q.z * q.z;
-    sum += q.w * q.w;
-    const float norm = sqrtf(sum);
-    if (norm > 1.f) {
-      q.x /= norm;
-      q.y /= norm;
-      q.z /= norm;
-      q.w /= norm;
-    }
-  }
-}
-
-// The primal update of the masked pixel at (lx, ly) of the shared tile (its duals and
-// those left and above it there). Returns u, v; uBar, vBar through the references.
-__device__ __forceinline__ void primalPixel(const PrimalDualDev& pd, const PairTile& s, int lx, int ly, int idx,
-                                            const StepDev step, float uOld, float2 vOld, float& uNew, float2& vNew,
-                                            float& uBar, float2& vBar) {
-  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
-  const unsigned char f = s.flags[ly][lx];
-  const bool ex = f & kLinkX, ey = f & kLinkY;
-  const bool exLeft = s.flags[ly][lx - 1] & kLinkX, eyUp = s.flags[ly - 1][lx] & kLinkY;
-  const float2 tau = __ldg(reinterpret_cast<const float2*>(reinterpret_cast<const float4*>(pd.steps) + idx));
-  const float tauU = step.tauScale * tau.x;
-  const float tauV = step.tauScale * tau.y;
-  float divDp = 0.f;
-  if (ex) divDp += s.dp[ly][lx].x;
-  if (exLeft) divDp -= s.dp[ly][lx - 1].x;
-  if (ey) divDp += s.dp[ly][lx].y;
-  if (eyUp) divDp -= s.dp[ly - 1][lx].y;
-  const float u0 = __ldg(&pd.u0[idx]), iu = __ldg(&pd.iu[idx]), iz = __ldg(&pd.iz[idx]);
-  const float uHat = uOld + tauU * alpha1 * divDp;
-  uNew = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
-  uBar = uNew + step.theta * (uNew - uOld);
-  const float4 q = s.q[ly][lx], qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
-  float div0 = 0.f, div1 = 0.f;
-  if (ex) div0 += q.x;
-  if (exLeft) div0 -= qLeft.x;
-  if (ey) div0 += q.y;
-  if (eyUp) div0 -= qUp.y;
-  if (ex) div1 += q.z;
-  if (exLeft) div1 -= qLeft.z;
-  if (ey) div1 += q.w;
-  if (eyUp) div1 -= qUp.w;
-  const float2 p = s.p[ly][lx];
-  vNew.x = vOld.x + tauV * (alpha1 * p.x + alpha0 * div0);
-  vNew.y = vOld.y + tauV * (alpha1 * p.y + alpha0 * div1);
-  vBar = make_float2(vNew.x + step.theta * (vNew.x - vOld.x), vNew.y + step.theta * (vNew.y - vOld.y));
-}
 
 __global__ void __launch_bounds__(kPairThreads, kMinBlocksPair)
     primalDualPairKernel(PrimalDualDev pd, StepDev stepA, StepDev stepB, int parity) {
