@@ -184,9 +184,11 @@ void CpuBackend::structureTensor(const Buffer& tensor, const Buffer& steps, cons
 }
 
 void CpuBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                                 const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) {
+                                 const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                                 const Buffer& confidence, float weightFloor) {
+  const View c = confidence.id >= 0 ? view(confidence) : View{};
   cpu::warpDerivatives(view(data.u0), view(data.iu), view(data.iz), view(tangent), view(i0), view(i1), view(trajectory),
-                       view(w), view(u), view(mask));
+                       view(w), view(u), view(mask), confidence.id >= 0 ? &c : nullptr, weightFloor);
 }
 
 void CpuBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
@@ -202,6 +204,21 @@ void CpuBackend::median(const Buffer& dst, const Buffer& src, const Buffer& mask
 void CpuBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
                             const Buffer& mask, float duMax) {
   cpu::accumulate(view(u), view(w), view(u0), view(tangent), view(mask), duMax);
+}
+
+void CpuBackend::sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
+  cpu::sweepWarp(view(volume), view(image), view(mask), p);
+}
+
+void CpuBackend::sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                             const SweepParams& p) {
+  cpu::sweepSelect(view(best), view(reference), view(volume), view(mask), p);
+}
+
+void CpuBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                                 const Buffer& other, const Buffer& mask, const SweepParams& p,
+                                 const ConsistencyParams& c) {
+  cpu::sweepInitialise(view(u), view(w), view(confidence), view(best), view(other), view(mask), p, c);
 }
 
 }  // namespace cs::cpu

@@ -1,7 +1,7 @@
 // The scalar CPU backend: the readable reference implementation (the oracle) that
 // every other backend is tested against. One file per stage (fields.cpp, warp.cpp, resample.cpp,
 // structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp, accumulate.cpp,
-// triangulate.cpp).
+// plane_sweep.cpp, triangulate.cpp).
 #pragma once
 #include <vector>
 
@@ -20,12 +20,17 @@ void upsample(const View& dst, const View& src, float scale, float valueScale);
 void structureTensor(const View& tensor, const View& steps, const View& image, const View& mask,
                      const TensorParams& params);
 void warpDerivatives(const View& u0, const View& iu, const View& iz, const View& tangent, const View& i0,
-                     const View& i1, const View& trajectory, const View& w, const View& u, const View& mask);
+                     const View& i1, const View& trajectory, const View& w, const View& u, const View& mask,
+                     const View* confidence, float weightFloor);
 void primalDual(const View& u, const View& uBar, const View& v, const View& vBar, const View& p, const View& q,
                 const View& u0, const View& iu, const View& iz, const View& tensor, const View& steps, const View& mask,
                 const PrimalDualParams& params);
 void median(const View& dst, const View& src, const View& mask);
 void accumulate(const View& u, const View& w, const View& u0, const View& tangent, const View& mask, float duMax);
+void sweepWarp(const View& volume, const View& image, const View& mask, const SweepParams& p);
+void sweepSelect(const View& best, const View& reference, const View& volume, const View& mask, const SweepParams& p);
+void sweepInitialise(const View& u, const View& w, const View& confidence, const View& best, const View& other,
+                     const View& mask, const SweepParams& p, const ConsistencyParams& c);
 
 // Physical memory, or the container's memory limit when lower (0 if unknown): create()
 // refuses buffers beyond it with a cs::Error naming the size instead of being OOM-killed.
@@ -51,12 +56,19 @@ class CpuBackend final : public Backend {
   void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                        const TensorParams& params) override;
   void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) override;
+                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                       const Buffer& confidence, float weightFloor) override;
   void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
                   const Buffer& mask, const PrimalDualParams& params) override;
   void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;
+  void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
+  void sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                   const SweepParams& p) override;
+  void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                       const Buffer& other, const Buffer& mask, const SweepParams& p,
+                       const ConsistencyParams& c) override;
   void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                    const CameraParams& cam0, const double tPrime[3]) override;
 

@@ -27,7 +27,8 @@ bool sampleable(const View& mask, float x, float y, float gx, float gy) {
 }  // namespace
 
 void warpDerivatives(const View& u0, const View& iu, const View& iz, const View& tangent, const View& i0,
-                     const View& i1, const View& trajectory, const View& w, const View& u, const View& mask) {
+                     const View& i1, const View& trajectory, const View& w, const View& u, const View& mask,
+                     const View* confidence, float weightFloor) {
   parallelRows(mask.height, [&](int y) {
     for (int x = 0; x < mask.width; ++x) {
       u0.at(x, y) = u.at(x, y);
@@ -49,10 +50,12 @@ void warpDerivatives(const View& u0, const View& iu, const View& iz, const View&
       tangent.at(x, y, 1) = gy;
       if (!sampleable(mask, px, py, gx, gy)) continue;  // no data: the regulariser fills in
 
-      iz.at(x, y) = sampleBilinear(i1, px, py) - i0.at(x, y);
+      const float weight = confidence ? std::max(confidence->at(x, y), weightFloor) : 1.f;
+      iz.at(x, y) = weight * (sampleBilinear(i1, px, py) - i0.at(x, y));
       // Averaging both images' derivatives along the curve makes the linearisation
       // symmetric and less sensitive to where the warp currently is.
-      iu.at(x, y) = 0.5f * (derivativeAlong(i1, px, py, gx, gy) + derivativeAlong(i0, float(x), float(y), gx, gy));
+      iu.at(x, y) =
+          weight * 0.5f * (derivativeAlong(i1, px, py, gx, gy) + derivativeAlong(i0, float(x), float(y), gx, gy));
     }
   });
 }

@@ -64,6 +64,21 @@ cudak::CamDev camDev(const CameraParams& c) {
 
 cudak::Img img(float* data, const Buffer& b) { return cudak::Img{data, b.width, b.height, b.channels}; }
 
+// The sweep's parameters on the device; the shapes the kernels index by are checked here.
+cudak::SweepDev sweepDev(const SweepParams& p, const Buffer& volumeOrBest, int channels) {
+  if (p.planes < 2 || p.radius < 0) throw Error("cuda backend: sweep needs planes >= 2 and radius >= 0");
+  if (volumeOrBest.channels != channels)
+    throw Error("cuda backend: sweep buffer has " + std::to_string(volumeOrBest.channels) + " channels, expected " +
+                std::to_string(channels));
+  cudak::SweepDev d{};
+  d.cam = camDev(p.cam);
+  std::copy(p.t, p.t + 3, d.t);
+  d.qMax = p.qMax;
+  d.planes = p.planes;
+  d.radius = p.radius;
+  return d;
+}
+
 }  // namespace
 
 std::string probeCuda(const std::string& device) {
@@ -282,6 +297,36 @@ void CudaBackend::triangulate(const Buffer& radial, const Buffer& points, const 
         "triangulate");
 }
 
+void CudaBackend::sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
+  flush();
+  const cudak::SweepDev d = sweepDev(p, volume, p.planes);
+  check(cudak::launchSweepWarp(stream_, img(slot(volume).dev, volume), img(slot(image).dev, image),
+                               img(slot(mask).dev, mask), d),
+        "sweepWarp");
+}
+
+void CudaBackend::sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                              const SweepParams& p) {
+  flush();
+  const cudak::SweepDev d = sweepDev(p, best, 2);
+  if (volume.channels != p.planes) throw Error("cuda backend: sweepSelect volume does not have p.planes channels");
+  check(cudak::launchSweepSelect(stream_, img(slot(best).dev, best), img(slot(reference).dev, reference),
+                                 img(slot(volume).dev, volume), img(slot(mask).dev, mask), d),
+        "sweepSelect");
+}
+
+void CudaBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                                  const Buffer& other, const Buffer& mask, const SweepParams& p,
+                                  const ConsistencyParams& c) {
+  flush();
+  const cudak::SweepDev d = sweepDev(p, best, 2);
+  check(cudak::launchSweepInitialise(stream_, img(slot(u).dev, u), img(slot(w).dev, w),
+                                     img(slot(confidence).dev, confidence), img(slot(best).dev, best),
+                                     img(slot(other).dev, other), img(slot(mask).dev, mask), d,
+                                     cudak::ConsistencyDev{c.tolerancePx, c.acceptConfidence}),
+        "sweepInitialise");
+}
+
 void CudaBackend::warp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
   flush();
   check(cudak::launchWarp(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(flow).dev, flow)),
@@ -327,12 +372,14 @@ void CudaBackend::structureTensor(const Buffer& tensor, const Buffer& steps, con
 
 void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
                                   const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
-                                  const Buffer& mask) {
+                                  const Buffer& mask, const Buffer& confidence, float weightFloor) {
   flush();
-  check(cudak::launchWarpDerivatives(
-            stream_, img(slot(data.u0).dev, data.u0), img(slot(data.iu).dev, data.iu), img(slot(data.iz).dev, data.iz),
-            img(slot(tangent).dev, tangent), img(slot(i0).dev, i0), img(slot(i1).dev, i1),
-            img(slot(trajectory).dev, trajectory), img(slot(w).dev, w), img(slot(u).dev, u), img(slot(mask).dev, mask)),
+  const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
+  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), img(slot(data.iu).dev, data.iu),
+                                     img(slot(data.iz).dev, data.iz), img(slot(tangent).dev, tangent),
+                                     img(slot(i0).dev, i0), img(slot(i1).dev, i1),
+                                     img(slot(trajectory).dev, trajectory), img(slot(w).dev, w), img(slot(u).dev, u),
+                                     img(slot(mask).dev, mask), weight, weightFloor),
         "warpDerivatives");
 }
 

@@ -50,12 +50,19 @@ class CudaBackend final : public Backend {
   void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                        const TensorParams& params) override;
   void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) override;
+                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                       const Buffer& confidence, float weightFloor) override;
   void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
                   const Buffer& mask, const PrimalDualParams& params) override;
   void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;
+  void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
+  void sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                   const SweepParams& p) override;
+  void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                       const Buffer& other, const Buffer& mask, const SweepParams& p,
+                       const ConsistencyParams& c) override;
   void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                    const CameraParams& cam0, const double tPrime[3]) override;
 

@@ -31,6 +31,19 @@ struct FieldsDev {
   double maxFovDeg, epipoleDeg;
 };
 
+// The plane sweep (SweepParams): the level's camera, the translation to the other view,
+// the nearest sphere's inverse depth, the number of spheres and the ZNCC window radius.
+struct SweepDev {
+  CamDev cam;
+  double t[3];
+  double qMax;
+  int planes, radius;
+};
+// The left-right check (ConsistencyParams).
+struct ConsistencyDev {
+  float tolerancePx, acceptConfidence;
+};
+
 constexpr int kMaxTaps = 255;  // Gaussian pre-smoothing radius up to 127 px
 struct TensorDev {
   float beta, eta, wMin, alpha0, alpha1;
@@ -93,7 +106,8 @@ cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float 
 cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorDev& p,
                                   float* tmpRows, float* tmpSmooth);
 cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory,
-                                  Img w, Img u, Img mask);
+                                  Img w, Img u, Img mask, Img confidence,
+                                  float weightFloor);  // confidence.data may be null
 // Blocks of the primal-dual kernel the device runs at once in one cooperative launch
 // (0: no cooperative launch).
 int primalDualResidentBlocks(int device);
@@ -107,5 +121,11 @@ cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask);
 // u is then written at every pixel).
 cudaError_t launchAccumulate(cudaStream_t s, Img u, const float* uIn, Img w, Img u0, Img tangent, Img mask,
                              float duMax);
+
+// volume: p.planes channels. best: 2 channels (q, cost). other: the reverse sweep's best.
+cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepDev& p);
+cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img reference, Img volume, Img mask, const SweepDev& p);
+cudaError_t launchSweepInitialise(cudaStream_t s, Img u, Img w, Img confidence, Img best, Img other, Img mask,
+                                  const SweepDev& p, const ConsistencyDev& c);
 
 }  // namespace cs::cudak

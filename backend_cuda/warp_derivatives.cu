@@ -24,7 +24,7 @@ __device__ __forceinline__ bool sampleable(const Img& mask, float x, float y, fl
 }
 
 __global__ void warpDerivativesKernel(Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory, Img w, Img u,
-                                      Img mask) {
+                                      Img mask, Img confidence, float weightFloor) {
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= mask.width || y >= mask.height) return;
   at(u0, x, y) = at(u, x, y);
@@ -43,8 +43,9 @@ __global__ void warpDerivativesKernel(Img u0, Img iu, Img iz, Img tangent, Img i
     tx = gx;
     ty = gy;
     if (sampleable(mask, px, py, gx, gy)) {
-      izv = sampleBilinear(i1, px, py) - at(i0, x, y);
-      iuv = 0.5f * (derivativeAlong(i1, px, py, gx, gy) + derivativeAlong(i0, float(x), float(y), gx, gy));
+      const float weight = confidence.data ? fmaxf(at(confidence, x, y), weightFloor) : 1.f;
+      izv = weight * (sampleBilinear(i1, px, py) - at(i0, x, y));
+      iuv = weight * 0.5f * (derivativeAlong(i1, px, py, gx, gy) + derivativeAlong(i0, float(x), float(y), gx, gy));
     }
   }
   at(iu, x, y) = iuv;
@@ -56,10 +57,10 @@ __global__ void warpDerivativesKernel(Img u0, Img iu, Img iz, Img tangent, Img i
 }  // namespace
 
 cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory,
-                                  Img w, Img u, Img mask) {
+                                  Img w, Img u, Img mask, Img confidence, float weightFloor) {
   const dim3 block(32, 8);
-  warpDerivativesKernel<<<grid2d(mask.width, mask.height, block), block, 0, s>>>(u0, iu, iz, tangent, i0, i1,
-                                                                                 trajectory, w, u, mask);
+  warpDerivativesKernel<<<grid2d(mask.width, mask.height, block), block, 0, s>>>(
+      u0, iu, iz, tangent, i0, i1, trajectory, w, u, mask, confidence, weightFloor);
   return cudaGetLastError();
 }
 

@@ -461,6 +461,13 @@ struct VkTriangulateParams {
 };
 
 template <class S>
+struct VkSweepParams {
+  VkCam<S> cam;
+  S t[3];
+  S qMax;
+};
+
+template <class S>
 VkCam<S> toVkCam(const CameraParams& c) {
   VkCam<S> out{};
   out.model = c.model;
@@ -511,6 +518,11 @@ enum Shader {
   kFields64,
   kTriangulate32,
   kTriangulate64,
+  kSweepWarp32,
+  kSweepWarp64,
+  kSweepSelect,
+  kSweepInitialise32,
+  kSweepInitialise64,
   kShaderCount
 };
 const char* const kShaderNames[kShaderCount] = {"warp",
@@ -527,7 +539,12 @@ const char* const kShaderNames[kShaderCount] = {"warp",
                                                 "fields_f32",
                                                 "fields_f64",
                                                 "triangulate_f32",
-                                                "triangulate_f64"};
+                                                "triangulate_f64",
+                                                "sweep_warp_f32",
+                                                "sweep_warp_f64",
+                                                "sweep_select",
+                                                "sweep_initialise_f32",
+                                                "sweep_initialise_f64"};
 
 constexpr uint32_t kPushBytes = 128;
 constexpr uint32_t kGroup = 16;
@@ -564,8 +581,9 @@ struct PcSteps {
   float alpha0, alpha1;
 };
 struct PcWarpDerivatives {
-  Addr u0, iu, iz, tangent, i0, i1, trajectory, w, u, mask;
-  int32_t width, height;
+  Addr u0, iu, iz, tangent, i0, i1, trajectory, w, u, mask, confidence;  // confidence: mask when absent
+  int32_t width, height, hasConfidence;
+  float weightFloor;
 };
 struct PcDual {
   Addr uBar, vBar, p, q, tensor, steps, mask;
@@ -594,6 +612,20 @@ struct PcTriangulate {
   Addr radial, points, w, mask, params;
   int32_t width, height;
 };
+struct PcSweepWarp {
+  Addr volume, image, mask, params;
+  int32_t width, height, planes;
+};
+struct PcSweepSelect {
+  Addr best, reference, volume, mask;
+  int32_t width, height, planes, radius;
+  float qMax;
+};
+struct PcSweepInitialise {
+  Addr u, w, confidence, best, other, mask, params;
+  int32_t width, height;
+  float tolerancePx, acceptConfidence;
+};
 static_assert(sizeof(PcPrimal) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 
 // ---------------------------------------------------------------------------------------
@@ -621,12 +653,19 @@ class VulkanBackend final : public Backend {
   void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                        const TensorParams& params) override;
   void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) override;
+                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                       const Buffer& confidence, float weightFloor) override;
   void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
                   const Buffer& mask, const PrimalDualParams& params) override;
   void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;
+  void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
+  void sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                   const SweepParams& p) override;
+  void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                       const Buffer& other, const Buffer& mask, const SweepParams& p,
+                       const ConsistencyParams& c) override;
   void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                    const CameraParams& cam0, const double tPrime[3]) override;
 
@@ -659,6 +698,7 @@ class VulkanBackend final : public Backend {
   const Alloc& alloc(const Buffer& b) const;
   Addr addr(const Buffer& b) const;
   Addr paramBlock(const void* data, size_t bytes);
+  Addr sweepParamBlock(const SweepParams& p);
   VkPipeline pipeline(Shader s);
 
   VkCommandBuffer recorder();
@@ -1303,11 +1343,26 @@ void VulkanBackend::structureTensor(const Buffer& tensor, const Buffer& steps, c
 
 void VulkanBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
                                     const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
-                                    const Buffer& mask) {
+                                    const Buffer& mask, const Buffer& confidence, float weightFloor) {
   for (const Buffer* b : {&data.u0, &data.iu, &data.iz, &tangent, &i0, &i1, &trajectory, &w, &u})
     requireSameSize(*b, mask, "warpDerivatives");
-  PcWarpDerivatives pc{addr(data.u0),    addr(data.iu), addr(data.iz), addr(tangent), addr(i0),   addr(i1),
-                       addr(trajectory), addr(w),       addr(u),       addr(mask),    mask.width, mask.height};
+  const bool weighted = confidence.id >= 0;
+  if (weighted) requireSameSize(confidence, mask, "warpDerivatives");
+  PcWarpDerivatives pc{addr(data.u0),
+                       addr(data.iu),
+                       addr(data.iz),
+                       addr(tangent),
+                       addr(i0),
+                       addr(i1),
+                       addr(trajectory),
+                       addr(w),
+                       addr(u),
+                       addr(mask),
+                       weighted ? addr(confidence) : addr(mask),
+                       mask.width,
+                       mask.height,
+                       weighted ? 1 : 0,
+                       weightFloor};
   dispatch(kWarpDerivatives, pc, mask.width, mask.height);
 }
 
@@ -1339,6 +1394,74 @@ void VulkanBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u
   for (const Buffer* b : {&u, &w, &u0, &tangent}) requireSameSize(*b, mask, "accumulate");
   PcAccumulate pc{addr(u), addr(w), addr(u0), addr(tangent), addr(mask), mask.width, mask.height, duMax};
   dispatch(kAccumulate, pc, mask.width, mask.height);
+}
+
+// ---- plane sweep ----
+
+void requireChannels(const Buffer& b, int channels, const char* kernel, const char* what) {
+  if (b.channels != channels)
+    throw Error(std::string("vulkan backend: ") + kernel + ": " + what + " has " + std::to_string(b.channels) +
+                " channels, expected " + std::to_string(channels));
+}
+
+void requireSweepShape(const SweepParams& p, const char* kernel) {
+  if (p.planes < 2 || p.radius < 0)
+    throw Error(std::string("vulkan backend: ") + kernel + ": needs planes >= 2 and radius >= 0");
+}
+
+// The camera, translation and nearest sphere, in the precision of the geometry shaders.
+Addr VulkanBackend::sweepParamBlock(const SweepParams& p) {
+  auto store = [&](auto prm) {
+    using S = std::remove_reference_t<decltype(prm.qMax)>;
+    prm.cam = toVkCam<S>(p.cam);
+    for (int i = 0; i < 3; ++i) prm.t[i] = S(p.t[i]);
+    prm.qMax = S(p.qMax);
+    return paramBlock(&prm, sizeof(prm));
+  };
+  return float64_ ? store(VkSweepParams<double>{}) : store(VkSweepParams<float>{});
+}
+
+void VulkanBackend::sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
+  requireSweepShape(p, "sweepWarp");
+  requireSameSize(volume, image, "sweepWarp");
+  requireSameSize(volume, mask, "sweepWarp");
+  requireChannels(volume, p.planes, "sweepWarp", "the volume");
+  requireChannels(image, 1, "sweepWarp", "the image");
+  requireChannels(mask, 1, "sweepWarp", "the mask");
+  PcSweepWarp pc{addr(volume), addr(image), addr(mask), sweepParamBlock(p), volume.width, volume.height, p.planes};
+  dispatch(float64_ ? kSweepWarp64 : kSweepWarp32, pc, volume.width, volume.height);
+}
+
+void VulkanBackend::sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                                const SweepParams& p) {
+  requireSweepShape(p, "sweepSelect");
+  for (const Buffer* b : {&reference, &volume, &mask}) requireSameSize(*b, best, "sweepSelect");
+  requireChannels(best, 2, "sweepSelect", "best");
+  requireChannels(reference, 1, "sweepSelect", "the reference image");
+  requireChannels(volume, p.planes, "sweepSelect", "the volume");
+  requireChannels(mask, 1, "sweepSelect", "the mask");
+  // The oracle turns the plane index into inverse depth in double; float(qMax) here costs
+  // at most a few ulps of q.
+  PcSweepSelect pc{addr(best),  addr(reference), addr(volume), addr(mask),   best.width,
+                   best.height, p.planes,        p.radius,     float(p.qMax)};
+  dispatch(kSweepSelect, pc, best.width, best.height);
+}
+
+void VulkanBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                                    const Buffer& other, const Buffer& mask, const SweepParams& p,
+                                    const ConsistencyParams& c) {
+  requireSweepShape(p, "sweepInitialise");
+  for (const Buffer* b : {&w, &confidence, &best, &other, &mask}) requireSameSize(*b, u, "sweepInitialise");
+  requireChannels(u, 1, "sweepInitialise", "u");
+  requireChannels(w, 2, "sweepInitialise", "w");
+  requireChannels(confidence, 1, "sweepInitialise", "the confidence");
+  requireChannels(best, 2, "sweepInitialise", "best");
+  requireChannels(other, 2, "sweepInitialise", "other");
+  requireChannels(mask, 1, "sweepInitialise", "the mask");
+  PcSweepInitialise pc{addr(u),     addr(w),       addr(confidence),   addr(best),
+                       addr(other), addr(mask),    sweepParamBlock(p), u.width,
+                       u.height,    c.tolerancePx, c.acceptConfidence};
+  dispatch(float64_ ? kSweepInitialise64 : kSweepInitialise32, pc, u.width, u.height);
 }
 
 }  // namespace

@@ -5,8 +5,9 @@
 #include "sampling.glsl"
 
 layout(push_constant) uniform PC {
-  FBuf u0, iu, iz, tangent, i0, i1, trajectory, w, u, mask;
-  int width, height;
+  FBuf u0, iu, iz, tangent, i0, i1, trajectory, w, u, mask, confidence;
+  int width, height, hasConfidence;
+  float weightFloor;
 } pc;
 
 float derivativeAlong(FBuf image, float x, float y, float gx, float gy) {
@@ -53,6 +54,9 @@ void main() {
   pc.tangent.v[2 * i + 1] = gy;
   if (!sampleable(px, py, gx, gy)) return;
 
-  pc.iz.v[i] = sampleBilinear(pc.i1, pc.width, pc.height, 1, 0, px, py) - pc.i0.v[i];
-  pc.iu.v[i] = 0.5 * (derivativeAlong(pc.i1, px, py, gx, gy) + derivativeAlong(pc.i0, float(x), float(y), gx, gy));
+  // Confidence-weighted data term: lambda c |rho| = lambda |c rho|.
+  const float weight = pc.hasConfidence != 0 ? max(pc.confidence.v[i], pc.weightFloor) : 1.0;
+  pc.iz.v[i] = weight * (sampleBilinear(pc.i1, pc.width, pc.height, 1, 0, px, py) - pc.i0.v[i]);
+  pc.iu.v[i] =
+      weight * 0.5 * (derivativeAlong(pc.i1, px, py, gx, gy) + derivativeAlong(pc.i0, float(x), float(y), gx, gy));
 }

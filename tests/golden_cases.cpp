@@ -1,5 +1,6 @@
 #include "golden_cases.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -27,11 +28,11 @@ struct Host {
   cpu::View view() { return cpu::View{v.data(), w, h, c}; }
 };
 
-// Smooth random texture in [0, 1]: hash noise blurred by three 3x3 box passes.
-Host texture(int w, int h, uint32_t seed) {
+// Smooth random texture in [0, 1]: hash noise blurred by `passes` 3x3 box passes.
+Host texture(int w, int h, uint32_t seed, int passes = 3) {
   Host t(w, h, 1);
   for (size_t i = 0; i < t.v.size(); ++i) t.v[i] = hashNoise(uint32_t(i) * 747796405U + seed);
-  for (int pass = 0; pass < 3; ++pass) {
+  for (int pass = 0; pass < passes; ++pass) {
     Host s = t;
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
@@ -136,9 +137,26 @@ std::vector<Output> warpDerivativesCase(Backend& b) {
        u = noise(kW, kH, 1, 9, 2.f), mask = discMask(kW, kH);
   DataTermBuffers data{s.make(kW, kH, 1), s.make(kW, kH, 1), s.make(kW, kH, 1)};
   Buffer tangent = s.make(kW, kH, 2);
-  b.warpDerivatives(data, tangent, s.put(i0), s.put(i1), s.put(traj), s.put(w), s.put(u), s.put(mask));
+  b.warpDerivatives(data, tangent, s.put(i0), s.put(i1), s.put(traj), s.put(w), s.put(u), s.put(mask), Buffer{}, 0.f);
   return {s.get("derivatives_u0", data.u0), s.get("derivatives_iu", data.iu), s.get("derivatives_iz", data.iz),
           s.get("derivatives_tangent", tangent)};
+}
+
+// The same inputs with a confidence buffer: values below, at and above the floor (and
+// zero), so both branches of max(confidence, floor) are exercised.
+std::vector<Output> warpDerivativesConfidenceCase(Backend& b) {
+  Session s{b};
+  Host i0 = texture(kW, kH, 6), i1 = texture(kW, kH, 7), traj = tangentField(kW, kH), w = noise(kW, kH, 2, 8, 2.f),
+       u = noise(kW, kH, 1, 9, 2.f), mask = discMask(kW, kH), confidence(kW, kH, 1);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      confidence.at(x, y) = (x + 2 * y) % 7 == 0 ? 0.f : hashNoise(uint32_t(y * kW + x) * 2654435761U + 40);
+  DataTermBuffers data{s.make(kW, kH, 1), s.make(kW, kH, 1), s.make(kW, kH, 1)};
+  Buffer tangent = s.make(kW, kH, 2);
+  b.warpDerivatives(data, tangent, s.put(i0), s.put(i1), s.put(traj), s.put(w), s.put(u), s.put(mask),
+                    s.put(confidence), 0.3f);
+  return {s.get("derivativesconf_u0", data.u0), s.get("derivativesconf_iu", data.iu),
+          s.get("derivativesconf_iz", data.iz), s.get("derivativesconf_tangent", tangent)};
 }
 
 std::vector<Output> primalDualCase(Backend& b) {
@@ -218,6 +236,175 @@ std::vector<Output> triangulateCase(Backend& b) {
   return {s.get("triangulate_radial", radial), s.get("triangulate_points", points)};
 }
 
+// --- plane sweep ---
+
+// Stretches values linearly onto [0, 1] (a contrasty texture keeps ZNCC far from its
+// flat-window regularisation).
+Host stretched(Host h) {
+  const auto [lo, hi] = std::minmax_element(h.v.begin(), h.v.end());
+  const float a = *lo, range = *hi - *lo;
+  for (float& v : h.v) v = (v - a) / range;
+  return h;
+}
+
+// Bilinear sample of a 1-channel host image; false outside [0, w-1] x [0, h-1].
+bool sampleHost(Host& img, float x, float y, float& value) {
+  if (!(x >= 0.f && y >= 0.f && x <= float(img.w - 1) && y <= float(img.h - 1))) return false;
+  const int x0 = std::min(int(x), img.w - 2), y0 = std::min(int(y), img.h - 2);
+  const float fx = x - float(x0), fy = y - float(y0);
+  value = (img.at(x0, y0) * (1.f - fx) + img.at(x0 + 1, y0) * fx) * (1.f - fy) +
+          (img.at(x0, y0 + 1) * (1.f - fx) + img.at(x0 + 1, y0 + 1) * fx) * fy;
+  return true;
+}
+
+// The fields' T265-like lens and a baseline mostly along -x with some y and z, so the
+// hypotheses move along curves, not rows.
+SweepParams sweepParams(double qMax, int planes, int radius) {
+  SweepParams p{};
+  p.cam = fieldsParams().cam0;
+  p.t[0] = -0.1, p.t[1] = 0.004, p.t[2] = 0.006;
+  p.qMax = qMax;
+  p.planes = planes;
+  p.radius = radius;
+  return p;
+}
+
+// Where pixel (x, y) sees the sphere of inverse depth q in the other view, in double like
+// the oracle; false where the ray or its projection is invalid.
+bool hypothesis(const Camera& cam, const double t[3], double x, double y, double q, Vec2<double>& px) {
+  Vec3<double> ray;
+  if (!cam.unproject(Vec2<double>(x, y), ray)) return false;
+  return cam.project(Vec3<double>(ray.x() + q * t[0], ray.y() + q * t[1], ray.z() + q * t[2]), px);
+}
+
+// Distance from px to the border of the image rectangle [-0.5, w-0.5] x [-0.5, h-0.5].
+double borderDistance(const Camera& cam, const Vec2<double>& px) {
+  return std::min({std::abs(px.x() + 0.5), std::abs(px.x() - (cam.width - 0.5)), std::abs(px.y() + 0.5),
+                   std::abs(px.y() - (cam.height - 0.5))});
+}
+
+// A baseline reaching backwards (t_z = -0.1) and qMax = 4: up to 9 px of motion at the
+// centre, and about 180 hypotheses of the rim leave the image (-1); the moved points stay
+// >= 0.43 from the other centre, so no projection is ill-conditioned. A float camera model
+// puts a projection ~1e-3 px from where double does, so reference pixels with a hypothesis
+// within 0.05 px of the image border are left out of the mask (backends must agree on
+// which samples exist).
+std::vector<Output> sweepWarpCase(Backend& b) {
+  Session s{b};
+  SweepParams p = sweepParams(4.0, 9, 2);
+  p.t[2] = -0.1;
+  const Camera cam = toCamera(p.cam);
+  Host image = texture(kW, kH, 30), mask = discMask(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      for (int k = 0; k < p.planes && mask.at(x, y) != 0.f; ++k) {
+        Vec2<double> px;
+        if (hypothesis(cam, p.t, x, y, p.qMax * k / (p.planes - 1), px) && borderDistance(cam, px) < 0.05)
+          mask.at(x, y) = 0.f;
+      }
+  Buffer volume = s.make(kW, kH, p.planes);
+  b.sweepWarp(volume, s.put(image), s.put(mask), p);
+  return {s.get("sweepwarp_volume", volume)};
+}
+
+// A volume with a known answer: plane k at pixel x is the reference shifted by
+// (k - k*(x)) * 1.3 px along (1, 0.5), -1 where that leaves the image; k* is a gentle ramp
+// (1.3 .. 6.7 planes, 0.1 plane per px, so a 5x5 window is nearly one hypothesis).
+// Unsampleable patches: all planes in a 4x4 square (its centre scores nothing: (-1, 2)),
+// the first three planes in another (the parabola lacks a neighbour there). A texture of
+// short correlation (one blur pass) keeps the window variance high, so the one-pass float
+// ZNCC is within 4e-5 of the exact one (measured against double sums); and the parabola's
+// curvature is >= 0.06 wherever it is used, so that moves q by ~1e-4 at most (near-ties
+// between two planes are harmless: both winners give the same vertex).
+struct SelectInputs {
+  SweepParams p;
+  Host reference, mask, volume;
+};
+
+SelectInputs sweepSelectInputs() {
+  SelectInputs in{sweepParams(2.0, 9, 2), stretched(texture(kW, kH, 31, 1)), discMask(kW, kH), Host(kW, kH, 9)};
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const float kStar = 1.3f + 0.07f * float(x) + 0.065f * float(y);
+      for (int k = 0; k < in.p.planes; ++k) {
+        float v = -1.f;
+        const float shift = 1.3f * (float(k) - kStar);
+        const bool hole = (x >= 30 && x < 34 && y >= 8 && y < 12) || (k < 3 && x >= 8 && x < 15 && y >= 20 && y < 27);
+        if (hole || !sampleHost(in.reference, float(x) + shift, float(y) + 0.5f * shift, v)) v = -1.f;
+        in.volume.at(x, y, k) = v;
+      }
+    }
+  return in;
+}
+
+std::vector<Output> sweepSelectCase(Backend& b) {
+  Session s{b};
+  SelectInputs in = sweepSelectInputs();
+  Buffer best = s.make(kW, kH, 2);
+  b.sweepSelect(best, s.put(in.reference), s.put(in.volume), s.put(in.mask), in.p);
+  return {s.get("sweepselect_best", best)};
+}
+
+// A reference sweep with smooth inverse depths (0.3..2.8 /m, up to ~4 px of motion), holes
+// (q = -1), costs up to 1.15; the other view's answer is the reference's field at the
+// landing pixel (nearly consistent: round trips of a fraction of a pixel) except in a band
+// where it is far off, with holes of its own. u and w start as noise (the coarse-to-fine
+// estimate the sweep replaces where it is confident).
+// Well-conditioned by construction (computed on the host in double, like the oracle):
+// inverse depths whose landing point is within 0.05 px of a nearest-pixel tie (x.5) or of
+// the image border are nudged, so backends agree on which neighbour is read; pixels whose
+// round trip e is within 5 % of a threshold (e = tol, or the e of acceptConfidence) lose
+// their hypothesis, so no backend's rounding can flip a replace / keep decision.
+std::vector<Output> sweepInitialiseCase(Backend& b) {
+  Session s{b};
+  const SweepParams p = sweepParams(3.0, 9, 2);
+  const double back[3] = {-p.t[0], -p.t[1], -p.t[2]};
+  ConsistencyParams consistency{};
+  consistency.tolerancePx = 1.5f;
+  consistency.acceptConfidence = 0.3f;
+  const double eAccept = std::sqrt(-std::log(double(consistency.acceptConfidence)));
+  const Camera cam = toCamera(p.cam);
+  Host field = stretched(texture(kW, kH, 34)), mask = discMask(kW, kH), best(kW, kH, 2), other(kW, kH, 2);
+  // False when pixel (x, y) at inverse depth q lands within `margin` px of the image
+  // border or of a nearest-pixel tie.
+  auto clear = [&](int x, int y, double q, double margin) {
+    Vec2<double> px;
+    if (!hypothesis(cam, p.t, x, y, q, px) || !cam.inImage(px, -margin)) return true;
+    auto tie = [&](double v) { return std::abs(v - std::floor(v) - 0.5) < margin; };
+    return borderDistance(cam, px) >= margin && !tie(px.x()) && !tie(px.y());
+  };
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const uint32_t i = uint32_t(y * kW + x);
+      double q = 0.3 + 2.5 * field.at(x, y);
+      for (int n = 0; n < 40 && !clear(x, y, q, 0.05); ++n) q *= 0.985;
+      best.at(x, y, 0) = hashNoise(i * 3u + 35) < 0.08f ? -1.f : float(q);
+      best.at(x, y, 1) = 0.05f + 1.1f * hashNoise(i * 5u + 36);
+      float qOther = float(0.3 + 2.5 * field.at(x, y));
+      if (x >= 28 && x < 33) qOther += 1.5f;  // an inconsistent band
+      if (hashNoise(i * 7u + 37) < 0.06f) qOther = -1.f;
+      other.at(x, y, 0) = qOther;
+      other.at(x, y, 1) = 0.2f;
+    }
+  Host u0 = noise(kW, kH, 1, 38, 3.f), w0 = noise(kW, kH, 2, 39, 3.f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      Vec2<double> there, returned;
+      if (!mask.at(x, y) || best.at(x, y, 0) < 0.f || !hypothesis(cam, p.t, x, y, best.at(x, y, 0), there) ||
+          !cam.inImage(there))
+        continue;
+      const int nx = int(std::lround(there.x())), ny = int(std::lround(there.y()));
+      if (nx < 0 || ny < 0 || nx >= kW || ny >= kH || !mask.at(nx, ny) || other.at(nx, ny, 0) < 0.f ||
+          !hypothesis(cam, back, there.x(), there.y(), other.at(nx, ny, 0), returned) || !cam.inImage(returned))
+        continue;
+      const double e = std::hypot(returned.x() - x, returned.y() - y) / consistency.tolerancePx;
+      if (std::abs(e - 1.0) < 0.05 || std::abs(e - eAccept) < 0.05) best.at(x, y, 0) = -1.f;
+    }
+  Buffer u = s.put(u0), w = s.put(w0), confidence = s.make(kW, kH, 1);
+  b.sweepInitialise(u, w, confidence, s.put(best), s.put(other), s.put(mask), p, consistency);
+  return {s.get("sweepinit_u", u), s.get("sweepinit_w", w), s.get("sweepinit_confidence", confidence)};
+}
+
 }  // namespace
 
 const std::vector<KernelCase>& kernelCases() {
@@ -228,9 +415,13 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"upsample", upsampleCase},
                                                 {"structureTensor", structureTensorCase},
                                                 {"warpDerivatives", warpDerivativesCase},
+                                                {"warpDerivatives+confidence", warpDerivativesConfidenceCase},
                                                 {"primalDual", primalDualCase},
                                                 {"median", medianCase},
-                                                {"accumulate", accumulateCase}};
+                                                {"accumulate", accumulateCase},
+                                                {"sweepWarp", sweepWarpCase},
+                                                {"sweepSelect", sweepSelectCase},
+                                                {"sweepInitialise", sweepInitialiseCase}};
   return cases;
 }
 

@@ -23,6 +23,17 @@ Tolerance toleranceFor(const std::string& output) {
   if (output.rfind("fields_", 0) == 0) return {2e-3, 1e-9};       // float camera models vs double
   if (output.rfind("triangulate_", 0) == 0) return {1e-2, 1e-8};  // metres; far points amplify rounding
   if (output.rfind("tensor_", 0) == 0) return {2e-4, 1e-9};
+  // Sweep geometry like the fields (float camera models vs double): a hypothesis lands up
+  // to ~2e-3 px away. The volume is the golden texture sampled there (steps <= 0.13 per
+  // px, so <= 2.6e-4); w and u are those positions; the confidence's slope in e is at most
+  // sqrt(2/e) / tol = 0.57 per px at the case's tol = 1.5 px.
+  if (output.rfind("sweepwarp_", 0) == 0) return {5e-4, 1e-9};
+  if (output.rfind("sweepinit_", 0) == 0) return {2e-3, 1e-8};
+  // 1 - ZNCC from one-pass float sums: the oracle's own cost is ~4e-5 from the exact one
+  // (measured: float vs double sums on the case), a backend summing in another order is
+  // as far again; the parabola (curvature >= 0.06 in the case) turns that into <= 2e-4 of
+  // q (0.25 /m per plane there).
+  if (output.rfind("sweepselect_", 0) == 0) return {5e-4, 1e-9};
   return {1e-4, 1e-9};
 }
 
@@ -69,38 +80,51 @@ TEST_CASE("every kernel on every backend matches the CPU oracle") {
 }
 
 TEST_CASE("whole solves on every backend agree with the CPU oracle") {
-  if (otherBackends().empty()) MESSAGE("SKIPPED: no backend besides cpu is compiled into this build");
+  if (otherBackends().empty()) {
+    MESSAGE("SKIPPED: no backend besides cpu is compiled into this build");
+    return;
+  }
   synth::SynthConfig cfg;
   cfg.camera = synth::defaultFisheye(161);
   cfg.baseline = 0.12;
   cfg.seed = 9;
   cfg.samplesPerAxis = 2;
   const synth::SynthPair pair = synth::renderPair(cfg);
-  Params params = preset("default");
-  params.minWidth = 20;
-  params.warps = 12;
-  Stereo oracle(pair.rig, params, "cpu");
-  const DepthResult ref = oracle.compute(pair.left, pair.right);
-  const Metrics refMetrics = evaluate(pair.rig, ref.warp, ref.depth.radial, pair.depthLeft, &pair.depthRight);
-  for (const std::string& name : otherBackends()) {
-    if (!tryBackend(name)) continue;
-    Stereo stereo(pair.rig, params, name);
-    // Twice: the second frame may be a replay of a recorded one.
-    for (int frame = 0; frame < 2; ++frame) {
-      const DepthResult r = stereo.compute(pair.left, pair.right);
-      CHECK(r.valid.data == ref.valid.data);
-      long long valid = 0, close = 0;
-      for (size_t i = 0; i < r.valid.size(); ++i) {
-        if (!ref.valid.data[i]) continue;
-        ++valid;
-        close += std::abs(r.disparity.data[i] - ref.disparity.data[i]) <= 0.05f;
+  // "quality" adds the plane-sweep initialiser (its winner-take-all choice and left-right
+  // check are discrete, so this also shows backends rarely flip them).
+  for (const char* presetName : {"default", "quality"}) {
+    Params params = preset(presetName);
+    params.minWidth = 20;
+    params.warps = 12;
+    Stereo oracle(pair.rig, params, "cpu");
+    const DepthResult ref = oracle.compute(pair.left, pair.right);
+    const Metrics refMetrics = evaluate(pair.rig, ref.warp, ref.depth.radial, pair.depthLeft, &pair.depthRight);
+    for (const std::string& name : otherBackends()) {
+      if (!tryBackend(name)) continue;
+      Stereo stereo(pair.rig, params, name);
+      // Twice: the second frame may be a replay of a recorded one.
+      for (int frame = 0; frame < 2; ++frame) {
+        const DepthResult r = stereo.compute(pair.left, pair.right);
+        INFO("backend " << name << ", preset " << std::string(presetName) << ", frame " << frame);
+        CHECK(r.valid.data == ref.valid.data);
+        CHECK(r.confidence.empty() == ref.confidence.empty());
+        long long valid = 0, close = 0, closeConfidence = 0;
+        for (size_t i = 0; i < r.valid.size(); ++i) {
+          if (!ref.valid.data[i]) continue;
+          ++valid;
+          close += std::abs(r.disparity.data[i] - ref.disparity.data[i]) <= 0.05f;
+          if (!ref.confidence.empty() && !r.confidence.empty())
+            closeConfidence += std::abs(r.confidence.data[i] - ref.confidence.data[i]) <= 0.05f;
+        }
+        const Metrics m = evaluate(pair.rig, r.warp, r.depth.radial, pair.depthLeft, &pair.depthRight);
+        MESSAGE(name << " " << std::string(presetName) << " frame " << frame << ": " << 100.0 * close / valid
+                     << " % within 0.05 px; tau>1 " << m.tau1 << " vs " << refMetrics.tau1 << ", tau>3 " << m.tau3
+                     << " vs " << refMetrics.tau3);
+        CHECK(double(close) >= 0.99 * double(valid));
+        if (!ref.confidence.empty()) CHECK(double(closeConfidence) >= 0.99 * double(valid));
+        CHECK(std::abs(m.tau1 - refMetrics.tau1) <= 0.2);
+        CHECK(std::abs(m.tau3 - refMetrics.tau3) <= 0.2);
       }
-      const Metrics m = evaluate(pair.rig, r.warp, r.depth.radial, pair.depthLeft, &pair.depthRight);
-      MESSAGE(name << " frame " << frame << ": " << 100.0 * close / valid << " % within 0.05 px; tau>1 " << m.tau1
-                   << " vs " << refMetrics.tau1 << ", tau>3 " << m.tau3 << " vs " << refMetrics.tau3);
-      CHECK(double(close) >= 0.99 * double(valid));
-      CHECK(std::abs(m.tau1 - refMetrics.tau1) <= 0.2);
-      CHECK(std::abs(m.tau3 - refMetrics.tau3) <= 0.2);
     }
   }
 }

@@ -309,4 +309,28 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
   cases.refused("unknown preset", good + " --preset fastest", "unknown preset 'fastest'");
   cases.refused("unknown backend", good + " --backend tpu", "tpu");
   cases.refused("one image only", "run --calib rig.yaml l.png" + solve, "exactly two images");
+
+  // ---- the plane-sweep initialiser
+  cases.refused("--min-confidence without the initialiser", good + " --min-confidence 0.5",
+                "--min-confidence needs the plane-sweep initialiser");
+  cases.refused("--min-confidence 2", good + " --init planesweep --min-confidence 2",
+                "--min-confidence must be in [0, 1]");
+  cases.refused("--min-confidence -0.1 with --preset quality", good + " --preset quality --min-confidence -0.1",
+                "--min-confidence must be in [0, 1]");
+  cases.refused("--init foo", good + " --init foo", "unknown initialisation 'foo' (known: none, planesweep)");
+  cases.refused("--init-radius 9", good + " --init planesweep --init-radius 9", "initRadius must be in [1, 7]");
+  cases.refused("--occlusion-weight 2", good + " --init planesweep --occlusion-weight 2",
+                "occlusionWeight must be in [0, 1]");
+  cases.handled("--init planesweep --min-confidence 0.5", good + " --init planesweep --min-confidence 0.5", "");
+  {
+    // handled() removed the output: run again to look at it.
+    REQUIRE(runCli(dir, good + " --init planesweep --min-confidence 0.5").exitCode == 0);
+    const ImageF confidence = readExr((dir / "out" / "confidence.exr").string());
+    CHECK(confidence.width == 64);
+    CHECK(fs::exists(dir / "out" / "confidence.png"));
+    fs::remove_all(dir / "out");
+    REQUIRE(runCli(dir, good).exitCode == 0);
+    CHECK(!fs::exists(dir / "out" / "confidence.exr"));  // none without the initialiser
+    fs::remove_all(dir / "out");
+  }
 }

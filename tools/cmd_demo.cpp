@@ -13,7 +13,7 @@ namespace cs::cli {
 
 int cmdDemo(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"o", "output", "size", "seed", "scene"});
+  known.insert({"min-confidence", "o", "output", "size", "seed", "scene"});
   args.allowOnly(known);
   const std::string outDir = args.get("o", args.get("output", "demo_out"));
   synth::SynthConfig cfg;
@@ -38,6 +38,7 @@ int cmdDemo(const Args& args) {
   saveKalibr(pair.rig, path("camchain.yaml"));
 
   const Params params = paramsFromArgs(args);
+  const float minConfidence = minConfidenceFromArgs(args, params);
   Stereo stereo(pair.rig, params, backendFromArgs(args));
   std::printf("backend: %s - %s\nsettings: %s\n", stereo.deviceName().c_str(), stereo.backendChoice().c_str(),
               describe(params).c_str());
@@ -46,7 +47,7 @@ int cmdDemo(const Args& args) {
   stereo.setProgress([&](double f) { progress(f); });
   DepthResult r = stereo.compute(pair.left, pair.right);
   progress.done();
-  writeOutputs(outDir, r, pair.left);
+  writeOutputs(outDir, r, pair.left, minConfidence);
 
   const Metrics m = evaluate(pair.rig, r.warp, r.depth.radial, pair.depthLeft, &pair.depthRight);
   std::printf("stages: %s\n", formatStages(r.stages).c_str());

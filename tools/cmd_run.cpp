@@ -21,11 +21,12 @@ ImageU8 loadMask(const std::string& path) {
 
 int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"calib", "o", "output", "scale-intrinsics"});
+  known.insert({"min-confidence", "calib", "o", "output", "scale-intrinsics"});
   args.allowOnly(known);
   if (args.positional().size() != 2) throw Error("run needs exactly two images: LEFT RIGHT");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   const Params params = paramsFromArgs(args);
+  const float minConfidence = minConfidenceFromArgs(args, params);
   const StereoInputs in =
       loadStereoInputs(args.require("calib"), args.positional()[0], args.positional()[1], args.has("scale-intrinsics"));
   const Rig& rig = in.rig;
@@ -42,7 +43,7 @@ int cmdRun(const Args& args) {
   stereo.setProgress([&](double f) { progress(f); });
   DepthResult r = stereo.compute(left, right);
   progress.done();
-  writeOutputs(outDir, r, left);
+  writeOutputs(outDir, r, left, minConfidence);
 
   long long valid = 0;
   for (auto v : r.valid.data) valid += v;

@@ -12,9 +12,10 @@
 
 namespace cs::cli {
 
-const std::set<std::string> kSolverOptions = {"preset", "warps",   "iterations", "levels", "lambda", "du-max",
-                                              "alpha0", "alpha1",  "max-fov",    "gamma",  "median", "backend",
-                                              "mask",   "epipole", "beta",       "eta",    "device"};
+const std::set<std::string> kSolverOptions = {
+    "preset",  "warps", "iterations", "levels",        "lambda",      "du-max",          "alpha0", "alpha1",
+    "max-fov", "gamma", "median",     "backend",       "mask",        "epipole",         "beta",   "eta",
+    "device",  "init",  "init-level", "init-parallax", "init-radius", "occlusion-weight"};
 
 std::string backendFromArgs(const Args& args) {
   std::string backend = args.get("backend", "auto");
@@ -36,6 +37,11 @@ Params paramsFromArgs(const Args& args) {
   p.gamma = float(args.getDouble("gamma", p.gamma));
   p.maxFovDeg = args.getDouble("max-fov", p.maxFovDeg);
   p.epipoleDeg = args.getDouble("epipole", p.epipoleDeg);
+  if (args.has("init")) p.init = parseInit(args.get("init", "none"));
+  p.initLevel = args.getInt("init-level", p.initLevel);
+  p.initMaxParallaxDeg = args.getDouble("init-parallax", p.initMaxParallaxDeg);
+  p.initRadius = args.getInt("init-radius", p.initRadius);
+  p.occlusionWeight = float(args.getDouble("occlusion-weight", p.occlusionWeight));
   if (args.has("median")) {
     std::string m = args.get("median", "on");
     if (m != "on" && m != "off") throw Error("option --median expects on or off, got '" + m + "'");
@@ -129,7 +135,17 @@ void writeDepthPng(const std::string& path, const ImageF& radialDepth) {
   writePngRgb(path, colorizeScalar(inv, lo, hi));
 }
 
-void writeOutputs(const std::string& dir, const DepthResult& r, const ImageF& left) {
+float minConfidenceFromArgs(const Args& args, const Params& params) {
+  if (!args.has("min-confidence")) return 0.f;
+  if (params.init != Params::Init::PlaneSweep)
+    throw Error(
+        "--min-confidence needs the plane-sweep initialiser's confidence (--init planesweep or --preset quality)");
+  const double c = args.getDouble("min-confidence", 0.0);
+  if (!(c >= 0 && c <= 1)) throw Error("--min-confidence must be in [0, 1]");
+  return float(c);
+}
+
+void writeOutputs(const std::string& dir, const DepthResult& r, const ImageF& left, float minConfidence) {
   std::filesystem::create_directories(dir);
   auto path = [&](const char* name) { return (std::filesystem::path(dir) / name).string(); };
   writeExr(path("depth.exr"), r.depth.radial);
@@ -139,10 +155,16 @@ void writeOutputs(const std::string& dir, const DepthResult& r, const ImageF& le
   for (auto& v : flo.data)
     if (!std::isfinite(v.x) || !std::isfinite(v.y)) v = {kFloUnknown, kFloUnknown};
   writeFlo(path("flow.flo"), flo);
+  const bool hasConfidence = !r.confidence.empty();
+  if (hasConfidence) {
+    writeExr(path("confidence.exr"), r.confidence);
+    writePngRgb(path("confidence.png"), colorizeScalar(r.confidence, 0.f, 1.f));
+  }
   std::vector<PlyPoint> points;
   for (size_t i = 0; i < r.depth.points.size(); ++i) {
     const Point3f& p = r.depth.points.data[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    if (hasConfidence && !(r.confidence.data[i] >= minConfidence)) continue;
     float g = std::min(1.f, std::max(0.f, left.data[i]));
     points.push_back({p.x, p.y, p.z, uint8_t(std::lround(255.f * g))});
   }

@@ -30,6 +30,16 @@ void Params::validate() const {
   require(std::isfinite(wMin) && wMin > 0 && wMin <= 1, "wMin must be in (0, 1]");
   require(std::isfinite(tensorSigma) && tensorSigma >= 0 && tensorSigma <= 10, "tensorSigma must be in [0, 10]");
   require(std::isfinite(gamma) && gamma >= 0, "gamma must be >= 0");
+  require(initLevel >= 0 && initLevel < 12, "initLevel must be in [0, 12)");
+  require(std::isfinite(initMaxParallaxDeg) && initMaxParallaxDeg > 0 && initMaxParallaxDeg < 90,
+          "initMaxParallaxDeg must be in (0, 90)");
+  require(std::isfinite(initPxPerPlane) && initPxPerPlane >= 0.25 && initPxPerPlane <= 16,
+          "initPxPerPlane must be in [0.25, 16]");
+  require(initRadius >= 1 && initRadius <= 7, "initRadius must be in [1, 7]");
+  require(std::isfinite(lrTolerancePx) && lrTolerancePx > 0, "lrTolerancePx must be > 0");
+  require(std::isfinite(initAccept) && initAccept >= 0 && initAccept <= 1, "initAccept must be in [0, 1]");
+  require(std::isfinite(occlusionWeight) && occlusionWeight >= 0 && occlusionWeight <= 1,
+          "occlusionWeight must be in [0, 1]");
   require(std::isfinite(maxFovDeg) && maxFovDeg >= 0 && maxFovDeg <= 360, "maxFovDeg must be in [0, 360]");
   require(std::isfinite(epipoleDeg) && epipoleDeg >= 0 && epipoleDeg < 90, "epipoleDeg must be in [0, 90)");
 }
@@ -46,12 +56,24 @@ Params preset(const std::string& name) {
     p.warps = 5;
     return p;
   }
+  if (name == "quality") {
+    p.init = Params::Init::PlaneSweep;
+    return p;
+  }
   std::string known;
   for (auto& n : presetNames()) known += (known.empty() ? "" : ", ") + n;
   throw Error("unknown preset '" + name + "' (known: " + known + ")");
 }
 
-std::vector<std::string> presetNames() { return {"realtime", "default"}; }
+std::vector<std::string> presetNames() { return {"realtime", "default", "quality"}; }
+
+std::string initName(Params::Init init) { return init == Params::Init::PlaneSweep ? "planesweep" : "none"; }
+
+Params::Init parseInit(const std::string& name) {
+  if (name == "none") return Params::Init::None;
+  if (name == "planesweep") return Params::Init::PlaneSweep;
+  throw Error("unknown initialisation '" + name + "' (known: none, planesweep)");
+}
 
 std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p) {
   std::vector<LevelSize> plan{{width, height, 1.0}};
@@ -68,7 +90,11 @@ std::string describe(const Params& p) {
   std::ostringstream s;
   s << "levels=" << p.levels << " scale=" << p.scale << " warps=" << p.warps << " iterations=" << p.iterations
     << " du_max=" << p.duMax << " lambda=" << p.lambda << " alpha0=" << p.alpha0 << " alpha1=" << p.alpha1
-    << " beta=" << p.beta << " eta=" << p.eta << " median=" << (p.medianFilter ? "on" : "off") << " gamma=" << p.gamma;
+    << " beta=" << p.beta << " eta=" << p.eta << " median=" << (p.medianFilter ? "on" : "off") << " gamma=" << p.gamma
+    << " init=" << initName(p.init);
+  if (p.init == Params::Init::PlaneSweep)
+    s << " init_level=" << p.initLevel << " init_parallax=" << p.initMaxParallaxDeg << " init_radius=" << p.initRadius
+      << " occlusion_weight=" << p.occlusionWeight;
   return s.str();
 }
 

@@ -31,12 +31,41 @@ std::vector<float> levelMask(const ImageU8& userMask, const LevelSize& size) {
 
 // Keep in step with the constructor below: 34 floats per pixel per level (userMask, i0, i1,
 // mask, scratch 1; trajectory, w, tangent 2; tensor, steps 4; pd 12; data 3) plus 7 at
-// level 0 (rawRight 1, calibration 2, radial 1, points 3).
-unsigned long long Pipeline::bufferBytes(int width, int height, const Params& params) {
-  unsigned long long floats = 7ull * (unsigned long long)width * (unsigned long long)height;
-  for (const LevelSize& size : pyramidPlan(width, height, params))
-    floats += 34ull * (unsigned long long)size.width * (unsigned long long)size.height;
+// level 0 (rawRight 1, calibration 2, radial 1, points 3); with the initialiser, a
+// confidence (1) at the sweep level and every finer one, and the volume (planes) and two
+// sweep results (2 + 2) at the sweep level.
+unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
+  const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
+  auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
+  unsigned long long floats = 7ull * pixels(plan[0]);
+  for (const LevelSize& size : plan) floats += 34ull * pixels(size);
+  if (params.init == Params::Init::PlaneSweep) {
+    const size_t level = sweepLevel(plan.size(), params);
+    for (size_t l = 0; l <= level; ++l) floats += pixels(plan[l]);
+    const int planes = sweepPlanes(levelCamera(rig.cam0, plan[level]), rig.R.transpose() * rig.t, params);
+    floats += (unsigned long long)(planes + 4) * pixels(plan[level]);
+  }
   return floats * sizeof(float);
+}
+
+// Enough hypotheses that neighbouring ones move no pixel by more than initPxPerPlane:
+// the motion per unit of inverse depth is largest at q = 0, where it is J t' (J the
+// projection's Jacobian at the ray). Fixed per rig so a moving camera never reallocates;
+// the nearest sphere (qMax) follows the pose in setPose.
+int Pipeline::sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params) {
+  const double qMax = std::tan(params.initMaxParallaxDeg * M_PI / 180.0) / tPrime.norm();
+  const double cosMax = params.maxFovDeg > 0 ? std::cos(std::min(0.5 * params.maxFovDeg, 179.9) * M_PI / 180.0) : -1.0;
+  double fastest = 0;  // px per unit inverse depth
+  for (int y = 0; y < cam.height; y += 2)
+    for (int x = 0; x < cam.width; x += 2) {
+      Vec3<double> ray;
+      Vec2<double> px;
+      Mat23<double> J;
+      if (!cam.unproject(Vec2<double>(x, y), ray) || ray.z() < cosMax || !cam.project(ray, px, &J)) continue;
+      fastest = std::max(fastest, (J * tPrime).norm());
+    }
+  const double planes = std::ceil(qMax * fastest / params.initPxPerPlane) + 1;
+  return int(std::min(512.0, std::max(2.0, planes)));
 }
 
 Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask)
@@ -55,6 +84,18 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
     L.data = {make(1), make(1), make(1)};
     levels_.push_back(L);
   }
+  if (initialising()) {
+    sweep_.level = sweepLevel(levels_.size(), params_);
+    for (size_t l = 0; l <= sweep_.level; ++l)
+      levels_[l].confidence = backend_.create(levels_[l].size.width, levels_[l].size.height, 1);
+    const Level& S = levels_[sweep_.level];
+    sweep_.params.cam = toCameraParams(S.cam0);
+    sweep_.params.planes = sweepPlanes(S.cam0, rig.R.transpose() * rig.t, params_);
+    sweep_.params.radius = params_.initRadius;
+    sweep_.volume = backend_.create(S.size.width, S.size.height, sweep_.params.planes);
+    sweep_.best = backend_.create(S.size.width, S.size.height, 2);
+    sweep_.other = backend_.create(S.size.width, S.size.height, 2);
+  }
   setUserMask(userMask);
   const int w = rig.cam0.width, h = rig.cam0.height;
   rawRight_ = backend_.create(w, h, 1);
@@ -69,6 +110,8 @@ void Pipeline::setUserMask(const ImageU8& userMask) {
 
 void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   tPrime_ = R.transpose() * t;
+  std::copy(tPrime_.data(), tPrime_.data() + 3, sweep_.params.t);
+  sweep_.params.qMax = std::tan(params_.initMaxParallaxDeg * M_PI / 180.0) / tPrime_.norm();
   FieldsParams fp{};
   Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(fp.R) = R;
   std::copy(t.data(), t.data() + 3, fp.t);
@@ -120,8 +163,29 @@ void Pipeline::initialiseLevel(size_t l) {
     const float s = float(params_.scale);
     backend_.upsample(L.pd.u, coarse.pd.u, s, s);
     backend_.upsample(L.w, coarse.w, s, s);
+    if (initialising() && l < sweep_.level) backend_.upsample(L.confidence, coarse.confidence, s, 1.f);
   }
+  if (initialising() && l == sweep_.level) runSweep();
   for (const Buffer* b : {&L.pd.v, &L.pd.p, &L.pd.q}) backend_.fill(*b, 0.f);
+}
+
+// The sweep proposes, the left-right check decides: pixels it matches consistently (near
+// objects, large motion) take its disparity; the rest keep the coarse-to-fine estimate,
+// which is smooth and, where a near object was lost, lies on the background (the right
+// value for the occluded band beside it). Both views are swept on the calibrated images (image 1 has camera 0's model
+// and orientation there, so the sweep needs one camera and the translation only): camera 0 against image 1 with t',
+// then camera 1 against image 0 with -t' for the left-right check.
+void Pipeline::runSweep() {
+  stage("plane sweep");
+  Level& L = levels_[sweep_.level];
+  SweepParams reverse = sweep_.params;
+  for (double& c : reverse.t) c = -c;
+  backend_.sweepWarp(sweep_.volume, L.i1, L.mask, sweep_.params);
+  backend_.sweepSelect(sweep_.best, L.i0, sweep_.volume, L.mask, sweep_.params);
+  backend_.sweepWarp(sweep_.volume, L.i0, L.mask, reverse);
+  backend_.sweepSelect(sweep_.other, L.i1, sweep_.volume, L.mask, reverse);
+  backend_.sweepInitialise(L.pd.u, L.w, L.confidence, sweep_.best, sweep_.other, L.mask, sweep_.params,
+                           {params_.lrTolerancePx, params_.initAccept});
 }
 
 PrimalDualParams Pipeline::primalDualParams() const {
@@ -141,7 +205,9 @@ void Pipeline::solveLevel(Level& L, const std::function<void(int)>& warpDone) {
   const PrimalDualParams pdParams = primalDualParams();
   for (int n = 0; n < params_.warps; ++n) {
     stage("warp derivatives");
-    backend_.warpDerivatives(L.data, L.tangent, L.i0, L.i1, L.trajectory, L.w, L.pd.u, L.mask);
+    const bool weighted = params_.occlusionWeight < 1.f;  // a floor of 1 weighs every pixel 1
+    backend_.warpDerivatives(L.data, L.tangent, L.i0, L.i1, L.trajectory, L.w, L.pd.u, L.mask,
+                             weighted ? L.confidence : Buffer{}, params_.occlusionWeight);
     stage("primal-dual");
     backend_.copy(L.pd.uBar, L.pd.u);
     backend_.copy(L.pd.vBar, L.pd.v);
@@ -187,6 +253,10 @@ Pipeline::Output Pipeline::download() {
   for (size_t i = 0; i < n; ++i) out.valid.data[i] = mask[i] != 0.f;
   out.radial = ImageF(w, h);
   backend_.download(radial_, out.radial.data.data());
+  if (initialising()) {
+    out.confidence = ImageF(w, h);
+    backend_.download(L0.confidence, out.confidence.data.data());
+  }
   if (selection_.disparity) {
     out.disparity = ImageF(w, h);
     backend_.download(L0.pd.u, out.disparity.data.data());
@@ -224,7 +294,7 @@ Pipeline::Output Pipeline::run(const ImageF& left, const ImageF& right, bool pro
 
 Pipeline::DeviceIO Pipeline::deviceIO() const {
   const Level& L0 = levels_[0];
-  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_};
+  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_, L0.confidence};
 }
 
 void Pipeline::runOnDevice() {

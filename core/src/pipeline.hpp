@@ -1,5 +1,6 @@
 // The per-frame algorithm (DESIGN.md "Per frame"), written once against Backend.
 #pragma once
+#include <algorithm>
 #include <functional>
 #include <vector>
 
@@ -15,8 +16,8 @@ class Pipeline {
   // Allocates every buffer of every level once. userMask (optional, full resolution)
   // restricts the solve; setPose() must be called before run().
   Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask);
-  // What the constructor allocates on the backend for a width x height frame.
-  static unsigned long long bufferBytes(int width, int height, const Params& params);
+  // What the constructor allocates on the backend for the rig's frame.
+  static unsigned long long bufferBytes(const Rig& rig, const Params& params);
 
   // Recomputes the per-rig fields of every level on the backend (a moving camera calls
   // this whenever the relative pose changes).
@@ -36,6 +37,7 @@ class Pipeline {
     ImageF disparity;
     FlowImage warp;
     ImageF radial;
+    ImageF confidence;  // only with the plane-sweep initialiser
     Image<Point3f> points;
     std::vector<StageTime> stages;
   };
@@ -49,6 +51,7 @@ class Pipeline {
   struct DeviceIO {
     Buffer left, right;                             // 1 ch, full resolution
     Buffer valid, disparity, warp, radial, points;  // 1, 1, 2, 1, 3 ch
+    Buffer confidence;                              // 1 ch; id -1 without the initialiser
   };
   DeviceIO deviceIO() const;
   void runOnDevice();
@@ -59,9 +62,23 @@ class Pipeline {
     Camera cam0, cam1;
     Buffer userMask;  // the user's mask at this level (or all ones)
     Buffer i0, i1, mask, trajectory, tensor, steps, w, tangent, scratch;
+    Buffer confidence;  // data-term weight from the initialiser (id -1 without one)
     PrimalDualBuffers pd;
     DataTermBuffers data;
   };
+
+  // The plane-sweep initialiser: which level, its hypotheses, and its buffers.
+  struct Sweep {
+    size_t level = 0;
+    SweepParams params{};  // params.t is t' (camera 0 as reference)
+    Buffer volume, best, other;
+  };
+  static int sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params);
+  static size_t sweepLevel(size_t levels, const Params& params) {
+    return std::min(levels - 1, size_t(params.initLevel));
+  }
+  void runSweep();
+  bool initialising() const { return params_.init == Params::Init::PlaneSweep; }
 
   void upload(const ImageF& left, const ImageF& right);
   void issueFrame(const std::function<void(double)>& progress);
@@ -76,6 +93,7 @@ class Pipeline {
   Params params_;
   Eigen::Vector3d tPrime_ = Eigen::Vector3d::Zero();
   std::vector<Level> levels_;
+  Sweep sweep_;
   Buffer rawRight_, calibration_, radial_, points_;
   bool profiling_ = false;
   Selection selection_;

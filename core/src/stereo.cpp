@@ -34,6 +34,8 @@ DepthResult finish(Pipeline::Output&& out, std::chrono::steady_clock::time_point
   r.warp = std::move(out.warp);
   r.depth.radial = std::move(out.radial);
   r.depth.points = std::move(out.points);
+  r.confidence = std::move(out.confidence);
+  const bool hasConfidence = !r.confidence.empty();
   const bool hasDisparity = !r.disparity.empty(), hasWarp = !r.warp.empty(), hasPoints = !r.depth.points.empty();
   if (hasPoints) r.depth.z = ImageF(r.valid.width, r.valid.height);
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -47,6 +49,7 @@ DepthResult finish(Pipeline::Output&& out, std::chrono::steady_clock::time_point
       if (hasDisparity) r.disparity.data[i] = nan;
       if (hasWarp) r.warp.data[i] = {nan, nan};
       if (hasPoints) r.depth.points.data[i] = {nan, nan, nan};
+      if (hasConfidence) r.confidence.data[i] = nan;
     }
     // A point at infinity has infinite z too (reported as +inf, also beyond 90 degrees).
     const float radial = r.depth.radial.data[i];
@@ -82,7 +85,7 @@ Stereo::~Stereo() = default;
 // the device fails: say which frame, not just which buffer.
 void Stereo::makePipeline() {
   const std::string frame = sizeText(rig_.cam0.width, rig_.cam0.height);
-  const unsigned long long need = Pipeline::bufferBytes(rig_.cam0.width, rig_.cam0.height, params_);
+  const unsigned long long need = Pipeline::bufferBytes(rig_, params_);
   const unsigned long long have = backend_->memoryBytes();
   if (have && need > have)
     throw Error("out of memory: a " + frame + " frame needs " + std::to_string(need) + " bytes of buffers on backend " +

@@ -62,6 +62,26 @@ struct DataTermBuffers {
   Buffer iz;  // 1 ch: I1(x + w) - I0(x)
 };
 
+// The plane-sweep initialiser (DESIGN.md "Initialisation"). Both images are in the
+// reference camera's model and orientation (image 1 after the calibration warp), so the
+// other view is the reference camera translated: a point X seen from the reference is
+// X + t in the other. Hypothesis k (0..planes-1) is the sphere of inverse radial depth
+// q_k = qMax k / (planes - 1) around the reference centre; pixel x sees it in the other
+// image at x_k = project(unproject(x) + q_k t) (projection ignores the 1/q scale).
+struct SweepParams {
+  CameraParams cam;  // the level's camera
+  double t[3];       // t' (reference = camera 0) or -t' (reference = camera 1)
+  double qMax;       // inverse depth of the nearest sphere (1/m)
+  int planes;        // >= 2
+  int radius;        // ZNCC window: (2 radius + 1)^2 level pixels
+};
+
+// Left-right consistency of two sweeps, turned into the initial state and a confidence.
+struct ConsistencyParams {
+  float tolerancePx;       // reprojection error (level px) at which confidence falls to 1/e
+  float acceptConfidence;  // the sweep replaces the coarse-to-fine estimate from this confidence on
+};
+
 struct PrimalDualStep {
   float tauScale;    // multiplies the per-pixel primal steps
   float sigmaScale;  // multiplies the per-pixel dual steps
@@ -104,9 +124,13 @@ class Backend {
   // sigma_p2) from the image and mask.
   virtual void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                                const TensorParams& params) = 0;
-  // tangent g = normalize(T(x + w)) (2 ch) and the data term at x + w.
+  // tangent g = normalize(T(x + w)) (2 ch) and the data term at x + w. With a confidence
+  // buffer (1 ch; id -1 = none), iz and iu are scaled by max(confidence, weightFloor):
+  // lambda c |rho| = lambda |c rho|, so unreliable pixels pull less on the solution and
+  // the primal-dual kernel stays unchanged.
   virtual void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                               const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask) = 0;
+                               const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                               const Buffer& confidence, float weightFloor) = 0;
   // schedule.size() primal-dual iterations (Jacobi-parallel over pixels).
   virtual void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
                           const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) = 0;
@@ -115,6 +139,26 @@ class Backend {
   // du = clamp(u - u0, +-duMax); u = u0 + du; w += du * tangent (masked pixels only).
   virtual void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                           float duMax) = 0;
+
+  // --- plane-sweep initialisation (one file / shader per kernel family: plane_sweep) ---
+  // volume (planes ch): `image` bilinearly sampled at x_k for every hypothesis k where the
+  // reference pixel is in `mask` and x_k is a valid projection inside the image; -1 elsewhere.
+  virtual void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) = 0;
+  // best (2 ch): for each masked pixel, the hypothesis minimising 1 - ZNCC between the
+  // reference window and the volume window (masked, non-negative samples only; at least
+  // half the window), the first on ties, refined by a parabola through its neighbours'
+  // costs (offset clamped to +-0.5 planes): (q, cost). (-1, 2) where nothing scored.
+  virtual void sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                           const SweepParams& p) = 0;
+  // From the reference sweep `best` (made with p.t) and the other view's `other` (made
+  // with -p.t): confidence = exp(-(e / tol)^2), e the distance from x
+  // to its round trip through `other` (nearest pixel at x_q), 0 where the reference has no
+  // hypothesis, the round trip fails or mask is 0. Where confidence >= acceptConfidence,
+  // u and w (in/out, the coarse-to-fine estimate) are replaced by the sweep's:
+  // w = x_q - x, u = |w|; elsewhere they are left as they are.
+  virtual void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                               const Buffer& other, const Buffer& mask, const SweepParams& p,
+                               const ConsistencyParams& c) = 0;
 
   // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w where mask
   // is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.

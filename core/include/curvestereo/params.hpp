@@ -32,6 +32,27 @@ struct Params {
   // estimate gamma; gamma = 0 gives constant steps and theta = 1.
   float gamma = 0.f;
 
+  // Initialisation (DESIGN.md "Initialisation"). None: the coarsest level starts at zero
+  // disparity, so coarse-to-fine warping reaches about levels x warps x duMax px and
+  // larger displacements are lost. PlaneSweep: a plane sweep (spheres uniform in inverse
+  // depth, ZNCC, winner-take-all, both views) at pyramid level initLevel gives the starting
+  // disparity there and a left-right confidence; coarser levels are skipped and pixels of
+  // low confidence (occlusions, mismatches) weigh at least occlusionWeight in the data term.
+  enum class Init { None, PlaneSweep };
+  Init init = Init::None;
+  int initLevel = 1;                 // 0 = full resolution; clamped to the coarsest level
+  double initMaxParallaxDeg = 40.0;  // nearest hypothesis: a point this many degrees of parallax away
+  double initPxPerPlane = 1.0;       // largest image motion between neighbouring hypotheses (level px)
+  int initRadius = 3;                // ZNCC window (2r+1)^2 at the sweep level
+  float lrTolerancePx = 1.0f;        // left-right round-trip error (level px) where confidence is 1/e
+  float initAccept = 0.3679f;        // confidence from which the sweep replaces the coarse estimate (e^-1: e <= tol)
+  // Data-term weight floor: pixels weigh max(confidence, occlusionWeight). 1 (no
+  // down-weighting) measured best on the development pairs: at the sweep's resolution the
+  // check also flags good pixels beside edges, and the regulariser's smooth fill of true
+  // occlusions was no better than their own data (bino02 tau>1 5.9 / 6.2 / 6.5 % at 1 /
+  // 0.5 / 0.1; temp02 non-occluded 15.8 / 17.3 % at 1 / 0.3).
+  float occlusionWeight = 1.0f;
+
   // Field of view used: rays farther than maxFovDeg/2 from the optical axis are masked
   // (0 = everything the camera model represents, which for an undistorted equidistant
   // model reaches into the black image corners; set it above 180 for wider lenses).
@@ -44,7 +65,12 @@ struct Params {
   void validate() const;
 };
 
-// Named presets: "realtime" (the paper's configuration), "default" (accuracy oriented).
+// "none" / "planesweep"; parseInit throws cs::Error listing the names.
+std::string initName(Params::Init init);
+Params::Init parseInit(const std::string& name);
+
+// Named presets: "realtime" (the paper's configuration), "default" (accuracy oriented),
+// "quality" (default + plane-sweep initialisation, for displacements beyond ~30 px).
 // Throws cs::Error listing the known names for an unknown one.
 Params preset(const std::string& name);
 std::vector<std::string> presetNames();

@@ -24,10 +24,16 @@ class Pipeline;
 // or +inf (zero disparity: a point at infinity; depth.z is +inf too). Where valid is 0,
 // every output is NaN.
 struct DepthResult {
-  ImageU8 valid;                  // 1 where the pixel was solved
-  ImageF disparity;               // u: px along the epipolar curve (NaN where invalid)
-  FlowImage warp;                 // w: 2-D displacement into the calibrated image 1 (NaN where invalid)
-  DepthMaps depth;                // radial / z depth and 3-D points
+  ImageU8 valid;     // 1 where the pixel was solved
+  ImageF disparity;  // u: px along the epipolar curve (NaN where invalid)
+  FlowImage warp;    // w: 2-D displacement into the calibrated image 1 (NaN where invalid)
+  DepthMaps depth;   // radial / z depth and 3-D points
+  // With the plane-sweep initialiser (Params::init): how well each pixel passed the
+  // sweep's left-right check, in [0, 1] (exp(-(e/tol)^2) for a round-trip error e, carried
+  // from the sweep level); low in occlusions, at the image rim and where the two views'
+  // sweeps found different matches.
+  // Empty without the initialiser.
+  ImageF confidence;
   std::vector<StageTime> stages;  // time of each stage of this frame (when profiling)
   double totalMs = 0;
 };

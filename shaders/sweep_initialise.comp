@@ -1,0 +1,92 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The initial state from two sweeps (backend_cpu/plane_sweep.cpp sweepInitialise): the
+// reference hypothesis q gives x_q; the other view's hypothesis at the nearest pixel to
+// x_q carries it back, and the round-trip error e gives confidence = exp(-(e / tol)^2)
+// (0 where the reference has no hypothesis, the round trip fails or mask is 0). Where
+// confidence >= acceptConfidence the sweep's w = x_q - x and u = |w| replace the
+// coarse-to-fine estimate (u, w in/out); elsewhere they are left as they are.
+// Geometry in `real`, compiled twice: double (-DCS_DOUBLE) and float.
+#ifdef CS_DOUBLE
+#extension GL_ARB_gpu_shader_fp64 : require
+#endif
+#include "common.glsl"
+#include "plane_sweep.glsl"
+
+layout(push_constant) uniform PC {
+  FBuf u, w, confidence, best, other, mask;  // w, best, other: 2 channels
+  SweepParamsRef prm;  // t: the reference sweep's translation (`other` was swept with -t)
+  int width, height;
+  float tolerancePx, acceptConfidence;
+} pc;
+
+// std::lround of a real (halves away from zero): the oracle rounds x_q in double, and
+// rounding float(x_q) instead could pick another pixel.
+int lroundr(real v) {
+  real a = abs(v);
+  real r = floor(a);
+  if (a - r >= R(0.5)) r += R(1.0);
+  return int(v < R(0.0) ? -r : r);
+}
+
+// exp(x), x <= 0. The oracle takes exp in double and rounds to float; GLSL's exp is float
+// only (and a few ulps off), and a confidence an ulp off could cross acceptConfidence. So
+// with doubles: x = n ln2 + r, |r| <= ln2 / 2, and exp(r) by its Taylor series in nested
+// form (16 terms: the first one left out is below 1e-22).
+real expNonPositive(real x) {
+#ifdef CS_DOUBLE
+  if (x < -745.0LF) return 0.0LF;  // below the smallest double
+  const double kLn2Hi = 6.93147180369123816490e-01LF, kLn2Lo = 1.90821492927058770002e-10LF;
+  const double n = floor(x * 1.44269504088896340736LF + 0.5LF);
+  precise double r = (x - n * kLn2Hi) - n * kLn2Lo;
+  precise double s = 1.0LF;
+  for (int i = 16; i >= 1; --i) s = 1.0LF + s * r / double(i);
+  return ldexp(s, int(n));
+#else
+  return exp(x);
+#endif
+}
+
+// The round trip's reprojection error (px) from x_q = `there` back towards `from`, or -1
+// where it fails: the nearest pixel is unmasked, has no hypothesis, or does not project.
+real roundTripError(Cam cam, vec2r from, vec2r there) {
+  const int nx = lroundr(there.x), ny = lroundr(there.y);
+  if (!masked(pc.mask, pc.width, pc.height, nx, ny)) return R(-1.0);
+  const float qOther = pc.other.v[idx(pc.width, 2, nx, ny, 0)];
+  vec3r rayOther;
+  vec2r returned;
+  if (qOther < 0.0 || !camUnproject(cam, there, rayOther) ||
+      !projectHypothesis(cam, rayOther, -sweepTranslation(pc.prm), real(qOther), returned))
+    return R(-1.0);
+  precise vec2r d = returned - from;
+  precise real e = sqrt(d.x * d.x + d.y * d.y);
+  return e;
+}
+
+void main() {
+  int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
+  if (x >= pc.width || y >= pc.height) return;
+  const int i = y * pc.width + x;
+  pc.confidence.v[i] = 0.0;
+
+  const Cam cam = pc.prm.cam;
+  const vec2r px = vec2r(real(x), real(y));
+  const float q = pc.best.v[idx(pc.width, 2, x, y, 0)];
+  vec3r ray;
+  vec2r there;
+  if (!masked(pc.mask, pc.width, pc.height, x, y) || q < 0.0 || !camUnproject(cam, px, ray) ||
+      !projectHypothesis(cam, ray, sweepTranslation(pc.prm), real(q), there))
+    return;
+  const real e = roundTripError(cam, px, there);
+  if (e < R(0.0)) return;
+  precise real scaled = e / real(pc.tolerancePx);
+  const float consistency = float(expNonPositive(-scaled * scaled));
+  pc.confidence.v[i] = consistency;
+  if (consistency < pc.acceptConfidence) return;  // keep the coarse-to-fine estimate
+
+  precise vec2r wq = there - px;
+  precise real u = sqrt(wq.x * wq.x + wq.y * wq.y);
+  pc.w.v[2 * i] = float(wq.x);
+  pc.w.v[2 * i + 1] = float(wq.y);
+  pc.u.v[i] = float(u);
+}

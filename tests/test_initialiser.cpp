@@ -1,0 +1,515 @@
+// The plane-sweep initialiser (issue: large displacements). First the oracle's kernels
+// against direct computations through cs::Camera on a synthetic sphere scene, then the
+// data-term weighting, then end to end on rendered pairs: a near object ~100 px away is
+// recovered with the initialiser and lost without it, and the confidence it reports.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "cpu_backend.hpp"
+#include "curvestereo/camera.hpp"
+#include "curvestereo/metrics.hpp"
+#include "curvestereo/stereo.hpp"
+#include "golden_cases.hpp"  // hash01
+#include "synth/scene.hpp"
+#include "test_util.hpp"
+
+using namespace cs;
+
+namespace {
+
+struct Grid {
+  int w, h, c;
+  std::vector<float> data;
+  Grid(int w_, int h_, int c_, float v = 0.f) : w(w_), h(h_), c(c_), data(size_t(w_) * h_ * c_, v) {}
+  cpu::View view() { return cpu::View{data.data(), w, h, c}; }
+  float& at(int x, int y, int ch = 0) { return data[(size_t(y) * w + x) * c + ch]; }
+};
+
+// A double-sphere lens (Usenko et al.'s model) with realistic distortion, ~190 deg over
+// an odd-sized 97x81 image; every pixel unprojects.
+Camera lens() { return Camera::doubleSphere(97, 81, 29.0, 29.2, 48.3, 40.1, -0.21, 0.59); }
+
+// Bilinear sample clamped to the image edge, written independently of the oracle's.
+float bilinear(Grid& g, double x, double y) {
+  x = std::clamp(x, 0.0, double(g.w - 1));
+  y = std::clamp(y, 0.0, double(g.h - 1));
+  const int x0 = std::min(int(x), g.w - 2), y0 = std::min(int(y), g.h - 2);
+  const double fx = x - x0, fy = y - y0;
+  return float((g.at(x0, y0) * (1 - fx) + g.at(x0 + 1, y0) * fx) * (1 - fy) +
+               (g.at(x0, y0 + 1) * (1 - fx) + g.at(x0 + 1, y0 + 1) * fx) * fy);
+}
+
+// Where pixel (x, y) sees inverse depth q in the other view: project(unproject(x) + q t),
+// inside the image; false otherwise.
+bool landing(const Camera& cam, const double t[3], double x, double y, double q, Vec2<double>& px) {
+  Vec3<double> ray;
+  if (!cam.unproject(Vec2<double>(x, y), ray)) return false;
+  return cam.project(Vec3<double>(ray.x() + q * t[0], ray.y() + q * t[1], ray.z() + q * t[2]), px) && cam.inImage(px);
+}
+
+SweepParams sweepParams(const Camera& cam, const double t[3], double qMax, int planes, int radius) {
+  SweepParams p{};
+  p.cam = toCameraParams(cam);
+  std::copy(t, t + 3, p.t);
+  p.qMax = qMax;
+  p.planes = planes;
+  p.radius = radius;
+  return p;
+}
+
+// A textured sphere of radius 1/qStar around the reference centre, seen from the
+// reference and from the other centre at -t (a point X of the reference is X + t there):
+// brightness is a function of the direction of the surface point from the reference
+// centre, with detail of a few pixels.
+struct SpherePair {
+  Grid left, right;
+};
+
+float sphereTexture(const Vec3<double>& p) {
+  const Vec3<double> u = p.normalized();
+  return float(0.5 + 0.15 * std::sin(40 * u.x() + 7 * u.y()) + 0.15 * std::sin(31 * u.y() - 23 * u.z() + 1) +
+               0.1 * std::sin(27 * u.x() + 35 * u.z() + 2));
+}
+
+SpherePair renderSphere(const Camera& cam, const double t[3], double qStar) {
+  SpherePair pair{Grid(cam.width, cam.height, 1), Grid(cam.width, cam.height, 1)};
+  const Vec3<double> T(t[0], t[1], t[2]);
+  const double radius = 1.0 / qStar;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      Vec3<double> d;
+      if (!cam.unproject(Vec2<double>(x, y), d)) continue;
+      pair.left.at(x, y) = sphereTexture(d);
+      // The other camera's ray -t + s d meets |P| = radius (the centre -t is inside).
+      const double b = d.dot(T), s = b + std::sqrt(b * b - T.squaredNorm() + radius * radius);
+      pair.right.at(x, y) = sphereTexture(-T + s * d);
+    }
+  return pair;
+}
+
+}  // namespace
+
+TEST_CASE("sweepWarp samples image(project(ray + q_k t)) for q_k = qMax k / (planes - 1); -1 elsewhere") {
+  const Camera cam = lens();
+  const double t[3] = {-0.12, 0.01, 0.03};
+  const SweepParams p = sweepParams(cam, t, 6.0, 7, 2);
+  Grid image(cam.width, cam.height, 1), mask(cam.width, cam.height, 1, 1.f), volume(cam.width, cam.height, p.planes);
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x)
+      image.at(x, y) = 0.5f + 0.3f * std::sin(0.31f * x + 0.1f * y) * std::cos(0.23f * y - 0.05f * x);
+  for (int y = 0; y < cam.height; ++y) mask.at(30, y) = 0.f;  // an excluded column
+  cpu::sweepWarp(volume.view(), image.view(), mask.view(), p);
+
+  long long sampled = 0, offImage = 0, excluded = 0;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x)
+      for (int k = 0; k < p.planes; ++k) {
+        CAPTURE(x);
+        CAPTURE(y);
+        CAPTURE(k);
+        const float v = volume.at(x, y, k);
+        Vec2<double> px;
+        if (mask.at(x, y) == 0.f) {
+          ++excluded;
+          CHECK(v == -1.f);
+        } else if (!landing(cam, t, x, y, p.qMax * k / (p.planes - 1), px)) {
+          ++offImage;
+          CHECK(v == -1.f);
+        } else {
+          ++sampled;
+          CHECK(std::abs(v - bilinear(image, px.x(), px.y())) <= 1e-5f);
+        }
+      }
+  // Both branches are exercised: the near planes leave the image on the left and at the back.
+  CHECK(offImage > 1000);
+  CHECK(sampled > 20000);
+  CHECK(excluded == cam.height * p.planes);
+}
+
+TEST_CASE("sweepSelect recovers the inverse depth of a textured sphere to a fraction of a plane") {
+  const Camera cam = lens();
+  const double t[3] = {-0.12, 0.005, 0.01};
+  // ~1.1 px of motion per plane at the centre; the true sphere lies between planes.
+  const SweepParams p = sweepParams(cam, t, 2.4, 9, 3);
+  const double spacing = p.qMax / (p.planes - 1);
+  for (const double planeStar : {2.35, 5.7}) {
+    CAPTURE(planeStar);
+    const double qStar = planeStar * spacing;
+    SpherePair pair = renderSphere(cam, t, qStar);
+    Grid mask(cam.width, cam.height, 1, 1.f), volume(cam.width, cam.height, p.planes), best(cam.width, cam.height, 2);
+    cpu::sweepWarp(volume.view(), pair.right.view(), mask.view(), p);
+    cpu::sweepSelect(best.view(), pair.left.view(), volume.view(), mask.view(), p);
+    std::vector<double> errors;
+    long long scored = 0;
+    for (int y = 0; y < cam.height; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        const float q = best.at(x, y, 0), cost = best.at(x, y, 1);
+        if (q < 0.f) {
+          CHECK(cost == 2.f);  // nothing scored: (-1, 2)
+          continue;
+        }
+        ++scored;
+        CHECK(cost >= 0.f);
+        CHECK(cost <= 2.f);
+        CHECK(q <= p.qMax + 1e-6);
+        errors.push_back(std::abs(q - qStar) / spacing);
+      }
+    std::sort(errors.begin(), errors.end());
+    const double median = errors[errors.size() / 2], p90 = errors[errors.size() * 9 / 10];
+    MESSAGE("plane " << planeStar << ": " << scored << " scored, |q - q*| median " << median << ", 90th percentile "
+                     << p90 << " planes");
+    CHECK(scored > cam.width * cam.height * 8 / 10);
+    // Measured: median 0.04 / 0.04, 90th percentile 0.12 / 0.14 planes. A sweep that
+    // picked the nearest plane without the parabola would sit at 0.35 / 0.3.
+    CHECK(median < 0.15);
+    CHECK(p90 < 0.3);
+  }
+}
+
+TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agrees; confidence 0 where it cannot") {
+  const Camera cam = lens();
+  const double t[3] = {-0.12, 0.005, 0.01}, back[3] = {0.12, -0.005, -0.01};
+  const SweepParams p = sweepParams(cam, t, 2.4, 9, 3);
+  SweepParams reverse = p;
+  std::copy(back, back + 3, reverse.t);
+  const double qStar = 4.4 * p.qMax / (p.planes - 1);
+  SpherePair pair = renderSphere(cam, t, qStar);
+  const int w = cam.width, h = cam.height;
+  Grid mask(w, h, 1, 1.f), volume(w, h, p.planes), best(w, h, 2), other(w, h, 2);
+  for (int y = 0; y < h; ++y) mask.at(60, y) = 0.f;
+  cpu::sweepWarp(volume.view(), pair.right.view(), mask.view(), p);
+  cpu::sweepSelect(best.view(), pair.left.view(), volume.view(), mask.view(), p);
+  cpu::sweepWarp(volume.view(), pair.left.view(), mask.view(), reverse);
+  cpu::sweepSelect(other.view(), pair.right.view(), volume.view(), mask.view(), reverse);
+
+  // Sabotage: no reference hypothesis in one block; the other view far off in another
+  // region (rows 60.. of the other image).
+  for (int y = 10; y < 20; ++y)
+    for (int x = 40; x < 50; ++x) best.at(x, y, 0) = -1.f;
+  for (int y = 60; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (other.at(x, y, 0) >= 0.f) other.at(x, y, 0) += 1.2f;
+
+  // The other view's true inverse depth of the point reference pixel (x, y) sees.
+  auto otherInverseDepth = [&](int x, int y) {
+    Vec3<double> ray;
+    cam.unproject(Vec2<double>(x, y), ray);
+    return 1.0 / (ray / qStar + Vec3<double>(t[0], t[1], t[2])).norm();
+  };
+  ConsistencyParams c{};
+  c.tolerancePx = 1.f;
+  c.acceptConfidence = 0.5f;
+  // The coarse-to-fine estimate the sweep may replace.
+  const float keptU = -5.f;
+  Grid u(w, h, 1, keptU), warp(w, h, 2), confidence(w, h, 1, 9.f), start(w, h, 2);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) start.at(x, y, 0) = -6.f, start.at(x, y, 1) = -7.f;
+  warp.data = start.data;
+  cpu::sweepInitialise(u.view(), warp.view(), confidence.view(), best.view(), other.view(), mask.view(), p, c);
+
+  long long consistent = 0, consistentConfident = 0, disagreeing = 0, replaced = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      CAPTURE(x);
+      CAPTURE(y);
+      const float conf = confidence.at(x, y), q = best.at(x, y, 0);
+      CHECK(conf >= 0.f);
+      CHECK(conf <= 1.f);
+      const bool kept =
+          u.at(x, y) == keptU && warp.at(x, y, 0) == start.at(x, y, 0) && warp.at(x, y, 1) == start.at(x, y, 1);
+      if (mask.at(x, y) == 0.f || q < 0.f) {
+        CHECK(conf == 0.f);
+        CHECK(kept);
+        continue;
+      }
+      // Replaced, by the sweep's w, exactly where the confidence reaches acceptConfidence.
+      Vec2<double> there;
+      REQUIRE(landing(cam, t, x, y, q, there));
+      CHECK(kept == (conf < c.acceptConfidence));
+      if (!kept) {
+        ++replaced;
+        CHECK(warp.at(x, y, 0) == doctest::Approx(there.x() - x).epsilon(1e-5));
+        CHECK(warp.at(x, y, 1) == doctest::Approx(there.y() - y).epsilon(1e-5));
+        CHECK(u.at(x, y) == doctest::Approx(std::hypot(warp.at(x, y, 0), warp.at(x, y, 1))).epsilon(1e-6));
+      }
+      const int nx = int(std::lround(there.x())), ny = int(std::lround(there.y()));
+      if (nx < 2 || ny < 2 || nx >= w - 2 || ny >= h - 2 || mask.at(nx, ny) == 0.f) continue;
+      if (ny >= 60) {
+        ++disagreeing;
+        CHECK(conf < 0.02f);  // the other view is 1.2 /m (~4 planes, px) off
+      } else if (std::abs(q - qStar) < 0.1 && std::abs(other.at(nx, ny, 0) - otherInverseDepth(x, y)) < 0.1) {
+        ++consistent;  // both sweeps within a third of a plane of the truth
+        consistentConfident += conf > 0.6f;
+      }
+    }
+  MESSAGE(consistent << " consistent pixels, " << consistentConfident << " of them with confidence > 0.6; "
+                     << disagreeing << " disagreeing; " << replaced << " replaced");
+  CHECK(disagreeing > 300);
+  CHECK(replaced > 2000);
+  CHECK(consistent > 2000);
+  // Measured: all 5191 consistent pixels above 0.6.
+  CHECK(consistentConfident >= 0.9 * consistent);
+}
+
+TEST_CASE("warpDerivatives with a confidence buffer scales iz and iu by max(confidence, floor)") {
+  const int w = 31, h = 23;
+  Grid i0(w, h, 1), i1(w, h, 1), traj(w, h, 2), warp(w, h, 2), u(w, h, 1), mask(w, h, 1, 1.f), conf(w, h, 1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const uint32_t i = uint32_t(y * w + x);
+      i0.at(x, y) = 0.5f + 0.4f * std::sin(0.5f * x + 0.3f * y);
+      i1.at(x, y) = 0.5f + 0.4f * std::sin(0.5f * x + 0.3f * y - 0.7f);
+      traj.at(x, y, 0) = 1.f, traj.at(x, y, 1) = 0.2f;
+      warp.at(x, y, 0) = 2.f * golden::hash01(i * 3 + 1) - 1.f;
+      warp.at(x, y, 1) = 2.f * golden::hash01(i * 3 + 2) - 1.f;
+      u.at(x, y) = golden::hash01(i * 3 + 3);
+      conf.at(x, y) = i % 5 == 0 ? 0.f : golden::hash01(i * 7 + 4);
+    }
+  conf.at(5, 5) = 1.f;
+  const float floor = 0.25f;
+  Grid u0a(w, h, 1), iua(w, h, 1), iza(w, h, 1), ga(w, h, 2), u0b(w, h, 1), iub(w, h, 1), izb(w, h, 1), gb(w, h, 2);
+  cpu::warpDerivatives(u0a.view(), iua.view(), iza.view(), ga.view(), i0.view(), i1.view(), traj.view(), warp.view(),
+                       u.view(), mask.view(), nullptr, floor);
+  const cpu::View confView = conf.view();
+  cpu::warpDerivatives(u0b.view(), iub.view(), izb.view(), gb.view(), i0.view(), i1.view(), traj.view(), warp.view(),
+                       u.view(), mask.view(), &confView, floor);
+  CHECK(u0a.data == u0b.data);
+  CHECK(ga.data == gb.data);
+  long long below = 0, above = 0, nonZero = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float weight = std::max(conf.at(x, y), floor);
+      (conf.at(x, y) < floor ? below : above) += 1;
+      nonZero += iza.at(x, y) != 0.f;
+      CHECK(izb.at(x, y) == doctest::Approx(weight * iza.at(x, y)).epsilon(1e-6));
+      CHECK(iub.at(x, y) == doctest::Approx(weight * iua.at(x, y)).epsilon(1e-6));
+    }
+  CHECK(below > 100);
+  CHECK(above > 100);
+  CHECK(nonZero > w * h / 2);
+}
+
+// ---------------------------------------------------------------- end to end
+
+namespace {
+
+// A rendered pair whose nearest object (a box, "near0", 0.5 m away on a 0.35 m baseline)
+// moves ~100 px: beyond what coarse-to-fine warping reaches from zero on this pyramid
+// (3 levels of 256 px: 30 warps x 0.2 px x (1 + 2 + 4) = 42 px). A 256x256 lens of f =
+// 150 px (an equidistant fisheye cropped to ~100 deg, T265-like distortion) keeps the
+// CPU solves to a few seconds.
+struct NearScene {
+  synth::SynthPair pair;
+  FlowImage truth;
+  ImageU8 nonOccluded, nearObject;  // nearObject: non-occluded pixels of near0 with a true warp
+  DepthResult plain, initialised;   // preset "default" and "quality"
+};
+
+// Per-pixel end-point error statistics over a mask.
+struct Accuracy {
+  double tau1 = 0, epe = 0, medianTruth = 0;  // tau1 in percent
+  long long pixels = 0;
+};
+
+Accuracy accuracyOn(const NearScene& s, const DepthResult& r, const ImageU8& where) {
+  Accuracy a;
+  long long bad = 0;
+  std::vector<double> truth;
+  for (int y = 0; y < where.height; ++y)
+    for (int x = 0; x < where.width; ++x) {
+      if (!where(x, y)) continue;
+      ++a.pixels;
+      const Vec2f gt = s.truth(x, y), est = r.warp(x, y);
+      const double e = std::hypot(double(est.x) - gt.x, double(est.y) - gt.y);
+      bad += !(e <= 1.0);
+      a.epe += std::isfinite(e) ? e : 1e3;
+      truth.push_back(std::hypot(gt.x, gt.y));
+    }
+  if (a.pixels == 0) return a;
+  std::sort(truth.begin(), truth.end());
+  a.tau1 = 100.0 * bad / a.pixels;
+  a.epe /= a.pixels;
+  a.medianTruth = truth[truth.size() / 2];
+  return a;
+}
+
+const NearScene& nearScene() {
+  static const NearScene scene = [] {
+    NearScene s;
+    synth::SynthConfig cfg;
+    cfg.camera = Camera::kannalaBrandt4(256, 256, 150, 150, 127.5, 127.5, -0.0066, 0.0473, -0.0458, 0.009);
+    cfg.baseline = 0.35;
+    cfg.nearest = 0.5;
+    cfg.seed = 6;
+    cfg.samplesPerAxis = 2;
+    s.pair = synth::renderPair(cfg);
+    const synth::SynthPair& p = s.pair;
+    s.truth = groundTruthWarp(p.rig, p.depthLeft);
+    s.nonOccluded = nonOccludedMask(p.rig, p.depthLeft, &p.depthRight);
+    s.nearObject = ImageU8(256, 256, 0);
+    for (int y = 0; y < 256; ++y)
+      for (int x = 0; x < 256; ++x) {
+        Vec3<double> r;
+        if (!s.nonOccluded(x, y) || !std::isfinite(s.truth(x, y).x) || !p.rig.cam0.unproject(Vec2<double>(x, y), r))
+          continue;
+        synth::Hit hit;
+        const synth::Ray ray{p.pose0.centre, p.pose0.rotation * Eigen::Vector3d(r.x(), r.y(), r.z())};
+        s.nearObject(x, y) = p.scene.intersect(ray, hit) && p.scene.shapes()[hit.shape].name == "near0";
+      }
+    s.plain = Stereo(p.rig, preset("default"), "cpu").compute(p.left, p.right);
+    s.initialised = Stereo(p.rig, preset("quality"), "cpu").compute(p.left, p.right);
+    return s;
+  }();
+  return scene;
+}
+
+}  // namespace
+
+TEST_CASE("a near object ~100 px away is recovered with the initialiser (preset quality) and lost without it") {
+  const NearScene& s = nearScene();
+  const Accuracy plain = accuracyOn(s, s.plain, s.nearObject), init = accuracyOn(s, s.initialised, s.nearObject);
+  const Metrics all0 = evaluate(s.pair.rig, s.plain.warp, s.plain.depth.radial, s.pair.depthLeft, &s.pair.depthRight);
+  const Metrics all1 =
+      evaluate(s.pair.rig, s.initialised.warp, s.initialised.depth.radial, s.pair.depthLeft, &s.pair.depthRight);
+  MESSAGE("near object: " << init.pixels << " px, true |w| median " << init.medianTruth << " px");
+  MESSAGE("default: near tau>1 " << plain.tau1 << " %, EPE " << plain.epe << " px; all tau>3 " << all0.tau3 << " % ("
+                                 << s.plain.totalMs << " ms)");
+  MESSAGE("quality: near tau>1 " << init.tau1 << " %, EPE " << init.epe << " px; all tau>3 " << all1.tau3 << " % ("
+                                 << s.initialised.totalMs << " ms)");
+  // The scene is what this test claims.
+  REQUIRE(init.pixels > 2000);
+  CHECK(init.medianTruth > 90);
+  CHECK(init.medianTruth < 120);
+  // Without the initialiser the object is lost: every pixel off by more than a pixel.
+  CHECK(plain.tau1 > 95);
+  CHECK(plain.epe > 60);
+  // With it, measured (2026-11): tau>1 51 %, EPE 20 px on the object (default: 100 %, 97
+  // px), and tau>3 over the image 23.5 % vs 29.7 %. The bounds leave room for renderer
+  // and solver changes, not for an initialiser that does not reach the object.
+  CHECK(init.tau1 < 65);
+  CHECK(init.epe < 30);
+  CHECK(all1.tau3 < all0.tau3 - 3);
+}
+
+TEST_CASE("confidence: in [0, 1] where valid, NaN where not, empty without the initialiser, low in occlusions") {
+  const NearScene& s = nearScene();
+  CHECK(s.plain.confidence.empty());
+  const DepthResult& r = s.initialised;
+  REQUIRE(r.confidence.width == r.valid.width);
+  REQUIRE(r.confidence.height == r.valid.height);
+  long long bad = 0, valid = 0, occludedCount = 0, visibleCount = 0;
+  double occluded = 0, visible = 0;
+  for (size_t i = 0; i < r.valid.size(); ++i) {
+    const float c = r.confidence.data[i];
+    if (!r.valid.data[i]) {
+      bad += !std::isnan(c);
+      continue;
+    }
+    ++valid;
+    bad += !(c >= 0.f && c <= 1.f);
+    // Occluded: a surface of image 0 that image 1 does not see (ground truth).
+    if (!std::isfinite(s.truth.data[i].x)) continue;
+    (s.nonOccluded.data[i] ? visible : occluded) += c;
+    ++(s.nonOccluded.data[i] ? visibleCount : occludedCount);
+  }
+  occluded /= std::max(1LL, occludedCount);
+  visible /= std::max(1LL, visibleCount);
+  MESSAGE("mean confidence: " << visible << " on " << visibleCount << " visible pixels, " << occluded << " on "
+                              << occludedCount << " occluded ones");
+  CHECK(valid > 30000);
+  CHECK(bad == 0);
+  REQUIRE(occludedCount > 1000);
+  // Measured 0.18 occluded (or outside image 1) vs 0.85 visible.
+  CHECK(occluded < visible - 0.4);
+}
+
+TEST_CASE("init parameters: validation, parseInit / initName, preset quality") {
+  const Params good = preset("quality");
+  CHECK(good.init == Params::Init::PlaneSweep);
+  CHECK(preset("default").init == Params::Init::None);
+  CHECK(preset("realtime").init == Params::Init::None);
+  const auto names = presetNames();
+  CHECK(std::find(names.begin(), names.end(), "quality") != names.end());
+  // quality is default plus the initialiser.
+  Params same = good;
+  same.init = Params::Init::None;
+  CHECK(describe(same) == describe(preset("default")));
+  CHECK(describe(good).find("init=planesweep") != std::string::npos);
+  good.validate();
+
+  CHECK(parseInit("planesweep") == Params::Init::PlaneSweep);
+  CHECK(parseInit("none") == Params::Init::None);
+  for (const char* n : {"none", "planesweep"}) CHECK(initName(parseInit(n)) == n);
+  CHECK_THROWS_WITH_AS(parseInit("foo"), doctest::Contains("unknown initialisation 'foo'"), Error);
+  CHECK_THROWS_WITH_AS(parseInit("foo"), doctest::Contains("none, planesweep"), Error);
+  CHECK_THROWS_AS(parseInit("PlaneSweep"), Error);
+
+  auto refused = [&](const char* field, auto set) {
+    Params p = good;
+    set(p);
+    CHECK_THROWS_WITH_AS(p.validate(), doctest::Contains(field), Error);
+  };
+  refused("initLevel", [](Params& p) { p.initLevel = -1; });
+  refused("initLevel", [](Params& p) { p.initLevel = 12; });
+  refused("initMaxParallaxDeg", [](Params& p) { p.initMaxParallaxDeg = 0; });
+  refused("initMaxParallaxDeg", [](Params& p) { p.initMaxParallaxDeg = 90; });
+  refused("initMaxParallaxDeg", [](Params& p) { p.initMaxParallaxDeg = NAN; });
+  refused("initPxPerPlane", [](Params& p) { p.initPxPerPlane = 0.2; });
+  refused("initPxPerPlane", [](Params& p) { p.initPxPerPlane = 17; });
+  refused("initRadius", [](Params& p) { p.initRadius = 0; });
+  refused("initRadius", [](Params& p) { p.initRadius = 8; });
+  refused("lrTolerancePx", [](Params& p) { p.lrTolerancePx = 0; });
+  refused("lrTolerancePx", [](Params& p) { p.lrTolerancePx = INFINITY; });
+  refused("initAccept", [](Params& p) { p.initAccept = -0.1f; });
+  refused("initAccept", [](Params& p) { p.initAccept = 1.5f; });
+  refused("occlusionWeight", [](Params& p) { p.occlusionWeight = -0.1f; });
+  refused("occlusionWeight", [](Params& p) { p.occlusionWeight = 1.5f; });
+  refused("occlusionWeight", [](Params& p) { p.occlusionWeight = NAN; });
+  // The ends of each range are accepted.
+  Params edge = good;
+  edge.initLevel = 0, edge.initRadius = 7, edge.initPxPerPlane = 16, edge.occlusionWeight = 0, edge.initAccept = 1;
+  edge.validate();
+  edge.initLevel = 11, edge.initRadius = 1, edge.initPxPerPlane = 0.25, edge.occlusionWeight = 1, edge.initAccept = 0;
+  edge.validate();
+}
+
+TEST_CASE("setPose with another baseline length and the initialiser on: same warp, depth scaled") {
+  synth::SynthConfig cfg;
+  cfg.camera = synth::defaultFisheye(128);
+  cfg.baseline = 0.2;
+  cfg.nearest = 1.0;
+  cfg.seed = 3;
+  cfg.samplesPerAxis = 2;
+  const synth::SynthPair pair = synth::renderPair(cfg);
+  Stereo stereo(pair.rig, preset("quality"), "cpu");
+  const DepthResult before = stereo.compute(pair.left, pair.right);
+  // Twice the baseline, same direction: the hypotheses move with it (qMax halves), so the
+  // images' correspondences, and with them the whole solve, are unchanged and every
+  // depth doubles.
+  stereo.setPose(pair.rig.R, 2.0 * pair.rig.t);
+  const DepthResult twice = stereo.compute(pair.left, pair.right);
+  stereo.setPose(pair.rig.R, pair.rig.t);
+  const DepthResult again = stereo.compute(pair.left, pair.right);
+  REQUIRE(twice.valid.data == before.valid.data);
+  CHECK(again.valid.data == before.valid.data);
+  long long valid = 0, sameWarp = 0, doubled = 0, finiteDepth = 0, repeated = 0;
+  for (size_t i = 0; i < before.valid.size(); ++i) {
+    if (!before.valid.data[i]) continue;
+    ++valid;
+    const Vec2f a = before.warp.data[i], b = twice.warp.data[i];
+    sameWarp += std::hypot(a.x - b.x, a.y - b.y) <= 1e-3f;
+    repeated += again.disparity.data[i] == before.disparity.data[i];
+    const float d0 = before.depth.radial.data[i], d1 = twice.depth.radial.data[i];
+    if (!std::isfinite(d0) || !std::isfinite(d1)) continue;
+    ++finiteDepth;
+    doubled += std::abs(d1 - 2.f * d0) <= 1e-3f * d1;
+  }
+  MESSAGE(valid << " valid: " << sameWarp << " same warp, " << doubled << " of " << finiteDepth
+                << " finite depths doubled, " << repeated << " repeated exactly after the pose came back");
+  CHECK(valid > 5000);
+  CHECK(!twice.confidence.empty());
+  CHECK(sameWarp >= 0.99 * valid);
+  CHECK(doubled >= 0.99 * finiteDepth);
+  CHECK(repeated == valid);
+}
