@@ -259,27 +259,36 @@ TEST_CASE("vulkan: the plane sweep at 131 planes stays inside its buffers and ma
   const std::pair<const char*, const std::vector<float> SweepRun::*> outputs[] = {
       {"volume", &SweepRun::volume}, {"best", &SweepRun::best}, {"other", &SweepRun::other},
       {"u", &SweepRun::u},           {"w", &SweepRun::w},       {"confidence", &SweepRun::confidence}};
-  // With camera models in double the kernels reproduce the oracle (to the last bit on
-  // lavapipe). Float models put projections ~1e-3 px off: the volume still agrees, but
-  // weakly textured windows then pick other hypotheses and the round trips move, so the
-  // derived outputs are only compared loosely there.
-  const bool doubleModels = vk->device().find("camera models in double") != std::string::npos;
+  // With camera models in double and correctly rounded float arithmetic (lavapipe) the
+  // kernels reproduce the oracle to the last bit. Vulkan lets a GPU divide and take square
+  // roots to 2.5 ulp (NVIDIA does), and on weakly textured windows of this small pair the
+  // ZNCC costs of neighbouring hypotheses tie to that precision, so the winner can flip:
+  // measured on an H200, 4 % of `best` and 10 % of `u` differ while the costs agree. There
+  // the winner's cost is compared tightly and the hypotheses and what follows from them
+  // loosely; the whole solves below compare the end result. Float camera models put
+  // projections ~1e-3 px off with the same effect.
+  const std::string device = vk->device();
+  const bool doubleModels = device.find("camera models in double") != std::string::npos;
+  const bool exact = doubleModels && device.find("llvmpipe") != std::string::npos;
   for (const auto& [name, member] : outputs) {
-    INFO("output " << name);
+    INFO("output " << std::string(name));
     const std::vector<float>&a = actual.*member, &e = expected.*member;
     REQUIRE(a.size() == e.size());
-    const bool tight = doubleModels || member == &SweepRun::volume;
+    const bool tight = exact || member == &SweepRun::volume;
+    const bool hasCost = member == &SweepRun::best || member == &SweepRun::other;
     const float tolerance = tight ? 1e-4f : 1e-2f;
-    long long nonFinite = 0, close = 0;
+    long long nonFinite = 0, close = 0, costs = 0, costsClose = 0;
     for (size_t i = 0; i < a.size(); ++i) {
       nonFinite += !std::isfinite(a[i]);
       close += std::abs(a[i] - e[i]) <= tolerance;
+      if (hasCost && i % 2 == 1) ++costs, costsClose += std::abs(a[i] - e[i]) <= 1e-3f;
     }
     MESSAGE(std::string(name) << ": " << a.size() - close << " of " << a.size() << " values off by more than "
                               << tolerance);
     CHECK(nonFinite == 0);
     // Not all: even in double, a sample right at the image border may fall either way.
-    CHECK(double(close) >= (tight ? 0.999 : 0.95) * double(a.size()));
+    CHECK(double(close) >= (tight ? 0.999 : 0.8) * double(a.size()));
+    if (hasCost) CHECK(double(costsClose) >= 0.995 * double(costs));  // a flipped winner is a tie
   }
   if (vulkanValidationLayerActive())
     CHECK_MESSAGE(vulkanValidationMessageCount() == before, "last: " << vulkanValidationLastMessage());
