@@ -261,12 +261,12 @@ TEST_CASE("vulkan: the plane sweep at 131 planes stays inside its buffers and ma
       {"u", &SweepRun::u},           {"w", &SweepRun::w},       {"confidence", &SweepRun::confidence}};
   // With camera models in double and correctly rounded float arithmetic (lavapipe) the
   // kernels reproduce the oracle to the last bit. Vulkan lets a GPU divide and take square
-  // roots to 2.5 ulp (NVIDIA does), and on weakly textured windows of this small pair the
-  // ZNCC costs of neighbouring hypotheses tie to that precision, so the winner can flip:
-  // measured on an H200, 4 % of `best` and 10 % of `u` differ while the costs agree. There
-  // the winner's cost is compared tightly and the hypotheses and what follows from them
-  // loosely; the whole solves below compare the end result. Float camera models put
-  // projections ~1e-3 px off with the same effect.
+  // roots to 2.5 ulp (NVIDIA does), and the one-pass window variance (s00/n - m^2) of
+  // nearly flat windows amplifies that to ~1e-3 in the ZNCC cost, so near-tied winners
+  // flip. Measured on an H200: 0.2-1.1 % of best / other / u / w / confidence values off
+  // by more than 1e-2 (the volume exact), end-to-end eval equal to CUDA within 0.02
+  // points. There the derived outputs must agree within 1e-2 at 97 % of values; the whole
+  // solves below compare the end result. Float camera models have the same effect.
   const std::string device = vk->device();
   const bool doubleModels = device.find("camera models in double") != std::string::npos;
   const bool exact = doubleModels && device.find("llvmpipe") != std::string::npos;
@@ -275,20 +275,17 @@ TEST_CASE("vulkan: the plane sweep at 131 planes stays inside its buffers and ma
     const std::vector<float>&a = actual.*member, &e = expected.*member;
     REQUIRE(a.size() == e.size());
     const bool tight = exact || member == &SweepRun::volume;
-    const bool hasCost = member == &SweepRun::best || member == &SweepRun::other;
     const float tolerance = tight ? 1e-4f : 1e-2f;
-    long long nonFinite = 0, close = 0, costs = 0, costsClose = 0;
+    long long nonFinite = 0, close = 0;
     for (size_t i = 0; i < a.size(); ++i) {
       nonFinite += !std::isfinite(a[i]);
       close += std::abs(a[i] - e[i]) <= tolerance;
-      if (hasCost && i % 2 == 1) ++costs, costsClose += std::abs(a[i] - e[i]) <= 1e-3f;
     }
     MESSAGE(std::string(name) << ": " << a.size() - close << " of " << a.size() << " values off by more than "
                               << tolerance);
     CHECK(nonFinite == 0);
     // Not all: even in double, a sample right at the image border may fall either way.
-    CHECK(double(close) >= (tight ? 0.999 : 0.8) * double(a.size()));
-    if (hasCost) CHECK(double(costsClose) >= 0.995 * double(costs));  // a flipped winner is a tie
+    CHECK(double(close) >= (tight ? 0.999 : 0.97) * double(a.size()));
   }
   if (vulkanValidationLayerActive())
     CHECK_MESSAGE(vulkanValidationMessageCount() == before, "last: " << vulkanValidationLastMessage());
