@@ -706,6 +706,8 @@ class VulkanBackend final : public Backend {
   void flush();
   void waitFence(VkFence fence, const char* what);
   void abortFrameRecording();
+  // Submits one ended command buffer, signalling fence when done.
+  void submit(VkCommandBuffer cb, VkFence fence);
   template <class PC>
   void dispatch(Shader s, const PC& pc, int w, int h);
   Buffer scratch(int slot, int w, int h);
@@ -1044,11 +1046,15 @@ void VulkanBackend::abortFrameRecording() {
   recordingFrame_ = false;
   frameValid_ = false;
   check(inst_.fn.vkEndCommandBuffer(frameCmd_), "vkEndCommandBuffer");
+  submit(frameCmd_, frameFence_);
+  frameInFlight_ = true;
+}
+
+void VulkanBackend::submit(VkCommandBuffer cb, VkFence fence) {
   auto si = vkStruct<VkSubmitInfo>(VK_STRUCTURE_TYPE_SUBMIT_INFO);
   si.commandBufferCount = 1;
-  si.pCommandBuffers = &frameCmd_;
-  check(inst_.fn.vkQueueSubmit(queue_, 1, &si, frameFence_), "vkQueueSubmit");
-  frameInFlight_ = true;
+  si.pCommandBuffers = &cb;
+  check(inst_.fn.vkQueueSubmit(queue_, 1, &si, fence), "vkQueueSubmit");
 }
 
 // Submits pending work and waits for everything in flight.
@@ -1058,10 +1064,7 @@ void VulkanBackend::flush() {
   if (immRecording_) {
     immRecording_ = false;
     check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
-    auto si = vkStruct<VkSubmitInfo>(VK_STRUCTURE_TYPE_SUBMIT_INFO);
-    si.commandBufferCount = 1;
-    si.pCommandBuffers = &immCmd_;
-    check(inst_.fn.vkQueueSubmit(queue_, 1, &si, immFence_), "vkQueueSubmit");
+    submit(immCmd_, immFence_);
     immInFlight_ = true;
   }
   if (frameInFlight_) {
@@ -1104,10 +1107,7 @@ void VulkanBackend::endFrame() {
   if (!recordingFrame_) return;  // aborted: already submitted
   recordingFrame_ = false;
   check(inst_.fn.vkEndCommandBuffer(frameCmd_), "vkEndCommandBuffer");
-  auto si = vkStruct<VkSubmitInfo>(VK_STRUCTURE_TYPE_SUBMIT_INFO);
-  si.commandBufferCount = 1;
-  si.pCommandBuffers = &frameCmd_;
-  check(inst_.fn.vkQueueSubmit(queue_, 1, &si, frameFence_), "vkQueueSubmit");
+  submit(frameCmd_, frameFence_);
   frameInFlight_ = true;
   // A profiled frame holds timestamp writes (queries reset once per profiled frame): it
   // is run, not replayed.
@@ -1117,10 +1117,7 @@ void VulkanBackend::endFrame() {
 void VulkanBackend::replayFrame() {
   if (!frameValid_) throw Error("vulkan backend: no recorded frame to replay");
   flush();  // uploads are done; the previous frame has finished
-  auto si = vkStruct<VkSubmitInfo>(VK_STRUCTURE_TYPE_SUBMIT_INFO);
-  si.commandBufferCount = 1;
-  si.pCommandBuffers = &frameCmd_;
-  check(inst_.fn.vkQueueSubmit(queue_, 1, &si, frameFence_), "vkQueueSubmit");
+  submit(frameCmd_, frameFence_);
   frameInFlight_ = true;
 }
 

@@ -48,12 +48,17 @@ unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
   return floats * sizeof(float);
 }
 
+// The nearest sphere: a point seen with initMaxParallaxDeg of parallax across the baseline.
+double Pipeline::sweepQMax(const Eigen::Vector3d& tPrime, const Params& params) {
+  return std::tan(params.initMaxParallaxDeg * M_PI / 180.0) / tPrime.norm();
+}
+
 // Enough hypotheses that neighbouring ones move no pixel by more than initPxPerPlane:
 // the motion per unit of inverse depth is largest at q = 0, where it is J t' (J the
 // projection's Jacobian at the ray). Fixed per rig so a moving camera never reallocates;
 // the nearest sphere (qMax) follows the pose in setPose.
 int Pipeline::sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params) {
-  const double qMax = std::tan(params.initMaxParallaxDeg * M_PI / 180.0) / tPrime.norm();
+  const double qMax = sweepQMax(tPrime, params);
   const double cosMax = params.maxFovDeg > 0 ? std::cos(std::min(0.5 * params.maxFovDeg, 179.9) * M_PI / 180.0) : -1.0;
   double fastest = 0;  // px per unit inverse depth
   for (int y = 0; y < cam.height; y += 2)
@@ -111,7 +116,7 @@ void Pipeline::setUserMask(const ImageU8& userMask) {
 void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   tPrime_ = R.transpose() * t;
   std::copy(tPrime_.data(), tPrime_.data() + 3, sweep_.params.t);
-  sweep_.params.qMax = std::tan(params_.initMaxParallaxDeg * M_PI / 180.0) / tPrime_.norm();
+  sweep_.params.qMax = sweepQMax(tPrime_, params_);
   FieldsParams fp{};
   Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(fp.R) = R;
   std::copy(t.data(), t.data() + 3, fp.t);
@@ -203,11 +208,12 @@ PrimalDualParams Pipeline::primalDualParams() const {
 
 void Pipeline::solveLevel(Level& L, const std::function<void(int)>& warpDone) {
   const PrimalDualParams pdParams = primalDualParams();
+  // A floor of 1 weighs every pixel 1: then the kernel need not read the confidence.
+  const Buffer weight = params_.occlusionWeight < 1.f ? L.confidence : Buffer{};
   for (int n = 0; n < params_.warps; ++n) {
     stage("warp derivatives");
-    const bool weighted = params_.occlusionWeight < 1.f;  // a floor of 1 weighs every pixel 1
-    backend_.warpDerivatives(L.data, L.tangent, L.i0, L.i1, L.trajectory, L.w, L.pd.u, L.mask,
-                             weighted ? L.confidence : Buffer{}, params_.occlusionWeight);
+    backend_.warpDerivatives(L.data, L.tangent, L.i0, L.i1, L.trajectory, L.w, L.pd.u, L.mask, weight,
+                             params_.occlusionWeight);
     stage("primal-dual");
     backend_.copy(L.pd.uBar, L.pd.u);
     backend_.copy(L.pd.vBar, L.pd.v);
@@ -294,7 +300,7 @@ Pipeline::Output Pipeline::run(const ImageF& left, const ImageF& right, bool pro
 
 Pipeline::DeviceIO Pipeline::deviceIO() const {
   const Level& L0 = levels_[0];
-  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_, L0.confidence};
+  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_};
 }
 
 void Pipeline::runOnDevice() {

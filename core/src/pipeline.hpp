@@ -51,7 +51,6 @@ class Pipeline {
   struct DeviceIO {
     Buffer left, right;                             // 1 ch, full resolution
     Buffer valid, disparity, warp, radial, points;  // 1, 1, 2, 1, 3 ch
-    Buffer confidence;                              // 1 ch; id -1 without the initialiser
   };
   DeviceIO deviceIO() const;
   void runOnDevice();
@@ -73,6 +72,7 @@ class Pipeline {
     SweepParams params{};  // params.t is t' (camera 0 as reference)
     Buffer volume, best, other;
   };
+  static double sweepQMax(const Eigen::Vector3d& tPrime, const Params& params);
   static int sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params);
   static size_t sweepLevel(size_t levels, const Params& params) {
     return std::min(levels - 1, size_t(params.initLevel));

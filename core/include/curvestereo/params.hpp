@@ -32,7 +32,7 @@ struct Params {
   // estimate gamma; gamma = 0 gives constant steps and theta = 1.
   float gamma = 0.f;
 
-  // Initialisation (DESIGN.md "Initialisation"). None: the coarsest level starts at zero
+  // Initialisation (README "Presets": the plane-sweep initialiser). None: the coarsest level starts at zero
   // disparity, so coarse-to-fine warping reaches about levels x warps x duMax px and
   // larger displacements are lost. PlaneSweep: a plane sweep (spheres uniform in inverse
   // depth, ZNCC, winner-take-all, both views) at pyramid level initLevel gives the starting
