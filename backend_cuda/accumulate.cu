@@ -6,6 +6,7 @@ namespace cs::cudak {
 
 namespace {
 __global__ void accumulateKernel(Img u, const float* uIn, Img w, Img u0, Img tangent, Img mask, float duMax) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= u.width || y >= u.height) return;
   const size_t i = size_t(y) * u.width + x;
@@ -23,7 +24,7 @@ __global__ void accumulateKernel(Img u, const float* uIn, Img w, Img u0, Img tan
 cudaError_t launchAccumulate(cudaStream_t s, Img u, const float* uIn, Img w, Img u0, Img tangent, Img mask,
                              float duMax) {
   const dim3 block(32, 8);
-  accumulateKernel<<<grid2d(u.width, u.height, block), block, 0, s>>>(u, uIn, w, u0, tangent, mask, duMax);
+  CS_LAUNCH(accumulateKernel, grid2d(u.width, u.height, block), block, 0, s, u, uIn, w, u0, tangent, mask, duMax);
   return cudaGetLastError();
 }
 

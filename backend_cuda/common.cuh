@@ -31,4 +31,57 @@ __device__ __forceinline__ float sampleBilinear(const Img& v, float x, float y, 
 
 inline dim3 grid2d(int w, int h, dim3 block) { return dim3((w + block.x - 1) / block.x, (h + block.y - 1) / block.y); }
 
+// Programmatic dependent launch (sm_90 and newer). A frame is hundreds of short dependent
+// kernels; launched with launch() below, a kernel's blocks are scheduled while the previous
+// kernel's last blocks still run, instead of after it, which hides the launch latency
+// between them. Every kernel therefore starts with awaitPreviousKernel(): nothing it reads
+// or writes is touched before the previous kernel has finished and its writes are visible.
+// Both instructions are no-ops when the kernel was launched without the attribute.
+__device__ __forceinline__ void awaitPreviousKernel() {
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
+  asm volatile("griddepcontrol.wait;" ::: "memory");
+#endif
+}
+// Lets the next kernel's blocks be scheduled once every block of this one has called it
+// (or exited). Kernels call it right after awaitPreviousKernel() unless they hold the SMs
+// for long (the persistent primal-dual kernel calls it at its end).
+__device__ __forceinline__ void releaseNextKernel() {
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
+  asm volatile("griddepcontrol.launch_dependents;");
+#endif
+}
+__device__ __forceinline__ void beginKernel() {
+  awaitPreviousKernel();
+  releaseNextKernel();
+}
+
+// Whether the current device takes programmatic dependent launches (compute capability 9+).
+bool dependentLaunchSupported();
+
+// kernel<<<grid, block, sharedBytes, s>>>(args...), as a programmatic dependent launch
+// where the device supports it.
+template <class... Params, class... Args>
+cudaError_t launch(void (*kernel)(Params...), dim3 grid, dim3 block, size_t sharedBytes, cudaStream_t s,
+                   Args... args) {
+  cudaLaunchConfig_t config{};
+  config.gridDim = grid;
+  config.blockDim = block;
+  config.dynamicSmemBytes = sharedBytes;
+  config.stream = s;
+  cudaLaunchAttribute attribute{};
+  attribute.id = cudaLaunchAttributeProgrammaticStreamSerialization;
+  attribute.val.programmaticStreamSerializationAllowed = 1;
+  config.attrs = &attribute;
+  config.numAttrs = dependentLaunchSupported() ? 1 : 0;
+  const cudaError_t e = cudaLaunchKernelEx(&config, kernel, Params(args)...);
+  return e != cudaSuccess ? e : cudaGetLastError();
+}
+
+// launch(...), returning its error from the enclosing launcher if it fails.
+#define CS_LAUNCH(...)                                                    \
+  do {                                                                    \
+    const cudaError_t launchError_ = ::cs::cudak::launch(__VA_ARGS__);    \
+    if (launchError_ != cudaSuccess) return launchError_;                 \
+  } while (0)
+
 }  // namespace cs::cudak

@@ -180,10 +180,30 @@ float* CudaBackend::pinnedFor(Slot& s) {
   return s.pinned;
 }
 
-float* CudaBackend::scratch(size_t floats, int key) {
+float*& CudaBackend::scratchSlot(size_t floats, int key) {
   float*& p = scratch_[{key, floats}];
   if (!p) ok(cudaMalloc(&p, floats * sizeof(float)), "cudaMalloc (scratch)");
   return p;
+}
+
+float* CudaBackend::scratch(size_t floats, int key) { return scratchSlot(floats, key); }
+
+bool CudaBackend::takePendingCopy(const float* dst, const float* src) {
+  for (auto it = pending_.begin(); it != pending_.end(); ++it)
+    if (it->dst == dst && it->src == src) {
+      pending_.erase(it);
+      return true;
+    }
+  return false;
+}
+
+void CudaBackend::runPendingMedian() {
+  if (!pendingMedian_) return;
+  const PendingMedian m = *pendingMedian_;
+  pendingMedian_.reset();
+  check(cudak::launchMedian(stream_, img(slot(m.dst).dev, m.dst), img(slot(m.src).dev, m.src),
+                            img(slot(m.mask).dev, m.mask)),
+        "median");
 }
 
 void CudaBackend::enqueue(const PendingOp& op) {
@@ -199,6 +219,7 @@ void CudaBackend::enqueue(const PendingOp& op) {
 }
 
 void CudaBackend::flush() {
+  runPendingMedian();
   if (pending_.empty()) return;
   cudak::MemOps ops{};
   ops.count = int(pending_.size());
@@ -385,7 +406,6 @@ void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tan
 
 void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
                              const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
-  flush();
   const int w = mask.width, h = mask.height;
   const size_t n = size_t(w) * h;
   PrimalDualScratch& b = pdScratch_[pd.p.id];
@@ -397,6 +417,12 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
     ok(cudaMalloc(&b.u, n * sizeof(float)), "cudaMalloc (primal-dual)");
     ok(cudaMalloc(&b.v, 2 * n * sizeof(float)), "cudaMalloc (primal-dual)");
   }
+  // The pipeline's copy(uBar, u), copy(vBar, v) before the iterations: when both are the
+  // queued ops, the first iteration reads u, v in place of uBar, vBar instead.
+  float *const uDev = slot(pd.u).dev, *const vDev = slot(pd.v).dev;
+  float *const uBarDev = slot(pd.uBar).dev, *const vBarDev = slot(pd.vBar).dev;
+  const bool barsFromPrimals = takePendingCopy(uBarDev, uDev) && takePendingCopy(vBarDev, vDev);
+  flush();
   cudak::PrimalDualDev d{};
   d.u[0] = slot(pd.u).dev, d.u[1] = b.u;
   d.v[0] = slot(pd.v).dev, d.v[1] = b.v;
@@ -404,26 +430,61 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
   d.vBar[0] = slot(pd.vBar).dev, d.vBar[1] = b.vBar;
   d.p[0] = slot(pd.p).dev, d.p[1] = b.p;
   d.q[0] = slot(pd.q).dev, d.q[1] = b.q;
+  d.uBarFirst = barsFromPrimals ? uDev : uBarDev;
+  d.vBarFirst = barsFromPrimals ? vDev : vBarDev;
   d.u0 = slot(data.u0).dev, d.iu = slot(data.iu).dev, d.iz = slot(data.iz).dev;
   d.tensor = slot(tensor).dev, d.steps = slot(steps).dev, d.mask = slot(mask).dev;
   d.width = w, d.height = h;
   d.lambda = params.lambda, d.alpha0 = params.alpha0, d.alpha1 = params.alpha1;
   std::vector<cudak::StepDev> schedule;
   for (const PrimalDualStep& s : params.schedule) schedule.push_back({s.tauScale, s.sigmaScale, s.theta});
-  if (schedule.empty()) return;
+  if (schedule.empty()) {
+    if (barsFromPrimals) copy(pd.uBar, pd.u), copy(pd.vBar, pd.v);
+    return;
+  }
+  int endSet = 0;
   check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()),
-                                persistentPrimalDual_ ? residentBlocks_ : 0),
+                                persistentPrimalDual_ ? residentBlocks_ : 0, endSet),
         "primalDual");
+  // The result is in the scratch set: it becomes the buffers' memory (later launches,
+  // captured or not, take the pointers from the slots), the old memory the scratch set.
+  if (endSet == 1) {
+    std::swap(slots_[size_t(pd.u.id)].dev, b.u);
+    std::swap(slots_[size_t(pd.v.id)].dev, b.v);
+    std::swap(slots_[size_t(pd.uBar.id)].dev, b.uBar);
+    std::swap(slots_[size_t(pd.vBar.id)].dev, b.vBar);
+    std::swap(slots_[size_t(pd.p.id)].dev, b.p);
+    std::swap(slots_[size_t(pd.q.id)].dev, b.q);
+  }
 }
 
+// Deferred: the pipeline follows it with copy(u, dst) and accumulate(u), which then run
+// as one launch; anything else runs it first (flush).
 void CudaBackend::median(const Buffer& dst, const Buffer& src, const Buffer& mask) {
   flush();
-  check(cudak::launchMedian(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(mask).dev, mask)),
-        "median");
+  slot(dst), slot(src), slot(mask);  // checked now, like every other call
+  pendingMedian_ = PendingMedian{dst, src, mask};
 }
 
 void CudaBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
                              const Buffer& mask, float duMax) {
+  // median(scratch, u) -> copy(u, scratch) -> accumulate(u): one pass that writes the
+  // median to scratch and the accumulated u to a spare buffer, which then becomes u's
+  // memory (u is read around each pixel, so it cannot be written in place).
+  if (pendingMedian_ && pendingMedian_->src.id == u.id && pendingMedian_->mask.id == mask.id &&
+      pending_.size() == 1 && pending_[0].dst == slot(u).dev && pending_[0].src == slot(pendingMedian_->dst).dev) {
+    const Buffer median = pendingMedian_->dst;
+    pendingMedian_.reset();
+    pending_.clear();
+    float*& spare = scratchSlot(u.count(), 2);
+    check(cudak::launchMedianAccumulate(stream_, img(spare, u), img(slot(median).dev, median), img(slot(u).dev, u),
+                                        img(slot(w).dev, w), img(slot(u0).dev, u0), img(slot(tangent).dev, tangent),
+                                        img(slot(mask).dev, mask), duMax),
+          "median + accumulate");
+    std::swap(slots_[size_t(u.id)].dev, spare);
+    return;
+  }
+  runPendingMedian();
   // The pipeline's median -> copy(u, scratch) -> accumulate: when the last queued op is a
   // copy into u, this launch reads u from its source and writes u everywhere instead.
   float* const uDev = slot(u).dev;

@@ -5,6 +5,7 @@
 #pragma once
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -109,13 +110,21 @@ class CudaBackend final : public Backend {
     size_t count;
     float value;
   };
+  // median() is deferred until the next call (see accumulate()).
+  struct PendingMedian {
+    Buffer dst, src, mask;
+  };
   void enqueue(const PendingOp& op);
-  void flush();
+  void flush();  // runs the deferred median, then the queued ops
+  void runPendingMedian();
+  // Removes the queued copy dst <- src; false if there is none.
+  bool takePendingCopy(const float* dst, const float* src);
   const Slot& slot(const Buffer& b) const;
   float* pinnedFor(Slot& s);
   void dropGraph();
   void check(int launchResult, const char* what) const;
   float* scratch(size_t floats, int key);
+  float*& scratchSlot(size_t floats, int key);  // the map entry itself, to swap memory with a slot
 
   int device_ = 0;
   CUstream_st* stream_ = nullptr;
@@ -126,6 +135,7 @@ class CudaBackend final : public Backend {
   std::map<std::pair<int, size_t>, float*> scratch_;  // (role, floats) -> device memory
   std::map<int, PrimalDualScratch> pdScratch_;        // by the id of pd.p
   std::vector<PendingOp> pending_;
+  std::optional<PendingMedian> pendingMedian_;
   int residentBlocks_ = 0;  // of the persistent primal-dual kernel
   bool persistentPrimalDual_ = true;
 

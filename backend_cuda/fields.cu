@@ -9,6 +9,7 @@ namespace {
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 __global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsDev p) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= mask.width || y >= mask.height) return;
   bool valid = false;
@@ -50,7 +51,7 @@ __global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsDe
 
 cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsDev& p) {
   const dim3 block(16, 8);
-  fieldsKernel<<<grid2d(mask.width, mask.height, block), block, 0, s>>>(mask, calibration, trajectory, p);
+  CS_LAUNCH(fieldsKernel, grid2d(mask.width, mask.height, block), block, 0, s, mask, calibration, trajectory, p);
   return cudaGetLastError();
 }
 

@@ -65,6 +65,10 @@ struct PrimalDualDev {
   float* vBar[2];  // 2 ch
   float* p[2];     // 2 ch
   float* q[2];     // 4 ch
+  // The over-relaxed primals the first iteration reads: set 0's uBar, vBar, or u, v
+  // themselves (uBar = u, vBar = v at the start of every warp, without copying them).
+  const float* uBarFirst;
+  const float* vBarFirst;  // 2 ch
   const float* u0;
   const float* iu;
   const float* iz;
@@ -111,16 +115,22 @@ cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img ta
 // Blocks of the primal-dual kernel the device runs at once in one cooperative launch
 // (0: no cooperative launch).
 int primalDualResidentBlocks(int device);
-// `count` iterations, the first reading set 0; the result is left in set 0. A level whose
-// tiles number at most residentBlocks runs them all in one cooperative launch, a larger
-// one launches once per iteration. Pixels outside the mask are left untouched.
+// `count` iterations, the first reading set 0 (uBar, vBar from uBarFirst, vBarFirst). A
+// level whose tiles number at most residentBlocks runs them all in one cooperative launch,
+// a larger one launches once per two iterations, going from one set to the other.
+// endSet: the set that holds the result (0 or 1; the caller swaps the sets' roles rather
+// than copying). Pixels outside the mask keep their values.
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                             int residentBlocks);
+                             int residentBlocks, int& endSet);
 cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask);
 // uIn: where u is read (u.data, or a buffer whose copy to u this launch stands in for:
 // u is then written at every pixel).
 cudaError_t launchAccumulate(cudaStream_t s, Img u, const float* uIn, Img w, Img u0, Img tangent, Img mask,
                              float duMax);
+// median = median(u) (launchMedian), then accumulate from it into uOut (launchAccumulate
+// with uIn = median, written to uOut instead of u): the warp's two last stages in one pass.
+cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
+                                   float duMax);
 
 // volume: p.planes channels. best: 2 channels (q, cost). other: the reverse sweep's best.
 cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepDev& p);

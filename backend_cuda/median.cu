@@ -1,25 +1,44 @@
 // 3x3 median of u over the masked neighbours (cpu/median.cpp); even counts take the mean
-// of the two middle values.
+// of the two middle values. Also the fused median + accumulate of the warp's last stages.
 #include "common.cuh"
 
 namespace cs::cudak {
 
 namespace {
-__global__ void medianKernel(Img dst, Img src, Img mask) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x >= dst.width || y >= dst.height) return;
-  if (!masked(mask, x, y)) {
-    at(dst, x, y) = at(src, x, y);
-    return;
-  }
-  float values[9];
-  int n = 0;
+
+__device__ __forceinline__ void order(float& a, float& b) {
+  const float lo = fminf(a, b), hi = fmaxf(a, b);
+  a = lo, b = hi;
+}
+
+// The median of nine values by a 19-exchange network (the fifth smallest, exactly what
+// sorting gives), in registers: the common case of a pixel whose neighbours are all masked.
+__device__ __forceinline__ float median9(float p0, float p1, float p2, float p3, float p4, float p5, float p6,
+                                         float p7, float p8) {
+  order(p1, p2), order(p4, p5), order(p7, p8), order(p0, p1), order(p3, p4), order(p6, p7);
+  order(p1, p2), order(p4, p5), order(p7, p8), order(p0, p3), order(p5, p8), order(p4, p7);
+  order(p3, p6), order(p1, p4), order(p2, p5), order(p4, p7), order(p4, p2), order(p6, p4);
+  order(p4, p2);
+  return p4;
+}
+
+// The masked median at (x, y) of a masked pixel.
+__device__ __forceinline__ float maskedMedian(const Img& src, const Img& mask, int x, int y) {
+  bool all = true;
 #pragma unroll
   for (int dy = -1; dy <= 1; ++dy)
 #pragma unroll
+    for (int dx = -1; dx <= 1; ++dx) all = all && masked(mask, x + dx, y + dy);
+  if (all) {
+    auto v = [&](int dx, int dy) { return __ldg(&at(src, x + dx, y + dy)); };
+    return median9(v(-1, -1), v(0, -1), v(1, -1), v(-1, 0), v(0, 0), v(1, 0), v(-1, 1), v(0, 1), v(1, 1));
+  }
+  // Beside the mask's edge: insertion sort of the masked neighbours.
+  float values[9];
+  int n = 0;
+  for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx)
       if (masked(mask, x + dx, y + dy)) values[n++] = __ldg(&at(src, x + dx, y + dy));
-  // Insertion sort of at most 9 values.
   for (int i = 1; i < n; ++i) {
     const float v = values[i];
     int j = i - 1;
@@ -31,14 +50,48 @@ __global__ void medianKernel(Img dst, Img src, Img mask) {
   }
   float upper = values[n / 2];
   if (n % 2 == 0) upper = 0.5f * (values[n / 2 - 1] + upper);
-  at(dst, x, y) = upper;
+  return upper;
 }
+
+__global__ void medianKernel(Img dst, Img src, Img mask) {
+  beginKernel();
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= dst.width || y >= dst.height) return;
+  at(dst, x, y) = masked(mask, x, y) ? maskedMedian(src, mask, x, y) : at(src, x, y);
+}
+
+// accumulateKernel (accumulate.cu) reading u from the median computed here.
+__global__ void medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
+                                       float duMax) {
+  beginKernel();
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= u.width || y >= u.height) return;
+  if (!masked(mask, x, y)) {
+    at(median, x, y) = at(uOut, x, y) = at(u, x, y);
+    return;
+  }
+  const float m = maskedMedian(u, mask, x, y);
+  at(median, x, y) = m;
+  const float du = fminf(fmaxf(m - at(u0, x, y), -duMax), duMax);
+  at(uOut, x, y) = at(u0, x, y) + du;
+  at(w, x, y, 0) += du * at(tangent, x, y, 0);
+  at(w, x, y, 1) += du * at(tangent, x, y, 1);
+}
+
 }  // namespace
 
 cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask) {
   const dim3 block(32, 8);
-  medianKernel<<<grid2d(dst.width, dst.height, block), block, 0, s>>>(dst, src, mask);
-  return cudaGetLastError();
+  CS_LAUNCH(medianKernel, grid2d(dst.width, dst.height, block), block, 0, s, dst, src, mask);
+  return cudaSuccess;
+}
+
+cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
+                                   float duMax) {
+  const dim3 block(32, 8);
+  CS_LAUNCH(medianAccumulateKernel, grid2d(u.width, u.height, block), block, 0, s, uOut, median, u, w, u0, tangent,
+            mask, duMax);
+  return cudaSuccess;
 }
 
 }  // namespace cs::cudak

@@ -1,6 +1,9 @@
 // fill() and copy(): queued copies and fills of disjoint buffers run as one launch.
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
 
 #include "common.cuh"
 
@@ -8,10 +11,12 @@ namespace cs::cudak {
 
 namespace {
 __global__ void fillKernel(float* data, size_t count, float value) {
+  beginKernel();
   for (size_t i = blockIdx.x * size_t(blockDim.x) + threadIdx.x; i < count; i += size_t(gridDim.x) * blockDim.x)
     data[i] = value;
 }
 __global__ void memOpsKernel(MemOps ops) {
+  beginKernel();
   const MemOp o = ops.op[blockIdx.y];
   const size_t stride = size_t(gridDim.x) * blockDim.x;
   const size_t first = blockIdx.x * size_t(blockDim.x) + threadIdx.x;
@@ -28,18 +33,38 @@ __global__ void memOpsKernel(MemOps ops) {
 }
 }  // namespace
 
+bool dependentLaunchSupported() {
+  // Per device, cached: a frame launches hundreds of kernels. CURVESTEREO_CUDA_PDL=0 turns
+  // the dependent launches off (to measure what they bring, or to rule them out).
+  static const bool disabled = [] {
+    const char* v = std::getenv("CURVESTEREO_CUDA_PDL");
+    return v && std::strcmp(v, "0") == 0;
+  }();
+  static std::atomic<signed char> known[64] = {};
+  int device = 0;
+  if (disabled || cudaGetDevice(&device) != cudaSuccess || device < 0 || device >= 64) return false;
+  signed char k = known[device].load(std::memory_order_relaxed);
+  if (k == 0) {
+    int major = 0;
+    if (cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, device) != cudaSuccess) return false;
+    k = major >= 9 ? 1 : -1;
+    known[device].store(k, std::memory_order_relaxed);
+  }
+  return k > 0;
+}
+
 cudaError_t launchMemOps(cudaStream_t s, const MemOps& ops) {
   if (ops.count <= 0) return cudaSuccess;
   size_t largest = 0;
   for (int i = 0; i < ops.count; ++i) largest = std::max(largest, ops.op[i].count);
   const unsigned blocks = unsigned(std::max<size_t>(1, std::min<size_t>((largest / 4 + 255) / 256, 2048)));
-  memOpsKernel<<<dim3(blocks, unsigned(ops.count)), 256, 0, s>>>(ops);
+  CS_LAUNCH(memOpsKernel, dim3(blocks, unsigned(ops.count)), 256, 0, s, ops);
   return cudaGetLastError();
 }
 
 cudaError_t launchFill(cudaStream_t s, float* data, size_t count, float value) {
   const unsigned blocks = unsigned(std::min<size_t>((count + 255) / 256, 4096));
-  fillKernel<<<blocks, 256, 0, s>>>(data, count, value);
+  CS_LAUNCH(fillKernel, blocks, 256, 0, s, data, count, value);
   return cudaGetLastError();
 }
 

@@ -40,6 +40,7 @@ __device__ __forceinline__ bool projectHypothesis(const CamDev& cam, const V3& r
 }
 
 __global__ void __launch_bounds__(kWarpThreads) sweepWarpKernel(Img volume, Img image, Img mask, SweepDev p) {
+  beginKernel();
   __shared__ V3 rays[kWarpPixels];
   __shared__ bool usable[kWarpPixels];
   const int x0 = blockIdx.x * kWarpPixels, y = blockIdx.y;
@@ -143,6 +144,7 @@ struct Winner {
 
 __global__ void __launch_bounds__(kTileX* kTileY)
     sweepSelectKernel(Img best, Img reference, Img volume, Img mask, SweepDev p) {
+  beginKernel();
   extern __shared__ float shared[];
   const int r = p.radius;
   Tile t;
@@ -204,6 +206,7 @@ __device__ bool roundTrip(const Img& best, const Img& other, const Img& mask, co
 
 __global__ void sweepInitialiseKernel(Img u, Img w, Img confidence, Img best, Img other, Img mask, SweepDev p,
                                       ConsistencyDev c) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= u.width || y >= u.height) return;
   V2 there{0, 0};
@@ -223,7 +226,7 @@ __global__ void sweepInitialiseKernel(Img u, Img w, Img confidence, Img best, Im
 
 cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepDev& p) {
   const dim3 grid((volume.width + kWarpPixels - 1) / kWarpPixels, volume.height);
-  sweepWarpKernel<<<grid, kWarpThreads, 0, s>>>(volume, image, mask, p);
+  CS_LAUNCH(sweepWarpKernel, grid, kWarpThreads, 0, s, volume, image, mask, p);
   return cudaGetLastError();
 }
 
@@ -236,14 +239,14 @@ cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img reference, Img volum
     if (e != cudaSuccess) return e;
   }
   const dim3 block(kTileX, kTileY);
-  sweepSelectKernel<<<grid2d(best.width, best.height, block), block, bytes, s>>>(best, reference, volume, mask, p);
+  CS_LAUNCH(sweepSelectKernel, grid2d(best.width, best.height, block), block, bytes, s, best, reference, volume, mask, p);
   return cudaGetLastError();
 }
 
 cudaError_t launchSweepInitialise(cudaStream_t s, Img u, Img w, Img confidence, Img best, Img other, Img mask,
                                   const SweepDev& p, const ConsistencyDev& c) {
   const dim3 block(16, 8);
-  sweepInitialiseKernel<<<grid2d(u.width, u.height, block), block, 0, s>>>(u, w, confidence, best, other, mask, p, c);
+  CS_LAUNCH(sweepInitialiseKernel, grid2d(u.width, u.height, block), block, 0, s, u, w, confidence, best, other, mask, p, c);
   return cudaGetLastError();
 }
 

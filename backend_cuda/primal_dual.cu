@@ -1,12 +1,11 @@
-// Preconditioned primal-dual iterations of anisotropic TGV-L1 (cpu/primal_dual.cpp): one
-// launch per iteration on large levels, one cooperative launch for the whole schedule
+// Preconditioned primal-dual iterations of anisotropic TGV-L1 (cpu/primal_dual.cpp): two
+// iterations per launch on large levels, one cooperative launch for the whole schedule
 // (a grid barrier between iterations) on levels whose tiles fit on the device at once.
 // Each iteration fuses the dual and the primal pass: a block computes the new
 // duals p, q (and D p) of its tile plus a one-pixel halo to the left and above into
-// shared memory, then the primal update of its tile from there. The dual variables and
-// the over-relaxed primals ping-pong between two buffer sets (read one, write the
-// other), so a block never reads what a neighbouring block of the same launch wrote;
-// u and v are only read and written at their own pixel and stay in place.
+// shared memory, then the primal update of its tile from there. The state ping-pongs
+// between two buffer sets (read one, write the other), so a block never reads what a
+// neighbouring block of the same launch wrote.
 #include <cooperative_groups.h>
 
 #include "common.cuh"
@@ -243,6 +242,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
 // One iteration per launch (levels with more tiles than the device holds at once).
 __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocks)
     primalDualKernel(PrimalDualDev pd, StepDev step, int parity) {
+  beginKernel();
   __shared__ SharedTile s;
   iterateTile(pd, step, parity, s);
 }
@@ -271,6 +271,7 @@ struct PairTile {
 
 __global__ void __launch_bounds__(kPairThreads, kMinBlocksPair)
     primalDualPairKernel(PrimalDualDev pd, StepDev stepA, StepDev stepB, int parity) {
+  beginKernel();
   __shared__ PairTile s;
   const int w = pd.width, h = pd.height;
   const int x0 = blockIdx.x * kPairW, y0 = blockIdx.y * kPairH;
@@ -295,25 +296,26 @@ __global__ void __launch_bounds__(kPairThreads, kMinBlocksPair)
     unsigned char flags = 0;
     if (i >= 0 && j >= 0 && i < w && j < h) {
       const int idx = j * w + i;
+      // Everything the pixel may need is requested at once, before the mask decides what
+      // is used: one memory round trip instead of three dependent ones (the kernel is
+      // bound by latency, not bandwidth). dualPixel ignores the neighbours it has no link to.
+      const bool right = i + 1 < w, down = j + 1 < h;
       p = __ldg(&pIn[idx]);
       q = __ldg(&qIn[idx]);
-      if (__ldg(&pd.mask[idx]) != 0.f) {
-        const bool ex = isMasked(pd.mask, w, h, i + 1, j);
-        const bool ey = isMasked(pd.mask, w, h, i, j + 1);
-        t = __ldg(&tensor[idx]);
-        const float2 sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
-        const float ub = __ldg(&uBarIn[idx]);
-        const float2 vb = __ldg(&vBarIn[idx]);
-        float ur = 0.f, ud = 0.f;
-        float2 vr = make_float2(0.f, 0.f), vd = vr;
-        if (ex) {
-          ur = __ldg(&uBarIn[idx + 1]);
-          vr = __ldg(&vBarIn[idx + 1]);
-        }
-        if (ey) {
-          ud = __ldg(&uBarIn[idx + w]);
-          vd = __ldg(&vBarIn[idx + w]);
-        }
+      const float m = __ldg(&pd.mask[idx]);
+      const float mRight = right ? __ldg(&pd.mask[idx + 1]) : 0.f;
+      const float mDown = down ? __ldg(&pd.mask[idx + w]) : 0.f;
+      const float4 tensorHere = __ldg(&tensor[idx]);
+      const float2 sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
+      const float ub = __ldg(&uBarIn[idx]);
+      const float2 vb = __ldg(&vBarIn[idx]);
+      const float ur = right ? __ldg(&uBarIn[idx + 1]) : 0.f;
+      const float2 vr = right ? __ldg(&vBarIn[idx + 1]) : make_float2(0.f, 0.f);
+      const float ud = down ? __ldg(&uBarIn[idx + w]) : 0.f;
+      const float2 vd = down ? __ldg(&vBarIn[idx + w]) : make_float2(0.f, 0.f);
+      if (m != 0.f) {
+        const bool ex = mRight != 0.f, ey = mDown != 0.f;
+        t = tensorHere;
         flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
         dualPixel(p, q, t, sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, stepA, alpha0, alpha1);
       }
@@ -460,16 +462,15 @@ __device__ __forceinline__ HaloPixel loadHalo(const PrimalDualDev& pd, int i, in
 }
 
 // The halo pixel's new duals (from the set `in`) into the shared tile at (lx, ly).
-__device__ __forceinline__ void haloDual(const PrimalDualDev& pd, const HaloPixel& hp, int in, const StepDev step,
-                                         float2* sp, float2* sdp, float4* sq) {
+__device__ __forceinline__ void haloDual(const PrimalDualDev& pd, const HaloPixel& hp, int in, const float* uBarIn,
+                                         const float2* vBarIn, const StepDev step, float2* sp, float2* sdp,
+                                         float4* sq) {
   float2 p = make_float2(0.f, 0.f);
   float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
   if (hp.inside) {
     p = __ldcg(reinterpret_cast<const float2*>(pd.p[in]) + hp.idx);
     q = __ldcg(reinterpret_cast<const float4*>(pd.q[in]) + hp.idx);
     if (hp.flags & kMasked) {
-      const float* uBarIn = pd.uBar[in];
-      const float2* vBarIn = reinterpret_cast<const float2*>(pd.vBar[in]);
       const bool ex = hp.flags & kLinkX, ey = hp.flags & kLinkY;
       const float ub = __ldcg(&uBarIn[hp.idx]);
       const float2 vb = __ldcg(&vBarIn[hp.idx]);
@@ -493,6 +494,7 @@ __device__ __forceinline__ void haloDual(const PrimalDualDev& pd, const HaloPixe
 
 __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
     primalDualPersistentKernel(PrimalDualDev pd, const __grid_constant__ PrimalDualSchedule schedule) {
+  awaitPreviousKernel();
   __shared__ PersistentTile s;
   cg::grid_group grid = cg::this_grid();
   const int w = pd.width, h = pd.height;
@@ -528,8 +530,8 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
     }
     u = pd.u[0][idx];
     v = reinterpret_cast<const float2*>(pd.v[0])[idx];
-    uBar = pd.uBar[0][idx];
-    vBar = reinterpret_cast<const float2*>(pd.vBar[0])[idx];
+    uBar = pd.uBarFirst[idx];
+    vBar = reinterpret_cast<const float2*>(pd.vBarFirst)[idx];
     p = reinterpret_cast<const float2*>(pd.p[0])[idx];
     q = reinterpret_cast<const float4*>(pd.q[0])[idx];
   }
@@ -547,6 +549,8 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
   for (int k = 0; k < count; ++k) {
     const StepDev step = schedule.steps[k];
     const int in = k & 1, out = 1 - in;
+    const float* uBarIn = k == 0 ? pd.uBarFirst : pd.uBar[in];
+    const float2* vBarIn = reinterpret_cast<const float2*>(k == 0 ? pd.vBarFirst : pd.vBar[in]);
     if (k > 0) grid.sync();
     // --- dual pass: the own pixel (neighbours in the tile from shared memory, beyond it
     // from the set `in`) and the halo pixels ---
@@ -558,8 +562,8 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
           ur = s.uBar[ty][tx + 1];
           vr = s.vBar[ty][tx + 1];
         } else {
-          ur = __ldcg(&pd.uBar[in][idx + 1]);
-          vr = __ldcg(reinterpret_cast<const float2*>(pd.vBar[in]) + idx + 1);
+          ur = __ldcg(&uBarIn[idx + 1]);
+          vr = __ldcg(vBarIn + idx + 1);
         }
       }
       if (ey) {
@@ -567,14 +571,14 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
           ud = s.uBar[ty + 1][tx];
           vd = s.vBar[ty + 1][tx];
         } else {
-          ud = __ldcg(&pd.uBar[in][idx + w]);
-          vd = __ldcg(reinterpret_cast<const float2*>(pd.vBar[in]) + idx + w);
+          ud = __ldcg(&uBarIn[idx + w]);
+          vd = __ldcg(vBarIn + idx + w);
         }
       }
       dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, step, alpha0, alpha1);
     }
-    if (ty == 0) haloDual(pd, up, in, step, &s.p[0][tx + 1], &s.dp[0][tx + 1], &s.q[0][tx + 1]);
-    if (tx == 0) haloDual(pd, left, in, step, &s.p[ty + 1][0], &s.dp[ty + 1][0], &s.q[ty + 1][0]);
+    if (ty == 0) haloDual(pd, up, in, uBarIn, vBarIn, step, &s.p[0][tx + 1], &s.dp[0][tx + 1], &s.q[0][tx + 1]);
+    if (tx == 0) haloDual(pd, left, in, uBarIn, vBarIn, step, &s.p[ty + 1][0], &s.dp[ty + 1][0], &s.q[ty + 1][0]);
     const float2 dp = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
     s.p[ty + 1][tx + 1] = p;
     s.q[ty + 1][tx + 1] = q;
@@ -624,6 +628,7 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
       reinterpret_cast<float2*>(pd.vBar[out])[idx] = vBar;
     }
   }
+  releaseNextKernel();
   // The final state into set 0 (after a barrier where the last iteration read set 0).
   if (count % 2 == 1) grid.sync();
   if (own) {
@@ -633,22 +638,6 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
     reinterpret_cast<float2*>(pd.vBar[0])[idx] = vBar;
     reinterpret_cast<float2*>(pd.p[0])[idx] = p;
     reinterpret_cast<float4*>(pd.q[0])[idx] = q;
-  }
-}
-
-// Schedules of an odd number of launches end in set 1: copy it back to set 0, one launch
-// for the buffers (u and v too where the launches moved them: the per-iteration path).
-__global__ void copyBackKernel(PrimalDualDev pd, bool uv) {
-  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x >= pd.width || y >= pd.height) return;
-  const size_t idx = size_t(y) * pd.width + x;
-  pd.uBar[0][idx] = pd.uBar[1][idx];
-  reinterpret_cast<float2*>(pd.vBar[0])[idx] = reinterpret_cast<const float2*>(pd.vBar[1])[idx];
-  reinterpret_cast<float2*>(pd.p[0])[idx] = reinterpret_cast<const float2*>(pd.p[1])[idx];
-  reinterpret_cast<float4*>(pd.q[0])[idx] = reinterpret_cast<const float4*>(pd.q[1])[idx];
-  if (uv) {
-    pd.u[0][idx] = pd.u[1][idx];
-    reinterpret_cast<float2*>(pd.v[0])[idx] = reinterpret_cast<const float2*>(pd.v[1])[idx];
   }
 }
 
@@ -666,9 +655,11 @@ int primalDualResidentBlocks(int device) {
 }
 
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                             int residentBlocks) {
+                             int residentBlocks, int& endSet) {
+  endSet = 0;
   const dim3 block(kTileW, kTileH), grid = grid2d(pd.width, pd.height, block);
   if (int(grid.x * grid.y) <= residentBlocks) {
+    PrimalDualDev chunk = pd;
     for (int k0 = 0; k0 < count; k0 += kMaxPersistentIterations) {
       PrimalDualSchedule schedule{};
       schedule.count = count - k0 < kMaxPersistentIterations ? count - k0 : kMaxPersistentIterations;
@@ -682,23 +673,28 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
       attribute.val.cooperative = 1;
       config.attrs = &attribute;
       config.numAttrs = 1;
-      const cudaError_t e = cudaLaunchKernelEx(&config, primalDualPersistentKernel, pd, schedule);
+      const cudaError_t e = cudaLaunchKernelEx(&config, primalDualPersistentKernel, chunk, schedule);
       if (e != cudaSuccess) return e;
+      chunk.uBarFirst = pd.uBar[0];  // later chunks continue from the state in set 0
+      chunk.vBarFirst = pd.vBar[0];
     }
-  } else {
-    // Two iterations per launch, the odd one last; every launch goes from one set to the other.
-    const dim3 pairBlock(kPairW, kPairH), pairGrid = grid2d(pd.width, pd.height, pairBlock);
-    int parity = 0;
-    int k = 0;
-    for (; k + 1 < count; k += 2, parity ^= 1)
-      primalDualPairKernel<<<pairGrid, pairBlock, 0, s>>>(pd, steps[k], steps[k + 1], parity);
-    if (k < count) {
-      primalDualKernel<<<grid, block, 0, s>>>(pd, steps[k], parity);
-      parity ^= 1;
-    }
-    if (parity == 1) copyBackKernel<<<grid, block, 0, s>>>(pd, true);
+    return cudaGetLastError();
   }
-  return cudaGetLastError();
+  // Two iterations per launch, the odd one last; every launch goes from one set to the
+  // other. The first launch reads set 0 and writes set 1 only, so its uBar, vBar can be
+  // read from uBarFirst, vBarFirst in place of set 0's.
+  PrimalDualDev first = pd;
+  first.uBar[0] = const_cast<float*>(pd.uBarFirst);
+  first.vBar[0] = const_cast<float*>(pd.vBarFirst);
+  const dim3 pairBlock(kPairW, kPairH), pairGrid = grid2d(pd.width, pd.height, pairBlock);
+  int k = 0;
+  for (; k + 1 < count; k += 2, endSet ^= 1)
+    CS_LAUNCH(primalDualPairKernel, pairGrid, pairBlock, 0, s, k == 0 ? first : pd, steps[k], steps[k + 1], endSet);
+  if (k < count) {
+    CS_LAUNCH(primalDualKernel, grid, block, 0, s, k == 0 ? first : pd, steps[k], endSet);
+    endSet ^= 1;
+  }
+  return cudaSuccess;
 }
 
 }  // namespace cs::cudak

@@ -6,6 +6,7 @@ namespace cs::cudak {
 namespace {
 
 __global__ void downsampleKernel(Img dst, Img src, float scale, float sigma, int radius) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= dst.width || y >= dst.height) return;
   const float cy = (float(y) + 0.5f) * scale - 0.5f;
@@ -26,6 +27,7 @@ __global__ void downsampleKernel(Img dst, Img src, float scale, float sigma, int
 }
 
 __global__ void upsampleKernel(Img dst, Img src, float scale, float valueScale) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= dst.width || y >= dst.height) return;
   const float sy = (float(y) + 0.5f) / scale - 0.5f;
@@ -39,13 +41,13 @@ cudaError_t launchDownsample(cudaStream_t s, Img dst, Img src, float scale) {
   const float sigma = 0.5f * scale;  // decimationSigma
   const int radius = int(ceilf(2.f * sigma));
   const dim3 block(32, 8);
-  downsampleKernel<<<grid2d(dst.width, dst.height, block), block, 0, s>>>(dst, src, scale, sigma, radius);
+  CS_LAUNCH(downsampleKernel, grid2d(dst.width, dst.height, block), block, 0, s, dst, src, scale, sigma, radius);
   return cudaGetLastError();
 }
 
 cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float valueScale) {
   const dim3 block(32, 8);
-  upsampleKernel<<<grid2d(dst.width, dst.height, block), block, 0, s>>>(dst, src, scale, valueScale);
+  CS_LAUNCH(upsampleKernel, grid2d(dst.width, dst.height, block), block, 0, s, dst, src, scale, valueScale);
   return cudaGetLastError();
 }
 

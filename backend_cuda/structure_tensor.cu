@@ -10,6 +10,7 @@ namespace cs::cudak {
 namespace {
 
 __global__ void blurRowsKernel(float* out, const float* image, int w, int h, TensorDev p) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= w || y >= h) return;
   const float* row = image + size_t(y) * w;
@@ -23,6 +24,7 @@ __global__ void blurRowsKernel(float* out, const float* image, int w, int h, Ten
 }
 
 __global__ void blurColumnsKernel(float* out, const float* rows, int w, int h, TensorDev p) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= w || y >= h) return;
   if (p.radius < 0) {
@@ -50,6 +52,7 @@ __device__ Tensor tensorAt(const float* smooth, int w, int h, int x, int y, cons
 }
 
 __global__ void tensorStepsKernel(Img tensor, Img steps, const float* smooth, Img mask, TensorDev p) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   const int w = tensor.width, h = tensor.height;
   if (x >= w || y >= h) return;
@@ -87,9 +90,9 @@ __global__ void tensorStepsKernel(Img tensor, Img steps, const float* smooth, Im
 cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorDev& p,
                                   float* tmpRows, float* tmpSmooth) {
   const dim3 block(32, 8), grid = grid2d(image.width, image.height, block);
-  blurRowsKernel<<<grid, block, 0, s>>>(tmpRows, image.data, image.width, image.height, p);
-  blurColumnsKernel<<<grid, block, 0, s>>>(tmpSmooth, tmpRows, image.width, image.height, p);
-  tensorStepsKernel<<<grid, block, 0, s>>>(tensor, steps, tmpSmooth, mask, p);
+  CS_LAUNCH(blurRowsKernel, grid, block, 0, s, tmpRows, image.data, image.width, image.height, p);
+  CS_LAUNCH(blurColumnsKernel, grid, block, 0, s, tmpSmooth, tmpRows, image.width, image.height, p);
+  CS_LAUNCH(tensorStepsKernel, grid, block, 0, s, tensor, steps, tmpSmooth, mask, p);
   return cudaGetLastError();
 }
 

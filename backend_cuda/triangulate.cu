@@ -16,6 +16,7 @@ __device__ __forceinline__ V3 cross(const V3& a, const V3& b) {
 __device__ __forceinline__ double dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
 __global__ void triangulateKernel(Img radial, Img points, Img w, Img mask, CamDev cam0, T3 tPrime) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= radial.width || y >= radial.height) return;
   const float nan = __int_as_float(0x7fc00000);
@@ -60,7 +61,7 @@ cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img
                               const double tPrime[3]) {
   const dim3 block(16, 8);
   const T3 t{{tPrime[0], tPrime[1], tPrime[2]}};
-  triangulateKernel<<<grid2d(radial.width, radial.height, block), block, 0, s>>>(radial, points, w, mask, cam0, t);
+  CS_LAUNCH(triangulateKernel, grid2d(radial.width, radial.height, block), block, 0, s, radial, points, w, mask, cam0, t);
   return cudaGetLastError();
 }
 

@@ -25,6 +25,7 @@ __device__ __forceinline__ bool sampleable(const Img& mask, float x, float y, fl
 
 __global__ void warpDerivativesKernel(Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory, Img w, Img u,
                                       Img mask, Img confidence, float weightFloor) {
+  beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= mask.width || y >= mask.height) return;
   at(u0, x, y) = at(u, x, y);
@@ -59,7 +60,7 @@ __global__ void warpDerivativesKernel(Img u0, Img iu, Img iz, Img tangent, Img i
 cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory,
                                   Img w, Img u, Img mask, Img confidence, float weightFloor) {
   const dim3 block(32, 8);
-  warpDerivativesKernel<<<grid2d(mask.width, mask.height, block), block, 0, s>>>(
+  CS_LAUNCH(warpDerivativesKernel, grid2d(mask.width, mask.height, block), block, 0, s, 
       u0, iu, iz, tangent, i0, i1, trajectory, w, u, mask, confidence, weightFloor);
   return cudaGetLastError();
 }
