@@ -210,9 +210,19 @@ void CpuBackend::sweepWarp(const Buffer& volume, const Buffer& image, const Buff
   cpu::sweepWarp(view(volume), view(image), view(mask), p);
 }
 
-void CpuBackend::sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+void CpuBackend::sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                           const SweepParams& p) {
+  cpu::sweepCost(view(costs), view(reference), view(volume), view(mask), p);
+}
+
+void CpuBackend::sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                                const SweepParams& p) {
+  cpu::sweepAggregate(view(aggregated), view(costs), view(mask), p);
+}
+
+void CpuBackend::sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                              const SweepParams& p) {
-  cpu::sweepSelect(view(best), view(reference), view(volume), view(mask), p);
+  cpu::sweepSelect(view(best), view(aggregated), view(costs), view(mask), p);
 }
 
 void CpuBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,

@@ -28,7 +28,9 @@ void primalDual(const View& u, const View& uBar, const View& v, const View& vBar
 void median(const View& dst, const View& src, const View& mask);
 void accumulate(const View& u, const View& w, const View& u0, const View& tangent, const View& mask, float duMax);
 void sweepWarp(const View& volume, const View& image, const View& mask, const SweepParams& p);
-void sweepSelect(const View& best, const View& reference, const View& volume, const View& mask, const SweepParams& p);
+void sweepCost(const View& costs, const View& reference, const View& volume, const View& mask, const SweepParams& p);
+void sweepAggregate(const View& aggregated, const View& costs, const View& mask, const SweepParams& p);
+void sweepSelect(const View& best, const View& aggregated, const View& costs, const View& mask, const SweepParams& p);
 void sweepInitialise(const View& u, const View& w, const View& confidence, const View& best, const View& other,
                      const View& mask, const SweepParams& p, const ConsistencyParams& c);
 
@@ -64,7 +66,10 @@ class CpuBackend final : public Backend {
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;
   void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
-  void sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+  void sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                 const SweepParams& p) override;
+  void sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask, const SweepParams& p) override;
+  void sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                    const SweepParams& p) override;
   void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
                        const Buffer& other, const Buffer& mask, const SweepParams& p,

@@ -2,7 +2,9 @@
 // camera, swept through the camera model (both images share it after the calibration
 // warp), scored by ZNCC, chosen winner-take-all, and checked left against right.
 // Geometry in double like the fields; costs in float.
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "cpu_backend.hpp"
 #include "curvestereo/camera.hpp"
@@ -70,61 +72,192 @@ void sweepWarp(const View& volume, const View& image, const View& mask, const Sw
   });
 }
 
-void sweepSelect(const View& best, const View& reference, const View& volume, const View& mask, const SweepParams& p) {
+void sweepCost(const View& costs, const View& reference, const View& volume, const View& mask, const SweepParams& p) {
+  parallelRows(costs.height, [&](int y) {
+    for (int x = 0; x < costs.width; ++x) {
+      const bool inside = masked(mask, x, y);
+      for (int k = 0; k < p.planes; ++k)
+        costs.at(x, y, k) = inside ? windowCost(reference, volume, mask, x, y, k, p.radius) : kNoCost;
+    }
+  });
+}
+
+namespace {
+
+// A cost above 1 (anticorrelated windows) says no more than "no match": capping it keeps
+// one bad window from outweighing the paths' agreement.
+constexpr float kCostCap = 1.f;
+
+// One scanline direction (dx, dy) of the aggregation, added into `aggregated`: the lines
+// along it are independent, each walked from its first pixel with the previous pixel's
+// path costs in `previous`.
+void aggregateDirection(const View& aggregated, const View& costs, const View& mask, const SweepParams& p, int dx,
+                        int dy) {
+  const bool alongRows = dy == 0;
+  const int lines = alongRows ? costs.height : costs.width, length = alongRows ? costs.width : costs.height;
+  parallelRows(lines, [&](int line) {
+    std::vector<float> previous(p.planes), current(p.planes);
+    bool havePrevious = false;
+    float previousMin = 0.f;
+    for (int step = 0; step < length; ++step) {
+      const int along = (dx + dy) > 0 ? step : length - 1 - step;
+      const int x = alongRows ? along : line, y = alongRows ? line : along;
+      if (!masked(mask, x, y)) {
+        havePrevious = false;
+        continue;
+      }
+      float lowest = 0.f;
+      for (int k = 0; k < p.planes; ++k) {
+        const float c = std::min(costs.at(x, y, k), kCostCap);
+        float l = c;
+        if (havePrevious) {
+          float v = std::min(previous[k], previousMin + p.p2);
+          if (k > 0) v = std::min(v, previous[k - 1] + p.p1);
+          if (k + 1 < p.planes) v = std::min(v, previous[k + 1] + p.p1);
+          l = c + v - previousMin;
+        }
+        current[k] = l;
+        lowest = k == 0 ? l : std::min(lowest, l);
+        aggregated.at(x, y, k) += l;
+      }
+      std::swap(previous, current);
+      previousMin = lowest;
+      havePrevious = true;
+    }
+  });
+}
+
+}  // namespace
+
+void sweepAggregate(const View& aggregated, const View& costs, const View& mask, const SweepParams& p) {
+  std::fill(aggregated.data, aggregated.data + size_t(aggregated.width) * aggregated.height * aggregated.channels, 0.f);
+  const int directions[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  for (const auto& d : directions) aggregateDirection(aggregated, costs, mask, p, d[0], d[1]);
+}
+
+void sweepSelect(const View& best, const View& aggregated, const View& costs, const View& mask, const SweepParams& p) {
+  constexpr float kPaths = 4.f;
   parallelRows(best.height, [&](int y) {
     for (int x = 0; x < best.width; ++x) {
       best.at(x, y, 0) = -1.f;
       best.at(x, y, 1) = kNoCost;
       if (!masked(mask, x, y)) continue;
       int winner = -1;
-      float winnerCost = kNoCost, before = kNoCost, after = kNoCost, previous = kNoCost;
-      for (int k = 0; k < p.planes; ++k) {
-        const float cost = windowCost(reference, volume, mask, x, y, k, p.radius);
-        if (cost < winnerCost) {
-          winner = k, winnerCost = cost, before = previous, after = kNoCost;
-        } else if (k == winner + 1) {
-          after = cost;
-        }
-        previous = cost;
-      }
+      for (int k = 0; k < p.planes; ++k)
+        if (costs.at(x, y, k) < kNoCost && (winner < 0 || aggregated.at(x, y, k) < aggregated.at(x, y, winner)))
+          winner = k;
       if (winner < 0) continue;
-      const double k = winner + parabolaOffset(before, winnerCost, after);
+      // The parabola sees the aggregated cost per path, on the scale of one window's cost.
+      auto score = [&](int k) {
+        return k < 0 || k >= p.planes || costs.at(x, y, k) >= kNoCost ? kNoCost : aggregated.at(x, y, k) / kPaths;
+      };
+      const double k = winner + parabolaOffset(score(winner - 1), score(winner), score(winner + 1));
       best.at(x, y, 0) = float(std::max(0.0, planeInverseDepth(p, k)));
-      best.at(x, y, 1) = winnerCost;
+      best.at(x, y, 1) = costs.at(x, y, winner);
     }
   });
 }
 
+namespace {
+
+// The left-right round trip of one pixel's sweep hypothesis: where it lands in the other
+// view (there), the other view's hypothesis at the nearest pixel carried back, and the
+// consistency exp(-(e / tolerance)^2) of the return error e. evaluated is false where
+// the pixel has no hypothesis or its match leaves the other view's valid pixels.
+struct RoundTrip {
+  bool evaluated = false;
+  float consistency = 0.f;
+  Vec3<double> ray;
+  Vec2<double> there;
+};
+
+RoundTrip roundTrip(const Camera& cam, const View& best, const View& other, const View& mask, const SweepParams& p,
+                    const ConsistencyParams& c, int x, int y) {
+  RoundTrip r;
+  const float q = best.at(x, y, 0);
+  if (!masked(mask, x, y) || q < 0.f || !cam.unproject(Vec2<double>(x, y), r.ray) ||
+      !projectHypothesis(cam, r.ray, p.t, q, r.there))
+    return r;
+  const int nx = int(std::lround(r.there.x())), ny = int(std::lround(r.there.y()));
+  if (!masked(mask, nx, ny)) return r;
+  const float qOther = other.at(nx, ny, 0);
+  const double back[3] = {-p.t[0], -p.t[1], -p.t[2]};
+  Vec3<double> rayOther;
+  Vec2<double> returned;
+  if (qOther < 0.f || !cam.unproject(r.there, rayOther) || !projectHypothesis(cam, rayOther, back, qOther, returned))
+    return r;
+  const double e = std::hypot(returned.x() - x, returned.y() - y) / c.tolerancePx;
+  r.evaluated = true;
+  r.consistency = float(std::exp(-e * e));
+  return r;
+}
+
+// The sweep's hypothesis q at the ray as the warp (u, w).
+bool setWarp(const View& u, const View& w, const Camera& cam, const SweepParams& p, const Vec3<double>& ray, double q,
+             int x, int y) {
+  Vec2<double> there;
+  if (!projectHypothesis(cam, ray, p.t, q, there)) return false;
+  const double wx = there.x() - x, wy = there.y() - y;
+  w.at(x, y, 0) = float(wx);
+  w.at(x, y, 1) = float(wy);
+  u.at(x, y) = float(std::sqrt(wx * wx + wy * wy));
+  return true;
+}
+
+// Occlusion: a pixel the other view cannot see is covered there by a nearer surface lying
+// behind it along its epipolar curve (on the side its match moves away from: the nearer
+// surface moves further and overtakes it), so the pixel belongs to the farther surface
+// ahead of it. One-pixel steps along the curve's direction at the pixel (the image motion
+// of growing inverse depth, J t) find the nearest consistent pixel on each side, up to
+// `reach`. When the one behind is nearer (larger q) than the one ahead, the pixel takes
+// the one ahead's inverse depth; -1 otherwise (or when a side has none).
+double occludedSurface(const Camera& cam, const View& best, const View& confidence, const View& mask,
+                       const SweepParams& p, float accept, const Vec3<double>& ray, int x, int y, int reach) {
+  Vec2<double> px;
+  Mat23<double> J;
+  if (!cam.project(ray, px, &J)) return -1.0;
+  Vec2<double> d = J * Vec3<double>(p.t[0], p.t[1], p.t[2]);
+  const double norm = d.norm();
+  if (!(norm > 0.0)) return -1.0;
+  d /= norm;
+  double nearest[2] = {-1.0, -1.0};  // behind, ahead
+  for (int side = 0; side < 2; ++side) {
+    const double sign = side == 0 ? -1.0 : 1.0;
+    for (int s = 1; s <= reach; ++s) {
+      const int nx = int(std::lround(x + sign * s * d.x())), ny = int(std::lround(y + sign * s * d.y()));
+      if (!masked(mask, nx, ny)) break;
+      if (confidence.at(nx, ny) < accept) continue;
+      nearest[side] = best.at(nx, ny, 0);
+      break;
+    }
+  }
+  return nearest[1] >= 0.0 && nearest[0] > nearest[1] ? nearest[1] : -1.0;
+}
+
+}  // namespace
+
 void sweepInitialise(const View& u, const View& w, const View& confidence, const View& best, const View& other,
                      const View& mask, const SweepParams& p, const ConsistencyParams& c) {
   const Camera cam = toCamera(p.cam);
-  const double back[3] = {-p.t[0], -p.t[1], -p.t[2]};
+  // Pass 1: confidence everywhere; consistent pixels take the sweep's hypothesis.
   parallelRows(u.height, [&](int y) {
     for (int x = 0; x < u.width; ++x) {
-      confidence.at(x, y) = 0.f;
-      const float q = best.at(x, y, 0);
-      Vec3<double> ray;
-      Vec2<double> there;
-      if (!masked(mask, x, y) || q < 0.f || !cam.unproject(Vec2<double>(x, y), ray) ||
-          !projectHypothesis(cam, ray, p.t, q, there))
-        continue;
-
-      // Round trip: the other view's hypothesis at the nearest pixel, carried back.
-      const int nx = int(std::lround(there.x())), ny = int(std::lround(there.y()));
-      if (!masked(mask, nx, ny)) continue;
-      const float qOther = other.at(nx, ny, 0);
-      Vec3<double> rayOther;
-      Vec2<double> returned;
-      if (qOther < 0.f || !cam.unproject(there, rayOther) || !projectHypothesis(cam, rayOther, back, qOther, returned))
-        continue;
-      const double e = std::hypot(returned.x() - x, returned.y() - y) / c.tolerancePx;
-      const float consistency = float(std::exp(-e * e));
-      confidence.at(x, y) = consistency;
-      if (consistency < c.acceptConfidence) continue;  // keep the coarse-to-fine estimate
-      const double wx = there.x() - x, wy = there.y() - y;
-      w.at(x, y, 0) = float(wx);
-      w.at(x, y, 1) = float(wy);
-      u.at(x, y) = float(std::sqrt(wx * wx + wy * wy));
+      const RoundTrip r = roundTrip(cam, best, other, mask, p, c, x, y);
+      confidence.at(x, y) = r.consistency;
+      if (r.evaluated && r.consistency >= c.acceptConfidence) setWarp(u, w, cam, p, r.ray, best.at(x, y, 0), x, y);
+    }
+  });
+  // Pass 2: inconsistent pixels whose match stays in view and that lie in front of a
+  // nearer surface take the surface ahead of them (occlusions); the rest (no hypothesis,
+  // a match leaving the other view, or no occlusion) keep the coarse-to-fine estimate.
+  // An occluded band is at most as wide as the largest motion, about `planes` level px.
+  parallelRows(u.height, [&](int y) {
+    for (int x = 0; x < u.width; ++x) {
+      if (confidence.at(x, y) >= c.acceptConfidence) continue;
+      const RoundTrip r = roundTrip(cam, best, other, mask, p, c, x, y);
+      if (!r.evaluated) continue;
+      const double q = occludedSurface(cam, best, confidence, mask, p, c.acceptConfidence, r.ray, x, y, p.planes);
+      if (q >= 0.0) setWarp(u, w, cam, p, r.ray, q, x, y);
     }
   });
 }

@@ -61,8 +61,7 @@ bool dependentLaunchSupported();
 // kernel<<<grid, block, sharedBytes, s>>>(args...), as a programmatic dependent launch
 // where the device supports it.
 template <class... Params, class... Args>
-cudaError_t launch(void (*kernel)(Params...), dim3 grid, dim3 block, size_t sharedBytes, cudaStream_t s,
-                   Args... args) {
+cudaError_t launch(void (*kernel)(Params...), dim3 grid, dim3 block, size_t sharedBytes, cudaStream_t s, Args... args) {
   cudaLaunchConfig_t config{};
   config.gridDim = grid;
   config.blockDim = block;
@@ -78,10 +77,10 @@ cudaError_t launch(void (*kernel)(Params...), dim3 grid, dim3 block, size_t shar
 }
 
 // launch(...), returning its error from the enclosing launcher if it fails.
-#define CS_LAUNCH(...)                                                    \
-  do {                                                                    \
-    const cudaError_t launchError_ = ::cs::cudak::launch(__VA_ARGS__);    \
-    if (launchError_ != cudaSuccess) return launchError_;                 \
+#define CS_LAUNCH(...)                                                 \
+  do {                                                                 \
+    const cudaError_t launchError_ = ::cs::cudak::launch(__VA_ARGS__); \
+    if (launchError_ != cudaSuccess) return launchError_;              \
   } while (0)
 
 }  // namespace cs::cudak

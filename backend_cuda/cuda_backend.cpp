@@ -76,7 +76,14 @@ cudak::SweepDev sweepDev(const SweepParams& p, const Buffer& volumeOrBest, int c
   d.qMax = p.qMax;
   d.planes = p.planes;
   d.radius = p.radius;
+  d.p1 = p.p1;
+  d.p2 = p.p2;
   return d;
+}
+
+// The planes-channel buffers besides the one sweepDev() checks.
+void checkPlanes(const Buffer& b, const SweepParams& p, const char* what) {
+  if (b.channels != p.planes) throw Error(std::string("cuda backend: ") + what + " does not have p.planes channels");
 }
 
 }  // namespace
@@ -168,7 +175,33 @@ const CudaBackend::Slot& CudaBackend::slot(const Buffer& b) const {
   return s;
 }
 
-float* CudaBackend::devicePointer(const Buffer& b) const { return slot(b).dev; }
+float* CudaBackend::devicePointer(const Buffer& b) {
+  Slot& s = slots_[size_t(slot(b).buffer.id)];
+  if (!s.handedOut) s.handedOut = s.dev;
+  return s.handedOut;
+}
+
+float** CudaBackend::scratchHolding(const float* memory) {
+  for (auto& kv : pdScratch_)
+    for (float** f : {&kv.second.uBar, &kv.second.vBar, &kv.second.p, &kv.second.q, &kv.second.u, &kv.second.v})
+      if (*f == memory) return f;
+  for (auto& kv : scratch_)
+    if (kv.second == memory) return &kv.second;
+  return nullptr;
+}
+
+// Buffers only ever trade memory with scratch roles (primalDual, accumulate), whose
+// contents between calls do not matter: copy the buffer home and trade back.
+void CudaBackend::returnHandedOutBuffers() {
+  for (Slot& s : slots_) {
+    if (!s.handedOut || s.dev == s.handedOut) continue;
+    float** holder = scratchHolding(s.handedOut);
+    if (!holder) throw Error("cuda backend: lost track of a buffer's memory");
+    enqueue({s.handedOut, s.dev, s.buffer.count(), 0.f});
+    *holder = s.dev;
+    s.dev = s.handedOut;
+  }
+}
 
 float* CudaBackend::pinnedFor(Slot& s) {
   if (!s.pinned) {
@@ -326,13 +359,36 @@ void CudaBackend::sweepWarp(const Buffer& volume, const Buffer& image, const Buf
         "sweepWarp");
 }
 
-void CudaBackend::sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+void CudaBackend::sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                            const SweepParams& p) {
+  flush();
+  const cudak::SweepDev d = sweepDev(p, costs, p.planes);
+  checkPlanes(volume, p, "sweepCost volume");
+  check(cudak::launchSweepCost(stream_, img(slot(costs).dev, costs), img(slot(reference).dev, reference),
+                               img(slot(volume).dev, volume), img(slot(mask).dev, mask), d),
+        "sweepCost");
+}
+
+void CudaBackend::sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                                 const SweepParams& p) {
+  flush();
+  const cudak::SweepDev d = sweepDev(p, aggregated, p.planes);
+  checkPlanes(costs, p, "sweepAggregate costs");
+  if (p.planes > cudak::kMaxSweepPlanes)
+    throw Error("cuda backend: sweepAggregate takes at most " + std::to_string(cudak::kMaxSweepPlanes) + " planes");
+  check(cudak::launchSweepAggregate(stream_, img(slot(aggregated).dev, aggregated), img(slot(costs).dev, costs),
+                                    img(slot(mask).dev, mask), d),
+        "sweepAggregate");
+}
+
+void CudaBackend::sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                               const SweepParams& p) {
   flush();
   const cudak::SweepDev d = sweepDev(p, best, 2);
-  if (volume.channels != p.planes) throw Error("cuda backend: sweepSelect volume does not have p.planes channels");
-  check(cudak::launchSweepSelect(stream_, img(slot(best).dev, best), img(slot(reference).dev, reference),
-                                 img(slot(volume).dev, volume), img(slot(mask).dev, mask), d),
+  checkPlanes(aggregated, p, "sweepSelect aggregated");
+  checkPlanes(costs, p, "sweepSelect costs");
+  check(cudak::launchSweepSelect(stream_, img(slot(best).dev, best), img(slot(aggregated).dev, aggregated),
+                                 img(slot(costs).dev, costs), img(slot(mask).dev, mask), d),
         "sweepSelect");
 }
 
@@ -471,8 +527,8 @@ void CudaBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0,
   // median(scratch, u) -> copy(u, scratch) -> accumulate(u): one pass that writes the
   // median to scratch and the accumulated u to a spare buffer, which then becomes u's
   // memory (u is read around each pixel, so it cannot be written in place).
-  if (pendingMedian_ && pendingMedian_->src.id == u.id && pendingMedian_->mask.id == mask.id &&
-      pending_.size() == 1 && pending_[0].dst == slot(u).dev && pending_[0].src == slot(pendingMedian_->dst).dev) {
+  if (pendingMedian_ && pendingMedian_->src.id == u.id && pendingMedian_->mask.id == mask.id && pending_.size() == 1 &&
+      pending_[0].dst == slot(u).dev && pending_[0].src == slot(pendingMedian_->dst).dev) {
     const Buffer median = pendingMedian_->dst;
     pendingMedian_.reset();
     pending_.clear();
@@ -513,6 +569,7 @@ void CudaBackend::beginFrame() {
 }
 
 void CudaBackend::endFrame() {
+  returnHandedOutBuffers();
   flush();
   ++framesIssued_;
   if (!capturing_) return;

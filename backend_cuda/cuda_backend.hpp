@@ -59,7 +59,10 @@ class CudaBackend final : public Backend {
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;
   void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
-  void sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+  void sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                 const SweepParams& p) override;
+  void sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask, const SweepParams& p) override;
+  void sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                    const SweepParams& p) override;
   void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
                        const Buffer& other, const Buffer& mask, const SweepParams& p,
@@ -82,7 +85,10 @@ class CudaBackend final : public Backend {
   std::vector<StageTime> takeStageTimes() override;
 
   // --- CUDA extensions (used by cs::cuda::DeviceStereo) ---
-  float* devicePointer(const Buffer& b) const;
+  // The buffer's memory. Within a frame the backend may move a buffer to memory it holds
+  // for another role (rather than copying it back); from the first call on, every frame
+  // ends with this buffer back at the pointer returned here.
+  float* devicePointer(const Buffer& b);
   CUstream_st* stream() const { return stream_; }
   int deviceIndex() const { return device_; }
   // dst = the packed float image at src (device memory, rows srcPitchBytes apart), async.
@@ -97,6 +103,7 @@ class CudaBackend final : public Backend {
     float* dev = nullptr;
     float* pinned = nullptr;       // host staging, allocated at the first transfer
     CUevent_st* staged = nullptr;  // completes when the last upload from `pinned` is done
+    float* handedOut = nullptr;    // what devicePointer() returned: the buffer's memory at every frame's end
     Buffer buffer;
   };
   struct PrimalDualScratch {
@@ -117,6 +124,9 @@ class CudaBackend final : public Backend {
   void enqueue(const PendingOp& op);
   void flush();  // runs the deferred median, then the queued ops
   void runPendingMedian();
+  // Moves the buffers handed out by devicePointer() back to that memory (endFrame()).
+  void returnHandedOutBuffers();
+  float** scratchHolding(const float* memory);
   // Removes the queued copy dst <- src; false if there is none.
   bool takePendingCopy(const float* dst, const float* src);
   const Slot& slot(const Buffer& b) const;

@@ -32,13 +32,16 @@ struct FieldsDev {
 };
 
 // The plane sweep (SweepParams): the level's camera, the translation to the other view,
-// the nearest sphere's inverse depth, the number of spheres and the ZNCC window radius.
+// the nearest sphere's inverse depth, the number of spheres, the ZNCC window radius and
+// the aggregation penalties.
 struct SweepDev {
   CamDev cam;
   double t[3];
   double qMax;
   int planes, radius;
+  float p1, p2;
 };
+constexpr int kMaxSweepPlanes = 512;  // launchSweepAggregate: one thread per plane
 // The left-right check (ConsistencyParams).
 struct ConsistencyDev {
   float tolerancePx, acceptConfidence;
@@ -132,9 +135,13 @@ cudaError_t launchAccumulate(cudaStream_t s, Img u, const float* uIn, Img w, Img
 cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
                                    float duMax);
 
-// volume: p.planes channels. best: 2 channels (q, cost). other: the reverse sweep's best.
+// volume, costs, aggregated: p.planes channels. best: 2 channels (q, cost). other: the
+// reverse sweep's best. launchSweepAggregate: p.planes <= kMaxSweepPlanes (else
+// cudaErrorInvalidValue); aggregated and costs must not alias.
 cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepDev& p);
-cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img reference, Img volume, Img mask, const SweepDev& p);
+cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume, Img mask, const SweepDev& p);
+cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img costs, Img mask, const SweepDev& p);
+cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img mask, const SweepDev& p);
 cudaError_t launchSweepInitialise(cudaStream_t s, Img u, Img w, Img confidence, Img best, Img other, Img mask,
                                   const SweepDev& p, const ConsistencyDev& c);
 

@@ -13,8 +13,8 @@ __device__ __forceinline__ void order(float& a, float& b) {
 
 // The median of nine values by a 19-exchange network (the fifth smallest, exactly what
 // sorting gives), in registers: the common case of a pixel whose neighbours are all masked.
-__device__ __forceinline__ float median9(float p0, float p1, float p2, float p3, float p4, float p5, float p6,
-                                         float p7, float p8) {
+__device__ __forceinline__ float median9(float p0, float p1, float p2, float p3, float p4, float p5, float p6, float p7,
+                                         float p8) {
   order(p1, p2), order(p4, p5), order(p7, p8), order(p0, p1), order(p3, p4), order(p6, p7);
   order(p1, p2), order(p4, p5), order(p7, p8), order(p0, p3), order(p5, p8), order(p4, p7);
   order(p3, p6), order(p1, p4), order(p2, p5), order(p4, p7), order(p4, p2), order(p6, p4);
@@ -61,8 +61,7 @@ __global__ void medianKernel(Img dst, Img src, Img mask) {
 }
 
 // accumulateKernel (accumulate.cu) reading u from the median computed here.
-__global__ void medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
-                                       float duMax) {
+__global__ void medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask, float duMax) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= u.width || y >= u.height) return;

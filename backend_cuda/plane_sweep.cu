@@ -1,7 +1,8 @@
 // Plane-sweep initialisation (cpu/plane_sweep.cpp): spheres of constant inverse depth
-// around the reference camera, swept through the camera model, scored by ZNCC, chosen
-// winner-take-all and checked left against right. Geometry in double through the device
-// camera models, intensities and costs in float, every sum in the oracle's order.
+// around the reference camera, swept through the camera model, scored by ZNCC, aggregated
+// semi-globally, chosen winner-take-all and checked left against right. Geometry in double
+// through the device camera models, intensities and costs in float, every sum in the
+// oracle's order (the kernels are built with --fmad=false, so floats match bit for bit).
 #include "camera_models.cuh"
 
 namespace cs::cudak {
@@ -18,13 +19,31 @@ constexpr float kFlatVariance = 1e-5f;
 constexpr int kWarpPixels = 32;
 constexpr int kWarpThreads = 256;
 
-// sweepSelect: a tile of pixels per block, one thread per pixel. The reference and mask
+// sweepCost: a tile of pixels per block, one thread per pixel. The reference and mask
 // windows are staged once; the volume is staged kChunk planes at a time (kChunk adjacent
 // floats per pixel: one 32-byte sector), so every window sample is read from global
-// memory once per tile instead of (2r+1)^2 times.
+// memory once per tile instead of (2r+1)^2 times. The chunk's costs go through shared
+// memory too (kStagedStride floats per pixel, odd so the per-pixel writes hit distinct
+// banks) and leave plane-fastest, in the same 32-byte runs.
 constexpr int kTileX = 32;  // one warp per tile row: shared-memory reads are conflict-free
 constexpr int kTileY = 8;
+constexpr int kTilePixels = kTileX * kTileY;
 constexpr int kChunk = 8;
+constexpr int kStagedStride = kChunk + 1;
+
+// sweepAggregate: one block per scanline, one thread per plane (planes rounded up to a
+// warp, at most kMaxSweepPlanes); the line is walked step by step with one barrier a step.
+// A cost above 1 (anticorrelated windows) says no more than "no match": capped (oracle's kCostCap).
+constexpr float kCostCap = 1.f;
+
+// sweepSelect: one warp per pixel, lanes over the planes, so the reads of a pixel's
+// planes coalesce.
+constexpr int kSelectThreads = 256;
+constexpr int kSelectPixels = kSelectThreads / 32;
+constexpr float kPaths = 4.f;  // the aggregation's directions
+
+// std::min(a, b) exactly (b < a ? b : a), including which operand a NaN leaves.
+__device__ __forceinline__ float stdMin(float a, float b) { return b < a ? b : a; }
 
 __device__ __forceinline__ double planeInverseDepth(const SweepDev& p, double k) {
   return p.qMax * k / double(p.planes - 1);
@@ -127,23 +146,19 @@ __device__ float parabolaOffset(float before, float best, float after) {
   return low < 0.5f ? low : 0.5f;           // std::min(0.5f, low)
 }
 
-// The running winner-take-all of one pixel over the planes in order: the first minimum,
-// with the costs of the planes either side of it for the parabola.
-struct Winner {
-  int k = -1;
-  float cost = kNoCost, before = kNoCost, after = kNoCost, previous = kNoCost;
-  __device__ void add(int plane, float c) {
-    if (c < cost) {
-      k = plane, cost = c, before = previous, after = kNoCost;
-    } else if (plane == k + 1) {
-      after = c;
-    }
-    previous = c;
+// The tile's costs of planes k0 .. k0 + chunk - 1 from `staged` to global memory,
+// consecutive threads writing consecutive planes of one pixel: a warp stores four pixels'
+// runs of kChunk floats instead of 32 floats planes apart.
+__device__ void writeCosts(const Img& costs, const float* staged, int k0, int chunk) {
+  for (int i = threadIdx.y * blockDim.x + threadIdx.x; i < kTilePixels * kChunk; i += blockDim.x * blockDim.y) {
+    const int pixel = i / kChunk, c = i % kChunk;
+    const int x = blockIdx.x * kTileX + pixel % kTileX, y = blockIdx.y * kTileY + pixel / kTileX;
+    if (c < chunk && x < costs.width && y < costs.height) at(costs, x, y, k0 + c) = staged[pixel * kStagedStride + c];
   }
-};
+}
 
-__global__ void __launch_bounds__(kTileX* kTileY)
-    sweepSelectKernel(Img best, Img reference, Img volume, Img mask, SweepDev p) {
+__global__ void __launch_bounds__(kTilePixels)
+    sweepCostKernel(Img costs, Img reference, Img volume, Img mask, SweepDev p) {
   beginKernel();
   extern __shared__ float shared[];
   const int r = p.radius;
@@ -152,39 +167,169 @@ __global__ void __launch_bounds__(kTileX* kTileY)
   t.width = kTileX + 2 * r, t.height = kTileY + 2 * r;
   t.reference = shared;
   t.volume = shared + t.size();
-  t.use = reinterpret_cast<unsigned char*>(shared + (1 + kChunk) * t.size());
+  float* const staged = shared + (1 + kChunk) * t.size();  // [kTilePixels][kStagedStride]
+  t.use = reinterpret_cast<unsigned char*>(staged + kTilePixels * kStagedStride);
 
   const int x = blockIdx.x * kTileX + threadIdx.x, y = blockIdx.y * kTileY + threadIdx.y;
   // Threads outside the image or the mask still stage their share of the tile.
-  const bool active = x < best.width && y < best.height && masked(mask, x, y);
+  const bool active = x < costs.width && y < costs.height && masked(mask, x, y);
+  float* const own = staged + (threadIdx.y * kTileX + threadIdx.x) * kStagedStride;
   stageReference(t, reference, mask);
-  Winner w;
   for (int k0 = 0; k0 < p.planes; k0 += kChunk) {
-    __syncthreads();  // the previous chunk is no longer read (and `use` is staged)
+    __syncthreads();  // the previous chunk's volume and costs are no longer read (and `use` is staged)
     stageVolume(t, volume, k0, p.planes);
     __syncthreads();
-    if (!active) continue;
     const int chunk = min(kChunk, p.planes - k0);
-    for (int c = 0; c < chunk; ++c) w.add(k0 + c, windowCost(t, threadIdx.x, threadIdx.y, c, r));
+    for (int c = 0; c < chunk; ++c) own[c] = active ? windowCost(t, threadIdx.x, threadIdx.y, c, r) : kNoCost;
+    __syncthreads();
+    writeCosts(costs, staged, k0, chunk);
   }
-  if (x >= best.width || y >= best.height) return;
-  float q = -1.f, cost = kNoCost;
-  if (active && w.k >= 0) {
-    const float k = float(w.k) + parabolaOffset(w.before, w.cost, w.after);  // float, as the oracle's int + float
-    const double depth = planeInverseDepth(p, double(k));
-    q = float(0.0 < depth ? depth : 0.0);  // std::max(0.0, depth)
-    cost = w.cost;
-  }
-  at(best, x, y, 0) = q;
-  at(best, x, y, 1) = cost;
 }
 
-// The round-trip confidence of pixel (x, y) and x_q (`there`); false (confidence 0) where
-// the reference has no hypothesis or the round trip fails.
+// The scanline a block walks: the pixel index of its first pixel and the index step
+// between neighbours along it.
+struct Line {
+  size_t start, stride;
+  int length;
+};
+
+struct AggregateShared {
+  float previous[2][kMaxSweepPlanes];  // the last two steps' L_r, alternating: neighbours' values
+  float warpMin[2][kMaxSweepPlanes / 32];
+};
+
+// What a step reads, loaded one step ahead (unconditionally, so the loads do not wait for
+// the mask) to overlap the previous step's barrier.
+struct AggregateInput {
+  bool inside;
+  float cost, sum;
+};
+
+__device__ AggregateInput loadStep(const Img& aggregated, const Img& costs, const Img& mask, size_t pixel, int k,
+                                   bool readSum) {
+  const size_t i = pixel * costs.channels + k;
+  return {__ldg(&mask.data[pixel * mask.channels]) != 0.f, __ldg(&costs.data[i]), readSum ? aggregated.data[i] : 0.f};
+}
+
+// The minimum of v over the block; every thread gets it. One barrier, and the per-warp
+// minima alternate between two buffers so the next call cannot overwrite them early.
+__device__ float blockMin(float v, float (&warpMin)[kMaxSweepPlanes / 32]) {
+  for (int offset = 16; offset > 0; offset /= 2) v = fminf(v, __shfl_xor_sync(0xffffffffu, v, offset));
+  if ((threadIdx.x & 31) == 0) warpMin[threadIdx.x / 32] = v;
+  __syncthreads();
+  float m = warpMin[0];
+  for (int w = 1; w < int(blockDim.x / 32); ++w) m = fminf(m, warpMin[w]);
+  return m;
+}
+
+// One direction along the block's line (the oracle's aggregateDirection for one line):
+// thread k keeps L_r(., k) in a register and publishes it in shared memory for planes
+// k -+ 1; the previous step's minimum m comes from blockMin. `overwrite`: the first
+// direction, which writes 0 + L (and 0 outside the mask) instead of adding, so that
+// `aggregated` needs no clearing. `buffer` alternates over the steps of both passes.
+__device__ void aggregatePass(const Img& aggregated, const Img& costs, const Img& mask, const SweepDev& p,
+                              const Line& line, bool forward, bool overwrite, AggregateShared& s, int& buffer) {
+  const int k = threadIdx.x;
+  const bool plane = k < p.planes;
+  const int kLoad = plane ? k : p.planes - 1;  // spare threads load a valid address
+  auto pixelAt = [&](int step) { return line.start + size_t(forward ? step : line.length - 1 - step) * line.stride; };
+  bool havePrevious = false;
+  float own = 0.f, previousMin = 0.f;
+  const bool readSum = !overwrite && plane;
+  AggregateInput next = loadStep(aggregated, costs, mask, pixelAt(0), kLoad, readSum);
+  for (int step = 0; step < line.length; ++step) {
+    const size_t pixel = pixelAt(step);
+    const AggregateInput in = next;
+    if (step + 1 < line.length) next = loadStep(aggregated, costs, mask, pixelAt(step + 1), kLoad, readSum);
+    float& out = aggregated.data[pixel * aggregated.channels + kLoad];
+    if (!in.inside) {  // the same for the whole block: no barrier is skipped by some threads only
+      if (overwrite && plane) out = 0.f;
+      havePrevious = false;
+      continue;
+    }
+    float l = kNoCost;
+    if (plane) {
+      const float c = stdMin(in.cost, kCostCap);
+      l = c;
+      if (havePrevious) {
+        const float* previous = s.previous[buffer ^ 1];
+        float v = stdMin(own, previousMin + p.p2);
+        if (k > 0) v = stdMin(v, previous[k - 1] + p.p1);
+        if (k + 1 < p.planes) v = stdMin(v, previous[k + 1] + p.p1);
+        l = c + v - previousMin;
+      }
+      s.previous[buffer][k] = l;
+      out = (overwrite ? 0.f : in.sum) + l;  // the oracle's aggregated += l from a cleared buffer
+    }
+    own = l;
+    previousMin = blockMin(plane ? l : INFINITY, s.warpMin[buffer]);  // its barrier also publishes `previous`
+    havePrevious = true;
+    buffer ^= 1;
+  }
+}
+
+// Both directions of one line: rows (+x, then -x) or columns (+y, then -y). The same
+// thread writes and then adds to a pixel's plane, so the passes need no barrier between them.
+__global__ void __launch_bounds__(kMaxSweepPlanes)
+    sweepAggregateKernel(Img aggregated, Img costs, Img mask, SweepDev p, bool rows) {
+  beginKernel();
+  __shared__ AggregateShared s;
+  const int width = costs.width;
+  const Line line = rows ? Line{size_t(blockIdx.x) * width, 1, width} : Line{blockIdx.x, size_t(width), costs.height};
+  int buffer = 0;
+  aggregatePass(aggregated, costs, mask, p, line, true, rows, s, buffer);
+  aggregatePass(aggregated, costs, mask, p, line, false, false, s, buffer);
+}
+
+// The first minimum of (value, k) over a warp; k = -1 (nothing scored) loses to everything.
+__device__ void warpFirstMin(float& value, int& k) {
+  for (int offset = 16; offset > 0; offset /= 2) {
+    const float otherValue = __shfl_xor_sync(0xffffffffu, value, offset);
+    const int otherK = __shfl_xor_sync(0xffffffffu, k, offset);
+    if (otherK >= 0 && (k < 0 || otherValue < value || (otherValue == value && otherK < k)))
+      value = otherValue, k = otherK;
+  }
+}
+
+__global__ void __launch_bounds__(kSelectThreads)
+    sweepSelectKernel(Img best, Img aggregated, Img costs, Img mask, SweepDev p) {
+  beginKernel();
+  const int lane = threadIdx.x & 31;
+  const long long pixel = (long long)blockIdx.x * kSelectPixels + threadIdx.x / 32;
+  if (pixel >= (long long)best.width * best.height) return;  // whole warps
+  const int x = int(pixel % best.width), y = int(pixel / best.width);
+  float q = -1.f, winnerCost = kNoCost;
+  if (masked(mask, x, y)) {
+    const float* const a = &at(aggregated, x, y);
+    const float* const c = &at(costs, x, y);
+    // Each lane's first minimum over its planes (ascending), then the warp's: the
+    // oracle's first k minimising `aggregated` among the scored.
+    int winner = -1;
+    float lowest = 0.f;
+    for (int k = lane; k < p.planes; k += 32)
+      if (c[k] < kNoCost && (winner < 0 || a[k] < lowest)) winner = k, lowest = a[k];
+    warpFirstMin(lowest, winner);
+    if (winner >= 0) {
+      // The parabola sees the aggregated cost per path, on the scale of one window's cost.
+      auto score = [&](int k) { return k < 0 || k >= p.planes || c[k] >= kNoCost ? kNoCost : a[k] / kPaths; };
+      // float, as the oracle's int + float
+      const float k = float(winner) + parabolaOffset(score(winner - 1), score(winner), score(winner + 1));
+      const double depth = planeInverseDepth(p, double(k));
+      q = float(0.0 < depth ? depth : 0.0);  // std::max(0.0, depth)
+      winnerCost = c[winner];
+    }
+  }
+  if (lane != 0) return;
+  at(best, x, y, 0) = q;
+  at(best, x, y, 1) = winnerCost;
+}
+
+// The round-trip confidence of pixel (x, y), its ray and x_q (`there`); false
+// (confidence 0) where the reference has no hypothesis or the round trip fails (the
+// oracle's RoundTrip::evaluated).
 __device__ bool roundTrip(const Img& best, const Img& other, const Img& mask, const SweepDev& p, float tolerancePx,
-                          int x, int y, V2& there, float& confidence) {
+                          int x, int y, V3& ray, V2& there, float& confidence) {
   const float q = at(best, x, y, 0);
-  V3 ray;
   if (!masked(mask, x, y) || q < 0.f || !cameraUnproject(p.cam, double(x), double(y), ray) ||
       !projectHypothesis(p.cam, ray, p.t, double(q), there))
     return false;
@@ -204,22 +349,82 @@ __device__ bool roundTrip(const Img& best, const Img& other, const Img& mask, co
   return true;
 }
 
+// The warp (u, w) of pixel (x, y) whose hypothesis lands at `there` (the oracle's setWarp).
+__device__ void storeWarp(const Img& u, const Img& w, const V2& there, int x, int y) {
+  const double wx = there.x - x, wy = there.y - y;
+  at(w, x, y, 0) = float(wx);
+  at(w, x, y, 1) = float(wy);
+  at(u, x, y) = float(sqrt(wx * wx + wy * wy));
+}
+
+// Pass 1: confidence everywhere; consistent pixels take the sweep's hypothesis.
 __global__ void sweepInitialiseKernel(Img u, Img w, Img confidence, Img best, Img other, Img mask, SweepDev p,
                                       ConsistencyDev c) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= u.width || y >= u.height) return;
+  V3 ray{0, 0, 0};
   V2 there{0, 0};
   float consistency = 0.f;
-  const bool matched = roundTrip(best, other, mask, p, c.tolerancePx, x, y, there, consistency);
+  const bool matched = roundTrip(best, other, mask, p, c.tolerancePx, x, y, ray, there, consistency);
   at(confidence, x, y) = consistency;
   // Where the round trip fails or the sweep is not sure, u and w keep the coarse-to-fine
   // estimate (the oracle's test, so a NaN confidence would replace them).
   if (!matched || consistency < c.acceptConfidence) return;
-  const double wx = there.x - x, wy = there.y - y;
-  at(w, x, y, 0) = float(wx);
-  at(w, x, y, 1) = float(wy);
-  at(u, x, y) = float(sqrt(wx * wx + wy * wy));
+  storeWarp(u, w, there, x, y);
+}
+
+// Occlusion (the oracle's occludedSurface): a pixel the other view cannot see is covered
+// there by a nearer surface lying behind it along its epipolar curve (the nearer surface
+// moves further and overtakes it), so the pixel belongs to the farther surface ahead of
+// it. One-pixel steps along the curve's direction at the pixel, d = J t / |J t| (the
+// image motion of growing inverse depth), rounded to the nearest pixel and stopping at
+// the mask, find the first consistent pixel on each side within `reach`. When the one
+// behind is nearer (larger q) than the one ahead: the one ahead's q; -1 otherwise.
+__device__ double occludedSurface(const Img& best, const Img& confidence, const Img& mask, const SweepDev& p,
+                                  float accept, const V3& ray, int x, int y, int reach) {
+  V2 px;
+  J23 J;
+  if (!cameraProject(p.cam, ray, px, &J)) return -1.0;
+  // Eigen's J * t: each row summed left to right.
+  double dx = J.m[0][0] * p.t[0] + J.m[0][1] * p.t[1] + J.m[0][2] * p.t[2];
+  double dy = J.m[1][0] * p.t[0] + J.m[1][1] * p.t[1] + J.m[1][2] * p.t[2];
+  const double norm = sqrt(dx * dx + dy * dy);
+  if (!(norm > 0.0)) return -1.0;
+  dx /= norm;
+  dy /= norm;
+  double nearest[2] = {-1.0, -1.0};  // behind, ahead
+  for (int side = 0; side < 2; ++side) {
+    const double sign = side == 0 ? -1.0 : 1.0;
+    for (int s = 1; s <= reach; ++s) {
+      const int nx = int(llround(x + sign * s * dx)), ny = int(llround(y + sign * s * dy));
+      if (!masked(mask, nx, ny)) break;
+      if (at(confidence, nx, ny) < accept) continue;
+      nearest[side] = at(best, nx, ny, 0);
+      break;
+    }
+  }
+  return nearest[1] >= 0.0 && nearest[0] > nearest[1] ? nearest[1] : -1.0;
+}
+
+// Pass 2, over pass 1's confidence (the launch boundary orders them): inconsistent pixels
+// whose round trip could be made and that lie in front of a nearer surface take the
+// surface ahead of them; the rest (no hypothesis, a match leaving the other view, or no
+// occlusion) keep the coarse-to-fine estimate. Reads confidence around the pixel, writes
+// u and w at the pixel only. An occluded band is at most as wide as the largest motion,
+// about `planes` px, hence the reach.
+__global__ void sweepOcclusionKernel(Img u, Img w, Img confidence, Img best, Img other, Img mask, SweepDev p,
+                                     ConsistencyDev c) {
+  beginKernel();
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= u.width || y >= u.height) return;
+  if (at(confidence, x, y) >= c.acceptConfidence) return;
+  V3 ray{0, 0, 0};
+  V2 there{0, 0};
+  float consistency = 0.f;
+  if (!roundTrip(best, other, mask, p, c.tolerancePx, x, y, ray, there, consistency)) return;
+  const double q = occludedSurface(best, confidence, mask, p, c.acceptConfidence, ray, x, y, p.planes);
+  if (q >= 0.0 && projectHypothesis(p.cam, ray, p.t, q, there)) storeWarp(u, w, there, x, y);
 }
 
 }  // namespace
@@ -230,23 +435,47 @@ cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, con
   return cudaGetLastError();
 }
 
-cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img reference, Img volume, Img mask, const SweepDev& p) {
+cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume, Img mask, const SweepDev& p) {
   const int halo = (kTileX + 2 * p.radius) * (kTileY + 2 * p.radius);
-  const size_t bytes = size_t(halo) * (1 + kChunk) * sizeof(float) + size_t(halo);
+  const size_t bytes =
+      (size_t(halo) * (1 + kChunk) + size_t(kTilePixels) * kStagedStride) * sizeof(float) + size_t(halo);
   if (bytes > 48 * 1024) {  // large windows: opt in to more than the default dynamic shared memory
     const cudaError_t e =
-        cudaFuncSetAttribute(sweepSelectKernel, cudaFuncAttributeMaxDynamicSharedMemorySize, int(bytes));
+        cudaFuncSetAttribute(sweepCostKernel, cudaFuncAttributeMaxDynamicSharedMemorySize, int(bytes));
     if (e != cudaSuccess) return e;
   }
   const dim3 block(kTileX, kTileY);
-  CS_LAUNCH(sweepSelectKernel, grid2d(best.width, best.height, block), block, bytes, s, best, reference, volume, mask, p);
+  CS_LAUNCH(sweepCostKernel, grid2d(costs.width, costs.height, block), block, bytes, s, costs, reference, volume, mask,
+            p);
   return cudaGetLastError();
 }
 
+// Two launches: the rows (+x, -x), then the columns (+y, -y), which add to the rows'
+// sums (in the oracle's order) and so wait for all of them.
+cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img costs, Img mask, const SweepDev& p) {
+  if (p.planes > kMaxSweepPlanes) return cudaErrorInvalidValue;
+  const int threads = (p.planes + 31) / 32 * 32;
+  CS_LAUNCH(sweepAggregateKernel, dim3(costs.height), dim3(threads), 0, s, aggregated, costs, mask, p, true);
+  CS_LAUNCH(sweepAggregateKernel, dim3(costs.width), dim3(threads), 0, s, aggregated, costs, mask, p, false);
+  return cudaGetLastError();
+}
+
+cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img mask, const SweepDev& p) {
+  const long long pixels = (long long)best.width * best.height;
+  const dim3 grid(unsigned((pixels + kSelectPixels - 1) / kSelectPixels));
+  CS_LAUNCH(sweepSelectKernel, grid, kSelectThreads, 0, s, best, aggregated, costs, mask, p);
+  return cudaGetLastError();
+}
+
+// Two launches: the occlusion pass reads the confidence of pixels around its own, which
+// the first pass must have written everywhere.
 cudaError_t launchSweepInitialise(cudaStream_t s, Img u, Img w, Img confidence, Img best, Img other, Img mask,
                                   const SweepDev& p, const ConsistencyDev& c) {
   const dim3 block(16, 8);
-  CS_LAUNCH(sweepInitialiseKernel, grid2d(u.width, u.height, block), block, 0, s, u, w, confidence, best, other, mask, p, c);
+  CS_LAUNCH(sweepInitialiseKernel, grid2d(u.width, u.height, block), block, 0, s, u, w, confidence, best, other, mask,
+            p, c);
+  CS_LAUNCH(sweepOcclusionKernel, grid2d(u.width, u.height, block), block, 0, s, u, w, confidence, best, other, mask, p,
+            c);
   return cudaGetLastError();
 }
 

@@ -520,7 +520,10 @@ enum Shader {
   kTriangulate64,
   kSweepWarp32,
   kSweepWarp64,
-  kSweepSelect,
+  kSweepCost,
+  kSweepAggregate,
+  kSweepSelect32,
+  kSweepSelect64,
   kSweepInitialise32,
   kSweepInitialise64,
   kShaderCount
@@ -542,7 +545,10 @@ const char* const kShaderNames[kShaderCount] = {"warp",
                                                 "triangulate_f64",
                                                 "sweep_warp_f32",
                                                 "sweep_warp_f64",
-                                                "sweep_select",
+                                                "sweep_cost",
+                                                "sweep_aggregate",
+                                                "sweep_select_f32",
+                                                "sweep_select_f64",
                                                 "sweep_initialise_f32",
                                                 "sweep_initialise_f64"};
 
@@ -616,15 +622,24 @@ struct PcSweepWarp {
   Addr volume, image, mask, params;
   int32_t width, height, planes;
 };
-struct PcSweepSelect {
-  Addr best, reference, volume, mask;
+struct PcSweepCost {
+  Addr costs, reference, volume, mask;
   int32_t width, height, planes, radius;
-  float qMax;
+};
+struct PcSweepAggregate {
+  Addr aggregated, costs, mask;
+  int32_t width, height, planes, direction;
+  float p1, p2;
+};
+struct PcSweepSelect {
+  Addr best, aggregated, costs, mask, params;
+  int32_t width, height, planes;
 };
 struct PcSweepInitialise {
   Addr u, w, confidence, best, other, mask, params;
   int32_t width, height;
   float tolerancePx, acceptConfidence;
+  int32_t pass, planes;
 };
 static_assert(sizeof(PcPrimal) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 
@@ -661,7 +676,10 @@ class VulkanBackend final : public Backend {
   void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                   float duMax) override;
   void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
-  void sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+  void sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                 const SweepParams& p) override;
+  void sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask, const SweepParams& p) override;
+  void sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                    const SweepParams& p) override;
   void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
                        const Buffer& other, const Buffer& mask, const SweepParams& p,
@@ -708,8 +726,12 @@ class VulkanBackend final : public Backend {
   void abortFrameRecording();
   // Submits one ended command buffer, signalling fence when done.
   void submit(VkCommandBuffer cb, VkFence fence);
+  // A w x h grid of pixels in the 16 x 16 work groups of common.glsl.
   template <class PC>
   void dispatch(Shader s, const PC& pc, int w, int h);
+  // groupsX x groupsY work groups, for shaders that map their invocations otherwise.
+  template <class PC>
+  void dispatchGroups(Shader s, const PC& pc, uint32_t groupsX, uint32_t groupsY);
   Buffer scratch(int slot, int w, int h);
 
   std::string description_;
@@ -1082,6 +1104,11 @@ void VulkanBackend::synchronize() { flush(); }
 
 template <class PC>
 void VulkanBackend::dispatch(Shader s, const PC& pc, int w, int h) {
+  dispatchGroups(s, pc, (uint32_t(w) + kGroup - 1) / kGroup, (uint32_t(h) + kGroup - 1) / kGroup);
+}
+
+template <class PC>
+void VulkanBackend::dispatchGroups(Shader s, const PC& pc, uint32_t groupsX, uint32_t groupsY) {
   static_assert(sizeof(PC) <= kPushBytes, "push constants exceed 128 bytes");
   VkPipeline p = pipeline(s);
   VkCommandBuffer cb = recorder();
@@ -1090,7 +1117,7 @@ void VulkanBackend::dispatch(Shader s, const PC& pc, int w, int h) {
   barrier(cb);
   inst_.fn.vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, p);
   inst_.fn.vkCmdPushConstants(cb, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, kPushBytes, bytes);
-  inst_.fn.vkCmdDispatch(cb, (uint32_t(w) + kGroup - 1) / kGroup, (uint32_t(h) + kGroup - 1) / kGroup, 1);
+  inst_.fn.vkCmdDispatch(cb, groupsX, groupsY, 1);
 }
 
 void VulkanBackend::beginFrame() {
@@ -1429,19 +1456,56 @@ void VulkanBackend::sweepWarp(const Buffer& volume, const Buffer& image, const B
   dispatch(float64_ ? kSweepWarp64 : kSweepWarp32, pc, volume.width, volume.height);
 }
 
-void VulkanBackend::sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+void VulkanBackend::sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                              const SweepParams& p) {
+  requireSweepShape(p, "sweepCost");
+  for (const Buffer* b : {&reference, &volume, &mask}) requireSameSize(*b, costs, "sweepCost");
+  requireChannels(costs, p.planes, "sweepCost", "the costs");
+  requireChannels(reference, 1, "sweepCost", "the reference image");
+  requireChannels(volume, p.planes, "sweepCost", "the volume");
+  requireChannels(mask, 1, "sweepCost", "the mask");
+  // One invocation per (pixel, plane), a row's (x * planes + k) in runs of kGroup^2: the
+  // interleaved volume is read and the costs written in consecutive floats.
+  const uint64_t rowItems = uint64_t(costs.width) * uint64_t(p.planes);
+  const uint64_t groupItems = uint64_t(kGroup) * kGroup;
+  PcSweepCost pc{addr(costs), addr(reference), addr(volume), addr(mask), costs.width, costs.height, p.planes, p.radius};
+  dispatchGroups(kSweepCost, pc, uint32_t((rowItems + groupItems - 1) / groupItems), uint32_t(costs.height));
+}
+
+void VulkanBackend::sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                                   const SweepParams& p) {
+  // Mirrors kMaxPlanes in sweep_aggregate.comp (the path costs of two steps in shared memory).
+  constexpr int kMaxAggregatePlanes = 1024;
+  requireSweepShape(p, "sweepAggregate");
+  if (p.planes > kMaxAggregatePlanes)
+    throw Error("vulkan backend: sweepAggregate: at most " + std::to_string(kMaxAggregatePlanes) + " planes");
+  for (const Buffer* b : {&costs, &mask}) requireSameSize(*b, aggregated, "sweepAggregate");
+  requireChannels(aggregated, p.planes, "sweepAggregate", "the aggregated costs");
+  requireChannels(costs, p.planes, "sweepAggregate", "the costs");
+  requireChannels(mask, 1, "sweepAggregate", "the mask");
+  // +x, -x, +y, -y in the oracle's order, one work group per scanline (rows for x, columns
+  // for y). The first direction writes every pixel, the others add: no fill needed.
+  // dispatchGroups puts a full barrier before each dispatch.
+  const int w = aggregated.width, h = aggregated.height;
+  for (int direction = 0; direction < 4; ++direction) {
+    PcSweepAggregate pc{addr(aggregated), addr(costs), addr(mask), w, h, p.planes, direction, p.p1, p.p2};
+    dispatchGroups(kSweepAggregate, pc, uint32_t(direction < 2 ? h : w), 1);
+  }
+}
+
+void VulkanBackend::sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                                 const SweepParams& p) {
   requireSweepShape(p, "sweepSelect");
-  for (const Buffer* b : {&reference, &volume, &mask}) requireSameSize(*b, best, "sweepSelect");
+  for (const Buffer* b : {&aggregated, &costs, &mask}) requireSameSize(*b, best, "sweepSelect");
   requireChannels(best, 2, "sweepSelect", "best");
-  requireChannels(reference, 1, "sweepSelect", "the reference image");
-  requireChannels(volume, p.planes, "sweepSelect", "the volume");
+  requireChannels(aggregated, p.planes, "sweepSelect", "the aggregated costs");
+  requireChannels(costs, p.planes, "sweepSelect", "the costs");
   requireChannels(mask, 1, "sweepSelect", "the mask");
-  // The oracle turns the plane index into inverse depth in double; float(qMax) here costs
-  // at most a few ulps of q.
-  PcSweepSelect pc{addr(best),  addr(reference), addr(volume), addr(mask),   best.width,
-                   best.height, p.planes,        p.radius,     float(p.qMax)};
-  dispatch(kSweepSelect, pc, best.width, best.height);
+  // The plane index becomes an inverse depth in the geometry shaders' precision (double as
+  // the oracle where the device has shaderFloat64).
+  PcSweepSelect pc{addr(best),         addr(aggregated), addr(costs), addr(mask),
+                   sweepParamBlock(p), best.width,       best.height, p.planes};
+  dispatch(float64_ ? kSweepSelect64 : kSweepSelect32, pc, best.width, best.height);
 }
 
 void VulkanBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
@@ -1455,10 +1519,16 @@ void VulkanBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buff
   requireChannels(best, 2, "sweepInitialise", "best");
   requireChannels(other, 2, "sweepInitialise", "other");
   requireChannels(mask, 1, "sweepInitialise", "the mask");
-  PcSweepInitialise pc{addr(u),     addr(w),       addr(confidence),   addr(best),
-                       addr(other), addr(mask),    sweepParamBlock(p), u.width,
-                       u.height,    c.tolerancePx, c.acceptConfidence};
-  dispatch(float64_ ? kSweepInitialise64 : kSweepInitialise32, pc, u.width, u.height);
+  // Two dispatches of one shader (dispatch puts a full barrier before each): pass 0 writes
+  // the confidence and the consistent pixels' warp, pass 1 reads that confidence to fill
+  // occluded pixels from the surface ahead of them.
+  const Shader shader = float64_ ? kSweepInitialise64 : kSweepInitialise32;
+  const Addr params = sweepParamBlock(p);
+  for (int32_t pass = 0; pass < 2; ++pass) {
+    PcSweepInitialise pc{addr(u), addr(w),  addr(confidence), addr(best),         addr(other), addr(mask), params,
+                         u.width, u.height, c.tolerancePx,    c.acceptConfidence, pass,        p.planes};
+    dispatch(shader, pc, u.width, u.height);
+  }
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
-// Shared by the plane-sweep shaders that do geometry (sweep_warp, sweep_initialise): the
-// sweep's parameter block and where a hypothesis lands (backend_cpu/plane_sweep.cpp).
+// Shared by the plane-sweep shaders that do geometry (sweep_warp, sweep_initialise) or turn
+// plane indices into inverse depths (sweep_select): the sweep's parameter block and where
+// a hypothesis lands (backend_cpu/plane_sweep.cpp).
 #ifndef CS_PLANE_SWEEP_GLSL
 #define CS_PLANE_SWEEP_GLSL
 #include "camera_models.glsl"

@@ -5,7 +5,10 @@
 // x_q carries it back, and the round-trip error e gives confidence = exp(-(e / tol)^2)
 // (0 where the reference has no hypothesis, the round trip fails or mask is 0). Where
 // confidence >= acceptConfidence the sweep's w = x_q - x and u = |w| replace the
-// coarse-to-fine estimate (u, w in/out); elsewhere they are left as they are.
+// coarse-to-fine estimate (u, w in/out); elsewhere they are left as they are (pass 0).
+// Pass 1, a second dispatch over pass 0's confidence: an inconsistent pixel whose round
+// trip could be made looks for occlusion (occludedSurface in the oracle) and may take the
+// inverse depth of the consistent surface ahead of it.
 // Geometry in `real`, compiled twice: double (-DCS_DOUBLE) and float.
 #ifdef CS_DOUBLE
 #extension GL_ARB_gpu_shader_fp64 : require
@@ -18,6 +21,8 @@ layout(push_constant) uniform PC {
   SweepParamsRef prm;  // t: the reference sweep's translation (`other` was swept with -t)
   int width, height;
   float tolerancePx, acceptConfidence;
+  int pass;    // 0: confidence and consistent pixels; 1: occlusions (after pass 0)
+  int planes;  // pass 1's reach in steps each way
 } pc;
 
 // std::lround of a real (halves away from zero): the oracle rounds x_q in double, and
@@ -63,28 +68,90 @@ real roundTripError(Cam cam, vec2r from, vec2r there) {
   return e;
 }
 
+// The oracle's roundTrip at (x, y): false where it is not evaluated (no hypothesis, the
+// pixel unmasked, or the match leaving the other view's valid pixels); else the pixel's
+// ray, x_q = `there` and the consistency exp(-(e / tol)^2).
+bool roundTripAt(Cam cam, int x, int y, out vec3r ray, out vec2r there, out float consistency) {
+  consistency = 0.0;
+  there = vec2r(0);
+  ray = vec3r(0);
+  const vec2r px = vec2r(real(x), real(y));
+  const float q = pc.best.v[idx(pc.width, 2, x, y, 0)];
+  if (!masked(pc.mask, pc.width, pc.height, x, y) || q < 0.0 || !camUnproject(cam, px, ray) ||
+      !projectHypothesis(cam, ray, sweepTranslation(pc.prm), real(q), there))
+    return false;
+  const real e = roundTripError(cam, px, there);
+  if (e < R(0.0)) return false;
+  precise real scaled = e / real(pc.tolerancePx);
+  consistency = float(expNonPositive(-scaled * scaled));
+  return true;
+}
+
+// The oracle's setWarp: the hypothesis q at the ray as the warp (u, w), where it lands.
+void setWarp(Cam cam, int x, int y, vec3r ray, real q) {
+  vec2r there;
+  if (!projectHypothesis(cam, ray, sweepTranslation(pc.prm), q, there)) return;
+  const int i = y * pc.width + x;
+  precise vec2r wq = there - vec2r(real(x), real(y));
+  precise real u = sqrt(wq.x * wq.x + wq.y * wq.y);
+  pc.w.v[2 * i] = float(wq.x);
+  pc.w.v[2 * i + 1] = float(wq.y);
+  pc.u.v[i] = float(u);
+}
+
+// The oracle's occludedSurface: one-pixel steps along d = J t / |J t| (J at the pixel's
+// ray), rounded to the nearest pixel, up to pc.planes each way and stopping at the mask,
+// find the first consistent pixel behind (-d) and ahead (+d). When the one behind is
+// nearer (larger q), the one ahead's q; -1 otherwise.
+real occludedSurface(Cam cam, vec3r ray, int x, int y) {
+  vec2r at;
+  vec3r J0, J1;
+  if (!camProject(cam, ray, at, J0, J1)) return R(-1.0);
+  const vec3r t = sweepTranslation(pc.prm);
+  // Eigen's J * t: left to right, no fused multiply-adds.
+  precise vec2r d = vec2r((J0.x * t.x + J0.y * t.y) + J0.z * t.z, (J1.x * t.x + J1.y * t.y) + J1.z * t.z);
+  precise real norm = sqrt(d.x * d.x + d.y * d.y);
+  if (!(norm > R(0.0))) return R(-1.0);
+  precise vec2r dir = d / norm;
+  real nearest[2] = real[2](R(-1.0), R(-1.0));  // behind, ahead
+  for (int side = 0; side < 2; ++side) {
+    const real sgn = side == 0 ? R(-1.0) : R(1.0);
+    for (int s = 1; s <= pc.planes; ++s) {
+      precise real step = sgn * real(s);
+      precise real sx = real(x) + step * dir.x;
+      precise real sy = real(y) + step * dir.y;
+      const int nx = lroundr(sx), ny = lroundr(sy);
+      if (!masked(pc.mask, pc.width, pc.height, nx, ny)) break;
+      if (pc.confidence.v[ny * pc.width + nx] < pc.acceptConfidence) continue;
+      nearest[side] = real(pc.best.v[idx(pc.width, 2, nx, ny, 0)]);
+      break;
+    }
+  }
+  return nearest[1] >= R(0.0) && nearest[0] > nearest[1] ? nearest[1] : R(-1.0);
+}
+
 void main() {
   int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
   if (x >= pc.width || y >= pc.height) return;
   const int i = y * pc.width + x;
-  pc.confidence.v[i] = 0.0;
-
   const Cam cam = pc.prm.cam;
-  const vec2r px = vec2r(real(x), real(y));
-  const float q = pc.best.v[idx(pc.width, 2, x, y, 0)];
   vec3r ray;
   vec2r there;
-  if (!masked(pc.mask, pc.width, pc.height, x, y) || q < 0.0 || !camUnproject(cam, px, ray) ||
-      !projectHypothesis(cam, ray, sweepTranslation(pc.prm), real(q), there))
-    return;
-  const real e = roundTripError(cam, px, there);
-  if (e < R(0.0)) return;
-  precise real scaled = e / real(pc.tolerancePx);
-  const float consistency = float(expNonPositive(-scaled * scaled));
-  pc.confidence.v[i] = consistency;
-  if (consistency < pc.acceptConfidence) return;  // keep the coarse-to-fine estimate
+  float consistency;
 
-  precise vec2r wq = there - px;
+  if (pc.pass == 1) {
+    // Occlusions: pass 0's inconsistent pixels whose round trip was evaluated.
+    if (pc.confidence.v[i] >= pc.acceptConfidence) return;
+    if (!roundTripAt(cam, x, y, ray, there, consistency)) return;
+    const real q = occludedSurface(cam, ray, x, y);
+    if (q >= R(0.0)) setWarp(cam, x, y, ray, q);
+    return;
+  }
+
+  const bool evaluated = roundTripAt(cam, x, y, ray, there, consistency);
+  pc.confidence.v[i] = consistency;
+  if (!evaluated || consistency < pc.acceptConfidence) return;  // keep the coarse-to-fine estimate
+  precise vec2r wq = there - vec2r(real(x), real(y));
   precise real u = sqrt(wq.x * wq.x + wq.y * wq.y);
   pc.w.v[2 * i] = float(wq.x);
   pc.w.v[2 * i + 1] = float(wq.y);

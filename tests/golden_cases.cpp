@@ -266,6 +266,8 @@ SweepParams sweepParams(double qMax, int planes, int radius) {
   p.qMax = qMax;
   p.planes = planes;
   p.radius = radius;
+  p.p1 = 0.05f;
+  p.p2 = 0.5f;
   return p;
 }
 
@@ -316,13 +318,13 @@ std::vector<Output> sweepWarpCase(Backend& b) {
 // ZNCC is within 4e-5 of the exact one (measured against double sums); and the parabola's
 // curvature is >= 0.06 wherever it is used, so that moves q by ~1e-4 at most (near-ties
 // between two planes are harmless: both winners give the same vertex).
-struct SelectInputs {
+struct CostInputs {
   SweepParams p;
   Host reference, mask, volume;
 };
 
-SelectInputs sweepSelectInputs() {
-  SelectInputs in{sweepParams(2.0, 9, 2), stretched(texture(kW, kH, 31, 1)), discMask(kW, kH), Host(kW, kH, 9)};
+CostInputs sweepCostInputs() {
+  CostInputs in{sweepParams(2.0, 9, 2), stretched(texture(kW, kH, 31, 1)), discMask(kW, kH), Host(kW, kH, 9)};
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
       const float kStar = 1.3f + 0.07f * float(x) + 0.065f * float(y);
@@ -337,11 +339,69 @@ SelectInputs sweepSelectInputs() {
   return in;
 }
 
+std::vector<Output> sweepCostCase(Backend& b) {
+  Session s{b};
+  CostInputs in = sweepCostInputs();
+  Buffer costs = s.make(kW, kH, in.p.planes);
+  b.sweepCost(costs, s.put(in.reference), s.put(in.volume), s.put(in.mask), in.p);
+  return {s.get("sweepcost_costs", costs)};
+}
+
+// Costs with a valley at a hypothesis that ramps across the image and jumps by three
+// planes along a slanted edge (so paths take both p1 and p2 steps), noise, unscored
+// hypotheses (2, capped to 1 by the aggregation) and an unmasked patch inside the disc
+// (paths restart after it).
+Host aggregationCosts(const SweepParams& p, Host& mask) {
+  Host costs(kW, kH, p.planes);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const float valley = 2.f + 0.05f * float(x) + (x + y / 2 > 30 ? 3.f : 0.f);
+      for (int k = 0; k < p.planes; ++k) {
+        const uint32_t i = uint32_t((y * kW + x) * p.planes + k);
+        const float d = float(k) - valley;
+        float c = 0.1f + 0.04f * d * d + 0.3f * hashNoise(i * 13u + 41);
+        if (hashNoise(i * 17u + 42) < 0.05f || c > 2.f) c = 2.f;
+        costs.at(x, y, k) = mask.at(x, y) != 0.f ? c : 2.f;
+      }
+    }
+  return costs;
+}
+
+Host holedDisc() {
+  Host mask = discMask(kW, kH);
+  for (int y = 14; y < 18; ++y)
+    for (int x = 20; x < 26; ++x) mask.at(x, y) = 0.f;
+  return mask;
+}
+
+std::vector<Output> sweepAggregateCase(Backend& b) {
+  Session s{b};
+  const SweepParams p = sweepParams(2.0, 9, 2);
+  Host mask = holedDisc();
+  Buffer aggregated = s.make(kW, kH, p.planes);
+  Host costs = aggregationCosts(p, mask);
+  b.sweepAggregate(aggregated, s.put(costs), s.put(mask), p);
+  return {s.get("sweepaggregate_volume", aggregated)};
+}
+
+// Aggregated costs with a clear parabola around a ramping hypothesis (curvature >= 0.5
+// per path, so the vertex is well conditioned), costs with unscored hypotheses: the
+// winner among the scored, no parabola beside an unscored one, (-1, 2) where none scored.
 std::vector<Output> sweepSelectCase(Backend& b) {
   Session s{b};
-  SelectInputs in = sweepSelectInputs();
+  const SweepParams p = sweepParams(2.0, 9, 2);
+  Host mask = holedDisc(), aggregated(kW, kH, p.planes), costs(kW, kH, p.planes);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      for (int k = 0; k < p.planes; ++k) {
+        const uint32_t i = uint32_t((y * kW + x) * p.planes + k);
+        const float d = float(k) - (0.6f + 0.11f * float(x) + 0.09f * float(y));
+        aggregated.at(x, y, k) = 4.f * (0.2f + 0.5f * d * d) + 0.01f * hashNoise(i * 19u + 43);
+        const bool none = (x >= 40 && x < 44 && y >= 10 && y < 13) || hashNoise(i * 23u + 44) < 0.04f;
+        costs.at(x, y, k) = none ? 2.f : 0.1f + hashNoise(i * 29u + 45);
+      }
   Buffer best = s.make(kW, kH, 2);
-  b.sweepSelect(best, s.put(in.reference), s.put(in.volume), s.put(in.mask), in.p);
+  b.sweepSelect(best, s.put(aggregated), s.put(costs), s.put(mask), p);
   return {s.get("sweepselect_best", best)};
 }
 
@@ -420,6 +480,8 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"median", medianCase},
                                                 {"accumulate", accumulateCase},
                                                 {"sweepWarp", sweepWarpCase},
+                                                {"sweepCost", sweepCostCase},
+                                                {"sweepAggregate", sweepAggregateCase},
                                                 {"sweepSelect", sweepSelectCase},
                                                 {"sweepInitialise", sweepInitialiseCase}};
   return cases;

@@ -108,8 +108,14 @@ class GuardedBackend final : public Backend {
   void sweepWarp(const Buffer& v, const Buffer& i, const Buffer& m, const SweepParams& p) override {
     b_.sweepWarp(v, i, m, p);
   }
-  void sweepSelect(const Buffer& b, const Buffer& r, const Buffer& v, const Buffer& m, const SweepParams& p) override {
-    b_.sweepSelect(b, r, v, m, p);
+  void sweepCost(const Buffer& c, const Buffer& r, const Buffer& v, const Buffer& m, const SweepParams& p) override {
+    b_.sweepCost(c, r, v, m, p);
+  }
+  void sweepAggregate(const Buffer& a, const Buffer& c, const Buffer& m, const SweepParams& p) override {
+    b_.sweepAggregate(a, c, m, p);
+  }
+  void sweepSelect(const Buffer& b, const Buffer& a, const Buffer& c, const Buffer& m, const SweepParams& p) override {
+    b_.sweepSelect(b, a, c, m, p);
   }
   void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& c, const Buffer& b, const Buffer& o,
                        const Buffer& m, const SweepParams& p, const ConsistencyParams& cp) override {
@@ -193,11 +199,11 @@ TEST_CASE("vulkan: every kernel stays inside its buffers and is finite where the
 
 namespace {
 
-// The three plane-sweep kernels at a realistic number of planes (the golden cases use a
-// few): a 97 px fisheye pair, 131 hypotheses interleaved per pixel, a 7x7 window, in the
+// The plane-sweep kernels at a realistic number of planes (the golden cases use a few):
+// a 97 px fisheye pair, 131 hypotheses interleaved per pixel, a 5x5 window, in the
 // pipeline's order (Pipeline::runSweep).
 struct SweepRun {
-  std::vector<float> volume, best, other, u, w, confidence;
+  std::vector<float> volume, costs, best, other, u, w, confidence;
 };
 
 SweepRun runSweep(Backend& b, const synth::SynthPair& pair) {
@@ -208,7 +214,9 @@ SweepRun runSweep(Backend& b, const synth::SynthPair& pair) {
   for (int i = 0; i < 3; ++i) p.t[i] = tPrime[i];
   p.qMax = std::tan(40.0 * M_PI / 180.0) / tPrime.norm();
   p.planes = 131;
-  p.radius = 3;
+  p.radius = 2;
+  p.p1 = 0.05f;
+  p.p2 = 0.5f;
   SweepParams reverse = p;
   for (double& c : reverse.t) c = -c;
   std::vector<float> ones(size_t(width) * height, 1.f);
@@ -218,22 +226,27 @@ SweepRun runSweep(Backend& b, const synth::SynthPair& pair) {
     return buf;
   };
   Buffer left = put(pair.left.data.data(), 1), right = put(pair.right.data.data(), 1), mask = put(ones.data(), 1);
-  Buffer volume = b.create(width, height, p.planes), best = b.create(width, height, 2),
+  Buffer volume = b.create(width, height, p.planes), costs = b.create(width, height, p.planes),
+         aggregated = b.create(width, height, p.planes), best = b.create(width, height, 2),
          other = b.create(width, height, 2), u = b.create(width, height, 1), w = b.create(width, height, 2),
          confidence = b.create(width, height, 1);
   b.fill(u, 0.5f);
   b.fill(w, -0.25f);
-  b.sweepWarp(volume, left, mask, reverse);
-  b.sweepSelect(other, right, volume, mask, reverse);
-  b.sweepWarp(volume, right, mask, p);  // last, so the volume compared is image 1 seen from camera 0
-  b.sweepSelect(best, left, volume, mask, p);
+  auto sweep = [&](const Buffer& result, const Buffer& reference, const Buffer& image, const SweepParams& params) {
+    b.sweepWarp(volume, image, mask, params);
+    b.sweepCost(costs, reference, volume, mask, params);
+    b.sweepAggregate(aggregated, costs, mask, params);
+    b.sweepSelect(result, aggregated, costs, mask, params);
+  };
+  sweep(other, right, left, reverse);
+  sweep(best, left, right, p);  // last, so the volume and costs compared are camera 0's
   b.sweepInitialise(u, w, confidence, best, other, mask, p, {1.f, 0.5f});
   auto get = [&](const Buffer& buf) {
     std::vector<float> host(buf.count());
     b.download(buf, host.data());
     return host;
   };
-  return {get(volume), get(best), get(other), get(u), get(w), get(confidence)};
+  return {get(volume), get(costs), get(best), get(other), get(u), get(w), get(confidence)};
 }
 
 }  // namespace
@@ -257,8 +270,9 @@ TEST_CASE("vulkan: the plane sweep at 131 planes stays inside its buffers and ma
   CHECK(scored > 0.5 * double(expected.confidence.size()));
   CHECK(confident > 0);
   const std::pair<const char*, const std::vector<float> SweepRun::*> outputs[] = {
-      {"volume", &SweepRun::volume}, {"best", &SweepRun::best}, {"other", &SweepRun::other},
-      {"u", &SweepRun::u},           {"w", &SweepRun::w},       {"confidence", &SweepRun::confidence}};
+      {"volume", &SweepRun::volume},        {"costs", &SweepRun::costs}, {"best", &SweepRun::best},
+      {"other", &SweepRun::other},          {"u", &SweepRun::u},         {"w", &SweepRun::w},
+      {"confidence", &SweepRun::confidence}};
   // With camera models in double and correctly rounded float arithmetic (lavapipe) the
   // kernels reproduce the oracle to the last bit. Vulkan lets a GPU divide and take square
   // roots to 2.5 ulp (NVIDIA does), and the one-pass window variance (s00/n - m^2) of

@@ -319,6 +319,8 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
                 "--min-confidence must be in [0, 1]");
   cases.refused("--init foo", good + " --init foo", "unknown initialisation 'foo' (known: none, planesweep)");
   cases.refused("--init-radius 9", good + " --init planesweep --init-radius 9", "initRadius must be in [1, 7]");
+  cases.refused("--init-p2 below --init-p1", good + " --init planesweep --init-p1 0.2 --init-p2 0.1",
+                "initP1, initP2 must satisfy 0 <= initP1 <= initP2");
   cases.refused("--occlusion-weight 2", good + " --init planesweep --occlusion-weight 2",
                 "occlusionWeight must be in [0, 1]");
   cases.handled("--init planesweep --min-confidence 0.5", good + " --init planesweep --min-confidence 0.5", "");

@@ -81,10 +81,19 @@ TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream")
     cuda::DeviceStereo dev(pair.rig, params, stream);
     CHECK(dev.stream() == stream);
     // Frames 1-3: run directly, recorded into a graph, replayed.
+    cuda::DeviceDepth first;
     for (int frame = 0; frame < 3; ++frame) {
       const cuda::DeviceDepth d = dev.compute(left, right, pitch);
       REQUIRE(d.width == w);
       REQUIRE(d.height == h);
+      // The outputs stay where the first frame put them (the backend moves buffers between
+      // memory blocks inside a frame), as DeviceDepth promises.
+      if (frame == 0) first = d;
+      CHECK(d.valid == first.valid);
+      CHECK(d.disparity == first.disparity);
+      CHECK(d.warp == first.warp);
+      CHECK(d.radial == first.radial);
+      CHECK(d.points == first.points);
       const std::vector<float> valid = fetch(d.valid, n, stream), u = fetch(d.disparity, n, stream),
                                radial = fetch(d.radial, n, stream), warp = fetch(d.warp, 2 * n, stream);
       long long mismatches = 0, validCount = 0, close = 0;

@@ -55,7 +55,17 @@ SweepParams sweepParams(const Camera& cam, const double t[3], double qMax, int p
   p.qMax = qMax;
   p.planes = planes;
   p.radius = radius;
+  p.p1 = 0.05f;
+  p.p2 = 0.5f;
   return p;
+}
+
+// The pipeline's choice of hypothesis: window costs, aggregation, selection.
+void select(Grid& best, Grid& reference, Grid& volume, Grid& mask, const SweepParams& p) {
+  Grid costs(volume.w, volume.h, p.planes), aggregated(volume.w, volume.h, p.planes);
+  cpu::sweepCost(costs.view(), reference.view(), volume.view(), mask.view(), p);
+  cpu::sweepAggregate(aggregated.view(), costs.view(), mask.view(), p);
+  cpu::sweepSelect(best.view(), aggregated.view(), costs.view(), mask.view(), p);
 }
 
 // A textured sphere of radius 1/qStar around the reference centre, seen from the
@@ -127,7 +137,7 @@ TEST_CASE("sweepWarp samples image(project(ray + q_k t)) for q_k = qMax k / (pla
   CHECK(excluded == cam.height * p.planes);
 }
 
-TEST_CASE("sweepSelect recovers the inverse depth of a textured sphere to a fraction of a plane") {
+TEST_CASE("cost, aggregation and selection recover the inverse depth of a textured sphere to a fraction of a plane") {
   const Camera cam = lens();
   const double t[3] = {-0.12, 0.005, 0.01};
   // ~1.1 px of motion per plane at the centre; the true sphere lies between planes.
@@ -139,7 +149,7 @@ TEST_CASE("sweepSelect recovers the inverse depth of a textured sphere to a frac
     SpherePair pair = renderSphere(cam, t, qStar);
     Grid mask(cam.width, cam.height, 1, 1.f), volume(cam.width, cam.height, p.planes), best(cam.width, cam.height, 2);
     cpu::sweepWarp(volume.view(), pair.right.view(), mask.view(), p);
-    cpu::sweepSelect(best.view(), pair.left.view(), volume.view(), mask.view(), p);
+    select(best, pair.left, volume, mask, p);
     std::vector<double> errors;
     long long scored = 0;
     for (int y = 0; y < cam.height; ++y)
@@ -167,6 +177,40 @@ TEST_CASE("sweepSelect recovers the inverse depth of a textured sphere to a frac
   }
 }
 
+TEST_CASE("sweepAggregate carries a clear minimum into windows that say nothing, and keeps depth edges sharp") {
+  const int w = 40, h = 30, planes = 9;
+  const double t[3] = {-0.12, 0.005, 0.01};
+  const SweepParams p = sweepParams(lens(), t, 2.4, planes, 2);
+  // A valley at plane 3 left of x = 30 and at plane 6 from there on; a stripe of flat
+  // (ambiguous) costs at x in [17, 23); pixel (5, 5) cut off from its four neighbours.
+  Grid costs(w, h, planes), mask(w, h, 1, 1.f), aggregated(w, h, planes), best(w, h, 2);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int k = 0; k < planes; ++k) {
+        const double d = k - (x < 30 ? 3 : 6);
+        costs.at(x, y, k) = x >= 17 && x < 23 ? 0.5f : float(std::min(1.9, 0.1 + 0.1 * d * d));
+      }
+  costs.at(5, 5, 0) = 1.7f;
+  for (const auto& n : {std::pair{4, 5}, {6, 5}, {5, 4}, {5, 6}}) mask.at(n.first, n.second) = 0.f;
+  cpu::sweepAggregate(aggregated.view(), costs.view(), mask.view(), p);
+  cpu::sweepSelect(best.view(), aggregated.view(), costs.view(), mask.view(), p);
+  auto plane = [&](int x, int y) { return best.at(x, y, 0) * (planes - 1) / p.qMax; };
+  // Every path restarts at the isolated pixel: four times its capped cost.
+  CHECK(aggregated.at(5, 5, 0) == 4.f);
+  CHECK(aggregated.at(5, 5, 3) == 4.f * costs.at(5, 5, 3));
+  CHECK(aggregated.at(4, 5, 3) == 0.f);  // unmasked
+  long long stripe = 0, stripeRight = 0;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 17; x < 23; ++x) stripe += std::abs(plane(x, y) - 3.0) < 0.5;
+    CHECK(std::abs(plane(29, y) - 3.0) < 0.5);  // the edge stays where the costs put it
+    CHECK(std::abs(plane(30, y) - 6.0) < 0.5);
+    stripeRight += std::abs(plane(35, y) - 6.0) < 0.5;
+  }
+  // Without the paths the flat stripe would take the first plane (its first minimum).
+  CHECK(stripe == 6 * h);
+  CHECK(stripeRight == h);
+}
+
 TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agrees; confidence 0 where it cannot") {
   const Camera cam = lens();
   const double t[3] = {-0.12, 0.005, 0.01}, back[3] = {0.12, -0.005, -0.01};
@@ -179,9 +223,9 @@ TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agre
   Grid mask(w, h, 1, 1.f), volume(w, h, p.planes), best(w, h, 2), other(w, h, 2);
   for (int y = 0; y < h; ++y) mask.at(60, y) = 0.f;
   cpu::sweepWarp(volume.view(), pair.right.view(), mask.view(), p);
-  cpu::sweepSelect(best.view(), pair.left.view(), volume.view(), mask.view(), p);
+  select(best, pair.left, volume, mask, p);
   cpu::sweepWarp(volume.view(), pair.left.view(), mask.view(), reverse);
-  cpu::sweepSelect(other.view(), pair.right.view(), volume.view(), mask.view(), reverse);
+  select(other, pair.right, volume, mask, reverse);
 
   // Sabotage: no reference hypothesis in one block; the other view far off in another
   // region (rows 60.. of the other image).
@@ -208,7 +252,19 @@ TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agre
   warp.data = start.data;
   cpu::sweepInitialise(u.view(), warp.view(), confidence.view(), best.view(), other.view(), mask.view(), p, c);
 
-  long long consistent = 0, consistentConfident = 0, disagreeing = 0, replaced = 0;
+  // Whether (x, y)'s warp is where the inverse depth of a consistent pixel within reach
+  // (p.planes px) takes it.
+  auto fromConsistentNeighbour = [&](int x, int y) {
+    for (int ny = std::max(0, y - p.planes); ny <= std::min(h - 1, y + p.planes); ++ny)
+      for (int nx = std::max(0, x - p.planes); nx <= std::min(w - 1, x + p.planes); ++nx) {
+        Vec2<double> there;
+        if (confidence.at(nx, ny) < c.acceptConfidence || !landing(cam, t, x, y, best.at(nx, ny, 0), there)) continue;
+        if (std::abs(warp.at(x, y, 0) - (there.x() - x)) < 1e-4 && std::abs(warp.at(x, y, 1) - (there.y() - y)) < 1e-4)
+          return true;
+      }
+    return false;
+  };
+  long long consistent = 0, consistentConfident = 0, disagreeing = 0, replaced = 0, filled = 0;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       CAPTURE(x);
@@ -223,16 +279,19 @@ TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agre
         CHECK(kept);
         continue;
       }
-      // Replaced, by the sweep's w, exactly where the confidence reaches acceptConfidence.
+      // Replaced by the sweep's w where the confidence reaches acceptConfidence; below it
+      // kept, or (an occlusion) set to the inverse depth of a consistent pixel nearby.
       Vec2<double> there;
       REQUIRE(landing(cam, t, x, y, q, there));
-      CHECK(kept == (conf < c.acceptConfidence));
-      if (!kept) {
+      if (conf >= c.acceptConfidence) {
         ++replaced;
         CHECK(warp.at(x, y, 0) == doctest::Approx(there.x() - x).epsilon(1e-5));
         CHECK(warp.at(x, y, 1) == doctest::Approx(there.y() - y).epsilon(1e-5));
-        CHECK(u.at(x, y) == doctest::Approx(std::hypot(warp.at(x, y, 0), warp.at(x, y, 1))).epsilon(1e-6));
+      } else if (!kept) {
+        ++filled;
+        CHECK(fromConsistentNeighbour(x, y));
       }
+      if (!kept) CHECK(u.at(x, y) == doctest::Approx(std::hypot(warp.at(x, y, 0), warp.at(x, y, 1))).epsilon(1e-6));
       const int nx = int(std::lround(there.x())), ny = int(std::lround(there.y()));
       if (nx < 2 || ny < 2 || nx >= w - 2 || ny >= h - 2 || mask.at(nx, ny) == 0.f) continue;
       if (ny >= 60) {
@@ -244,7 +303,8 @@ TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agre
       }
     }
   MESSAGE(consistent << " consistent pixels, " << consistentConfident << " of them with confidence > 0.6; "
-                     << disagreeing << " disagreeing; " << replaced << " replaced");
+                     << disagreeing << " disagreeing; " << replaced << " replaced; " << filled
+                     << " inconsistent ones filled from a neighbour");
   CHECK(disagreeing > 300);
   CHECK(replaced > 2000);
   CHECK(consistent > 2000);
@@ -466,9 +526,13 @@ TEST_CASE("init parameters: validation, parseInit / initName, preset quality") {
   refused("occlusionWeight", [](Params& p) { p.occlusionWeight = -0.1f; });
   refused("occlusionWeight", [](Params& p) { p.occlusionWeight = 1.5f; });
   refused("occlusionWeight", [](Params& p) { p.occlusionWeight = NAN; });
+  refused("initP1", [](Params& p) { p.initP1 = -0.01f; });
+  refused("initP1", [](Params& p) { p.initP1 = 0.6f, p.initP2 = 0.5f; });
+  refused("initP2", [](Params& p) { p.initP2 = NAN; });
   // The ends of each range are accepted.
   Params edge = good;
   edge.initLevel = 0, edge.initRadius = 7, edge.initPxPerPlane = 16, edge.occlusionWeight = 0, edge.initAccept = 1;
+  edge.initP1 = edge.initP2 = 0.f;  // no smoothness: winner-take-all on the window costs
   edge.validate();
   edge.initLevel = 11, edge.initRadius = 1, edge.initPxPerPlane = 0.25, edge.occlusionWeight = 1, edge.initAccept = 0;
   edge.validate();

@@ -13,9 +13,9 @@
 namespace cs::cli {
 
 const std::set<std::string> kSolverOptions = {
-    "preset",  "warps", "iterations", "levels",        "lambda",      "du-max",          "alpha0", "alpha1",
-    "max-fov", "gamma", "median",     "backend",       "mask",        "epipole",         "beta",   "eta",
-    "device",  "init",  "init-level", "init-parallax", "init-radius", "occlusion-weight"};
+    "preset",  "warps", "iterations", "levels",        "lambda",      "du-max",  "alpha0",  "alpha1",
+    "max-fov", "gamma", "median",     "backend",       "mask",        "epipole", "beta",    "eta",
+    "device",  "init",  "init-level", "init-parallax", "init-radius", "init-p1", "init-p2", "occlusion-weight"};
 
 std::string backendFromArgs(const Args& args) {
   std::string backend = args.get("backend", "auto");
@@ -41,6 +41,8 @@ Params paramsFromArgs(const Args& args) {
   p.initLevel = args.getInt("init-level", p.initLevel);
   p.initMaxParallaxDeg = args.getDouble("init-parallax", p.initMaxParallaxDeg);
   p.initRadius = args.getInt("init-radius", p.initRadius);
+  p.initP1 = float(args.getDouble("init-p1", p.initP1));
+  p.initP2 = float(args.getDouble("init-p2", p.initP2));
   p.occlusionWeight = float(args.getDouble("occlusion-weight", p.occlusionWeight));
   if (args.has("median")) {
     std::string m = args.get("median", "on");

@@ -36,6 +36,8 @@ void Params::validate() const {
   require(std::isfinite(initPxPerPlane) && initPxPerPlane >= 0.25 && initPxPerPlane <= 16,
           "initPxPerPlane must be in [0.25, 16]");
   require(initRadius >= 1 && initRadius <= 7, "initRadius must be in [1, 7]");
+  require(std::isfinite(initP1) && std::isfinite(initP2) && initP1 >= 0 && initP2 >= initP1,
+          "initP1, initP2 must satisfy 0 <= initP1 <= initP2");
   require(std::isfinite(lrTolerancePx) && lrTolerancePx > 0, "lrTolerancePx must be > 0");
   require(std::isfinite(initAccept) && initAccept >= 0 && initAccept <= 1, "initAccept must be in [0, 1]");
   require(std::isfinite(occlusionWeight) && occlusionWeight >= 0 && occlusionWeight <= 1,
@@ -94,7 +96,7 @@ std::string describe(const Params& p) {
     << " init=" << initName(p.init);
   if (p.init == Params::Init::PlaneSweep)
     s << " init_level=" << p.initLevel << " init_parallax=" << p.initMaxParallaxDeg << " init_radius=" << p.initRadius
-      << " occlusion_weight=" << p.occlusionWeight;
+      << " init_p1=" << p.initP1 << " init_p2=" << p.initP2 << " occlusion_weight=" << p.occlusionWeight;
   return s.str();
 }
 

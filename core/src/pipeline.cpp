@@ -32,7 +32,7 @@ std::vector<float> levelMask(const ImageU8& userMask, const LevelSize& size) {
 // Keep in step with the constructor below: 34 floats per pixel per level (userMask, i0, i1,
 // mask, scratch 1; trajectory, w, tangent 2; tensor, steps 4; pd 12; data 3) plus 7 at
 // level 0 (rawRight 1, calibration 2, radial 1, points 3); with the initialiser, a
-// confidence (1) at the sweep level and every finer one, and the volume (planes) and two
+// confidence (1) at the sweep level and every finer one, and the volume and the costs (planes each) and two
 // sweep results (2 + 2) at the sweep level.
 unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
   const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
@@ -43,7 +43,7 @@ unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
     const size_t level = sweepLevel(plan.size(), params);
     for (size_t l = 0; l <= level; ++l) floats += pixels(plan[l]);
     const int planes = sweepPlanes(levelCamera(rig.cam0, plan[level]), rig.R.transpose() * rig.t, params);
-    floats += (unsigned long long)(planes + 4) * pixels(plan[level]);
+    floats += (unsigned long long)(2 * planes + 4) * pixels(plan[level]);
   }
   return floats * sizeof(float);
 }
@@ -97,7 +97,10 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
     sweep_.params.cam = toCameraParams(S.cam0);
     sweep_.params.planes = sweepPlanes(S.cam0, rig.R.transpose() * rig.t, params_);
     sweep_.params.radius = params_.initRadius;
+    sweep_.params.p1 = params_.initP1;
+    sweep_.params.p2 = params_.initP2;
     sweep_.volume = backend_.create(S.size.width, S.size.height, sweep_.params.planes);
+    sweep_.costs = backend_.create(S.size.width, S.size.height, sweep_.params.planes);
     sweep_.best = backend_.create(S.size.width, S.size.height, 2);
     sweep_.other = backend_.create(S.size.width, S.size.height, 2);
   }
@@ -185,10 +188,15 @@ void Pipeline::runSweep() {
   Level& L = levels_[sweep_.level];
   SweepParams reverse = sweep_.params;
   for (double& c : reverse.t) c = -c;
-  backend_.sweepWarp(sweep_.volume, L.i1, L.mask, sweep_.params);
-  backend_.sweepSelect(sweep_.best, L.i0, sweep_.volume, L.mask, sweep_.params);
-  backend_.sweepWarp(sweep_.volume, L.i0, L.mask, reverse);
-  backend_.sweepSelect(sweep_.other, L.i1, sweep_.volume, L.mask, reverse);
+  // The volume of warped samples becomes the aggregated costs once the costs are taken.
+  auto sweep = [&](const Buffer& best, const Buffer& reference, const Buffer& image, const SweepParams& p) {
+    backend_.sweepWarp(sweep_.volume, image, L.mask, p);
+    backend_.sweepCost(sweep_.costs, reference, sweep_.volume, L.mask, p);
+    backend_.sweepAggregate(sweep_.volume, sweep_.costs, L.mask, p);
+    backend_.sweepSelect(best, sweep_.volume, sweep_.costs, L.mask, p);
+  };
+  sweep(sweep_.best, L.i0, L.i1, sweep_.params);
+  sweep(sweep_.other, L.i1, L.i0, reverse);
   backend_.sweepInitialise(L.pd.u, L.w, L.confidence, sweep_.best, sweep_.other, L.mask, sweep_.params,
                            {params_.lrTolerancePx, params_.initAccept});
 }

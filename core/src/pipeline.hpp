@@ -70,7 +70,9 @@ class Pipeline {
   struct Sweep {
     size_t level = 0;
     SweepParams params{};  // params.t is t' (camera 0 as reference)
-    Buffer volume, best, other;
+    Buffer volume;         // warped samples, then the aggregated costs (planes ch)
+    Buffer costs;          // window costs (planes ch)
+    Buffer best, other;
   };
   static double sweepQMax(const Eigen::Vector3d& tPrime, const Params& params);
   static int sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params);

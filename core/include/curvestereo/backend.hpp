@@ -74,6 +74,7 @@ struct SweepParams {
   double qMax;       // inverse depth of the nearest sphere (1/m)
   int planes;        // >= 2
   int radius;        // ZNCC window: (2 radius + 1)^2 level pixels
+  float p1, p2;      // aggregation penalties (cost units): a step to a neighbouring hypothesis, any larger jump
 };
 
 // Left-right consistency of two sweeps, turned into the initial state and a confidence.
@@ -144,18 +145,35 @@ class Backend {
   // volume (planes ch): `image` bilinearly sampled at x_k for every hypothesis k where the
   // reference pixel is in `mask` and x_k is a valid projection inside the image; -1 elsewhere.
   virtual void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) = 0;
-  // best (2 ch): for each masked pixel, the hypothesis minimising 1 - ZNCC between the
+  // costs (planes ch): for each masked pixel and hypothesis, 1 - ZNCC between the
   // reference window and the volume window (masked, non-negative samples only; at least
-  // half the window), the first on ties, refined by a parabola through its neighbours'
-  // costs (offset clamped to +-0.5 planes): (q, cost). (-1, 2) where nothing scored.
-  virtual void sweepSelect(const Buffer& best, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+  // half the window); 2 where fewer scored and outside the mask.
+  virtual void sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                         const SweepParams& p) = 0;
+  // aggregated (planes ch): semi-global aggregation (Hirschmueller 2008) of the costs along
+  // the scanline directions r = +x, -x, +y, -y, in that order, summed: at a masked pixel
+  // x, with C = min(cost, 1), L_r(x, k) = C(x, k) where x - r is not masked (or outside),
+  // else C(x, k) + min(L_r(x - r, k), L_r(x - r, k -+ 1) + p1, m + p2) - m with m the
+  // minimum of L_r(x - r, .); aggregated = ((L_+x + L_-x) + L_+y) + L_-y. 0 outside the mask.
+  virtual void sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                              const SweepParams& p) = 0;
+  // best (2 ch): for each masked pixel, the hypothesis minimising `aggregated` among those
+  // whose cost scored (< 2), the first on ties, refined by a parabola through
+  // aggregated / 4 at its neighbours (offset clamped to +-0.5 planes; none where a
+  // neighbour did not score): (q, its cost). (-1, 2) where nothing scored.
+  virtual void sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                            const SweepParams& p) = 0;
   // From the reference sweep `best` (made with p.t) and the other view's `other` (made
-  // with -p.t): confidence = exp(-(e / tol)^2), e the distance from x
-  // to its round trip through `other` (nearest pixel at x_q), 0 where the reference has no
-  // hypothesis, the round trip fails or mask is 0. Where confidence >= acceptConfidence,
-  // u and w (in/out, the coarse-to-fine estimate) are replaced by the sweep's:
-  // w = x_q - x, u = |w|; elsewhere they are left as they are.
+  // with -p.t): confidence = exp(-(e / tol)^2), e the distance from x to its round trip
+  // through `other` (nearest pixel at x_q), 0 where the reference has no hypothesis, the
+  // round trip fails or mask is 0. u and w (in/out, the coarse-to-fine estimate) become
+  // w = x_q - x, u = |w| where confidence >= acceptConfidence. Then (a second pass over
+  // those results) an inconsistent pixel whose round trip could be made is checked for
+  // occlusion: one-pixel steps along d = J t / |J t| (J the projection's Jacobian at the
+  // ray), positions rounded to the nearest pixel, up to p.planes steps each way and
+  // stopping at the mask, find the first pixel with confidence >= acceptConfidence
+  // behind (-d) and ahead (+d); if both exist and q(behind) > q(ahead), the pixel takes
+  // q(ahead): w = x_q(ahead) - x. Every other pixel keeps u and w.
   virtual void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
                                const Buffer& other, const Buffer& mask, const SweepParams& p,
                                const ConsistencyParams& c) = 0;
