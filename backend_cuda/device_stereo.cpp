@@ -74,6 +74,7 @@ DeviceDepth DeviceStereo::compute(const float* left, const float* right, size_t 
   d.warp = b.devicePointer(io.warp);
   d.radial = b.devicePointer(io.radial);
   d.points = b.devicePointer(io.points);
+  d.confidence = io.confidence.id >= 0 ? b.devicePointer(io.confidence) : nullptr;
   return d;
 }
 

@@ -223,6 +223,48 @@ TEST_CASE("CUDA primal-dual: the persistent and the per-iteration kernels match 
   }
 }
 
+TEST_CASE("CUDA device-pointer API: the initialiser's confidence stays on the device, as the host API gives it") {
+  const std::string why = cuda::probe();
+  if (!why.empty()) {
+    MESSAGE("SKIPPED cuda device API: " << why);
+    return;
+  }
+  const synth::SynthPair pair = smallPair(23);
+  Params params = preset("quality");
+  params.minWidth = 20;
+  params.warps = 4;
+  const int w = pair.left.width, h = pair.left.height;
+  const size_t n = size_t(w) * h;
+  cudaStream_t stream = nullptr;
+  ok(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
+  float* images = nullptr;
+  ok(cudaMalloc(&images, 2 * n * sizeof(float)));
+  ok(cudaMemcpy(images, pair.left.data.data(), n * sizeof(float), cudaMemcpyHostToDevice));
+  ok(cudaMemcpy(images + n, pair.right.data.data(), n * sizeof(float), cudaMemcpyHostToDevice));
+  {
+    Stereo host(pair.rig, params, "cuda");
+    const DepthResult ref = host.compute(pair.left, pair.right);
+    cuda::DeviceStereo dev(pair.rig, params, stream);
+    for (int frame = 0; frame < 2; ++frame) {
+      const cuda::DeviceDepth d = dev.compute(images, images + n);
+      REQUIRE(d.confidence != nullptr);
+      const std::vector<float> confidence = fetch(d.confidence, n, stream);
+      long long valid = 0, differ = 0;
+      for (size_t i = 0; i < n; ++i) {
+        if (!ref.valid.data[i]) continue;
+        ++valid;
+        differ += !(confidence[i] == ref.confidence.data[i]) || confidence[i] < 0.f || confidence[i] > 1.f;
+      }
+      CHECK(valid > 0);
+      CHECK(differ == 0);
+    }
+    cuda::DeviceStereo without(pair.rig, preset("default"), stream);
+    CHECK(without.compute(images, images + n).confidence == nullptr);
+  }
+  cudaFree(images);
+  cudaStreamDestroy(stream);
+}
+
 TEST_CASE("CUDA device-pointer API refuses what it cannot run") {
   const std::string why = cuda::probe();
   if (!why.empty()) {

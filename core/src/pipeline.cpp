@@ -308,7 +308,7 @@ Pipeline::Output Pipeline::run(const ImageF& left, const ImageF& right, bool pro
 
 Pipeline::DeviceIO Pipeline::deviceIO() const {
   const Level& L0 = levels_[0];
-  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_};
+  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_, L0.confidence};
 }
 
 void Pipeline::runOnDevice() {

@@ -51,6 +51,7 @@ class Pipeline {
   struct DeviceIO {
     Buffer left, right;                             // 1 ch, full resolution
     Buffer valid, disparity, warp, radial, points;  // 1, 1, 2, 1, 3 ch
+    Buffer confidence;                              // 1 ch; id -1 without the initialiser
   };
   DeviceIO deviceIO() const;
   void runOnDevice();

@@ -32,6 +32,9 @@ struct DeviceDepth {
   const float* warp = nullptr;       // 2 ch: w into the calibrated image 1 (meaningful where valid)
   const float* radial = nullptr;     // 1 ch: radial depth, m; NaN where not valid, +inf at infinity
   const float* points = nullptr;     // 3 ch: camera-0 points, m; NaN where not valid or infinite
+  // 1 ch: the plane-sweep initialiser's left-right confidence in [0, 1] (meaningful where
+  // valid); nullptr when the parameters do not run the initialiser.
+  const float* confidence = nullptr;
 };
 
 // "" when CUDA device `device` can run the backend, else the reason (e.g. "no CUDA
