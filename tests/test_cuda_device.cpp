@@ -35,6 +35,13 @@ std::vector<float> fetch(const float* dev, size_t count, cudaStream_t stream) {
   return host;
 }
 
+// True (and the reason reported) when no CUDA device can run these tests.
+bool noDevice(const char* what) {
+  const std::string why = cuda::probe();
+  if (!why.empty()) MESSAGE("SKIPPED " << what << ": " << why);
+  return !why.empty();
+}
+
 synth::SynthPair smallPair(uint32_t seed) {
   synth::SynthConfig cfg;
   cfg.camera = synth::defaultFisheye(121);
@@ -49,11 +56,7 @@ synth::SynthPair smallPair(uint32_t seed) {
 }  // namespace
 
 TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream") {
-  const std::string why = cuda::probe();
-  if (!why.empty()) {
-    MESSAGE("SKIPPED cuda device API: " << why);
-    return;
-  }
+  if (noDevice("cuda device API")) return;
   const synth::SynthPair pair = smallPair(21);
   Params params = preset("default");
   params.minWidth = 20;
@@ -141,11 +144,7 @@ TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream")
 // iteration otherwise (large levels): both paths, odd and even schedules, against the
 // oracle on random state over several tiles with a ragged edge and a masked disc.
 TEST_CASE("CUDA primal-dual: the persistent and the per-iteration kernels match the oracle") {
-  const std::string why = cuda::probe();
-  if (!why.empty()) {
-    MESSAGE("SKIPPED cuda primal-dual paths: " << why);
-    return;
-  }
+  if (noDevice("cuda primal-dual paths")) return;
   const int w = 203, h = 131;
   const size_t n = size_t(w) * h;
   auto noise = [&](int channels, uint32_t seed, float amp) {
@@ -224,11 +223,7 @@ TEST_CASE("CUDA primal-dual: the persistent and the per-iteration kernels match 
 }
 
 TEST_CASE("CUDA device-pointer API: the initialiser's confidence stays on the device, as the host API gives it") {
-  const std::string why = cuda::probe();
-  if (!why.empty()) {
-    MESSAGE("SKIPPED cuda device API: " << why);
-    return;
-  }
+  if (noDevice("cuda device API")) return;
   const synth::SynthPair pair = smallPair(23);
   Params params = preset("quality");
   params.minWidth = 20;

@@ -26,8 +26,11 @@ commands:
                                 render a synthetic pair with exact ground truth
 
 solver options (run, demo, eval, bench):
-  --backend auto|cpu|...  --device INDEX|NAME  --preset realtime|default   --warps N  --iterations K
-  --levels L  --lambda X  --du-max PX  --max-fov DEG  --median on|off  --mask PNG (run)
+  --backend auto|cpu|...  --device INDEX|NAME  --preset realtime|default|quality  --warps N
+  --iterations K  --levels L  --lambda X  --du-max PX  --max-fov DEG  --median on|off  --mask PNG (run)
+plane-sweep initialiser (on in --preset quality):
+  --init none|planesweep  --init-level L  --init-parallax DEG  --init-radius R  --init-p1 P1
+  --init-p2 P2  --occlusion-weight W  --min-confidence C (run, demo: points.ply)
 
 'curvestereo <command> --help' repeats this text.
 )";
