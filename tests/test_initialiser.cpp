@@ -577,3 +577,31 @@ TEST_CASE("setPose with another baseline length and the initialiser on: same war
   CHECK(doubled >= 0.99 * finiteDepth);
   CHECK(repeated == valid);
 }
+
+TEST_CASE("progress rises to 1 with the plane sweep counted as its share of the work") {
+  synth::SynthConfig cfg;
+  cfg.camera = synth::defaultFisheye(96);
+  cfg.baseline = 0.2;
+  const synth::SynthPair pair = synth::renderPair(cfg);
+  for (const bool initialiser : {false, true}) {
+    CAPTURE(initialiser);
+    Params params = preset(initialiser ? "quality" : "default");
+    params.warps = 3;
+    Stereo stereo(pair.rig, params, "cpu");
+    std::vector<double> reports;
+    stereo.setProgress([&](double f) { reports.push_back(f); });
+    stereo.compute(pair.left, pair.right);
+    const size_t warps = pyramidPlan(pair.left.width, pair.left.height, params).size() * params.warps;
+    REQUIRE(reports.size() == warps + (initialiser ? 1 : 0));
+    std::vector<double> steps{reports.front()};
+    for (size_t i = 1; i < reports.size(); ++i) {
+      CHECK(reports[i] >= reports[i - 1]);
+      steps.push_back(reports[i] - reports[i - 1]);
+    }
+    CHECK(reports.back() == doctest::Approx(1.0).epsilon(1e-12));
+    // The sweep (a quarter of a warp per hypothesis, dozens of hypotheses) is reported as
+    // one step that outweighs any warp's by far.
+    std::sort(steps.begin(), steps.end());
+    if (initialiser) CHECK(steps.back() > 4.0 * steps[steps.size() - 2]);
+  }
+}
