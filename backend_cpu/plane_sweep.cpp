@@ -1,6 +1,7 @@
 // Plane-sweep initialisation: spheres of constant inverse depth around the reference
 // camera, swept through the camera model (both images share it after the calibration
-// warp), scored by ZNCC, chosen winner-take-all, and checked left against right.
+// warp), scored by ZNCC, aggregated along scanlines, chosen winner-take-all, checked left
+// against right, and occluded pixels given the surface beside them.
 // Geometry in double like the fields; costs in float.
 #include <algorithm>
 #include <cmath>

@@ -29,6 +29,16 @@ __device__ __forceinline__ float sampleBilinear(const Img& v, float x, float y, 
   return top * (1.f - fy) + bottom * fy;
 }
 
+// accumulate at one masked pixel (cpu/accumulate.cpp) from the estimate `uIn`:
+// du = clamp(uIn - u0, +-duMax); u = u0 + du; w += du * tangent.
+__device__ __forceinline__ void accumulatePixel(const Img& u, const Img& w, const Img& u0, const Img& tangent, int x,
+                                                int y, float uIn, float duMax) {
+  const float du = fminf(fmaxf(uIn - at(u0, x, y), -duMax), duMax);
+  at(u, x, y) = at(u0, x, y) + du;
+  at(w, x, y, 0) += du * at(tangent, x, y, 0);
+  at(w, x, y, 1) += du * at(tangent, x, y, 1);
+}
+
 inline dim3 grid2d(int w, int h, dim3 block) { return dim3((w + block.x - 1) / block.x, (h + block.y - 1) / block.y); }
 
 // Programmatic dependent launch (sm_90 and newer). A frame is hundreds of short dependent

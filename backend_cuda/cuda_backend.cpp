@@ -540,17 +540,8 @@ void CudaBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0,
     std::swap(slots_[size_t(u.id)].dev, spare);
     return;
   }
-  runPendingMedian();
-  // The pipeline's median -> copy(u, scratch) -> accumulate: when the last queued op is a
-  // copy into u, this launch reads u from its source and writes u everywhere instead.
-  float* const uDev = slot(u).dev;
-  const float* uIn = uDev;
-  if (!pending_.empty() && pending_.back().dst == uDev && pending_.back().src) {
-    uIn = pending_.back().src;
-    pending_.pop_back();
-  }
   flush();
-  check(cudak::launchAccumulate(stream_, img(uDev, u), uIn, img(slot(w).dev, w), img(slot(u0).dev, u0),
+  check(cudak::launchAccumulate(stream_, img(slot(u).dev, u), img(slot(w).dev, w), img(slot(u0).dev, u0),
                                 img(slot(tangent).dev, tangent), img(slot(mask).dev, mask), duMax),
         "accumulate");
 }

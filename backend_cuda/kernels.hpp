@@ -126,10 +126,7 @@ int primalDualResidentBlocks(int device);
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
                              int residentBlocks, int& endSet);
 cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask);
-// uIn: where u is read (u.data, or a buffer whose copy to u this launch stands in for:
-// u is then written at every pixel).
-cudaError_t launchAccumulate(cudaStream_t s, Img u, const float* uIn, Img w, Img u0, Img tangent, Img mask,
-                             float duMax);
+cudaError_t launchAccumulate(cudaStream_t s, Img u, Img w, Img u0, Img tangent, Img mask, float duMax);
 // median = median(u) (launchMedian), then accumulate from it into uOut (launchAccumulate
 // with uIn = median, written to uOut instead of u): the warp's two last stages in one pass.
 cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,

@@ -71,10 +71,7 @@ __global__ void medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u
   }
   const float m = maskedMedian(u, mask, x, y);
   at(median, x, y) = m;
-  const float du = fminf(fmaxf(m - at(u0, x, y), -duMax), duMax);
-  at(uOut, x, y) = at(u0, x, y) + du;
-  at(w, x, y, 0) += du * at(tangent, x, y, 0);
-  at(w, x, y, 1) += du * at(tangent, x, y, 1);
+  accumulatePixel(uOut, w, u0, tangent, x, y, m, duMax);
 }
 
 }  // namespace

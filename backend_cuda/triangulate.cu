@@ -61,7 +61,8 @@ cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img
                               const double tPrime[3]) {
   const dim3 block(16, 8);
   const T3 t{{tPrime[0], tPrime[1], tPrime[2]}};
-  CS_LAUNCH(triangulateKernel, grid2d(radial.width, radial.height, block), block, 0, s, radial, points, w, mask, cam0, t);
+  CS_LAUNCH(triangulateKernel, grid2d(radial.width, radial.height, block), block, 0, s, radial, points, w, mask, cam0,
+            t);
   return cudaGetLastError();
 }
 

@@ -60,8 +60,8 @@ __global__ void warpDerivativesKernel(Img u0, Img iu, Img iz, Img tangent, Img i
 cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory,
                                   Img w, Img u, Img mask, Img confidence, float weightFloor) {
   const dim3 block(32, 8);
-  CS_LAUNCH(warpDerivativesKernel, grid2d(mask.width, mask.height, block), block, 0, s, 
-      u0, iu, iz, tangent, i0, i1, trajectory, w, u, mask, confidence, weightFloor);
+  CS_LAUNCH(warpDerivativesKernel, grid2d(mask.width, mask.height, block), block, 0, s, u0, iu, iz, tangent, i0, i1,
+            trajectory, w, u, mask, confidence, weightFloor);
   return cudaGetLastError();
 }
 
