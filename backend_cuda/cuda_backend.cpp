@@ -493,7 +493,10 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
   d.width = w, d.height = h;
   d.lambda = params.lambda, d.alpha0 = params.alpha0, d.alpha1 = params.alpha1;
   std::vector<cudak::StepDev> schedule;
-  for (const PrimalDualStep& s : params.schedule) schedule.push_back({s.tauScale, s.sigmaScale, s.theta});
+  for (const PrimalDualStep& s : params.schedule) {
+    const float sigmaQ = s.sigmaScale * 0.5f / params.alpha0;  // as cpu/primal_dual.cpp
+    schedule.push_back({s.tauScale, s.sigmaScale, s.theta, sigmaQ * params.alpha0});
+  }
   if (schedule.empty()) {
     if (barsFromPrimals) copy(pd.uBar, pd.u), copy(pd.vBar, pd.v);
     return;

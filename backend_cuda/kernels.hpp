@@ -56,6 +56,9 @@ struct TensorDev {
 
 struct StepDev {
   float tauScale, sigmaScale, theta;
+  // sigmaScale * 0.5 / alpha0 * alpha0, the q ascent's factor: the oracle's per-pixel
+  // expression, evaluated once on the host in the same order (stepDev()).
+  float qAscent;
 };
 
 // The primal-dual state: the buffers of the Backend call (set A) and the scratch copies

@@ -59,7 +59,7 @@ struct SharedTile {
 // balls; the same expressions, in the same order, as backend_cpu/primal_dual.cpp.
 __device__ __forceinline__ void dualPixel(float2& p, float4& q, const float4 t, const float2 sigmaP, bool ex, bool ey,
                                           float ub, float ur, float ud, float2 vb, float2 vr, float2 vd,
-                                          const StepDev step, float alpha0, float alpha1) {
+                                          const StepDev step, float alpha1) {
   float gx = 0.f, gy = 0.f;
   float2 vgx = make_float2(0.f, 0.f), vgy = make_float2(0.f, 0.f);
   if (ex) {
@@ -84,11 +84,10 @@ __device__ __forceinline__ void dualPixel(float2& p, float4& q, const float4 t, 
       p.y /= norm;
     }
   }
-  const float sigmaQ = step.sigmaScale * 0.5f / alpha0;
-  q.x = q.x + sigmaQ * alpha0 * vgx.x;
-  q.y = q.y + sigmaQ * alpha0 * vgy.x;
-  q.z = q.z + sigmaQ * alpha0 * vgx.y;
-  q.w = q.w + sigmaQ * alpha0 * vgy.y;
+  q.x = q.x + step.qAscent * vgx.x;
+  q.y = q.y + step.qAscent * vgy.x;
+  q.z = q.z + step.qAscent * vgx.y;
+  q.w = q.w + step.qAscent * vgy.y;
   {
     float sum = 0.f;
     sum += q.x * q.x;
@@ -107,25 +106,38 @@ __device__ __forceinline__ void dualPixel(float2& p, float4& q, const float4 t, 
 
 // The primal update of the masked pixel at (lx, ly) of the shared tile (its duals and
 // those left and above it there). Returns u, v; uBar, vBar through the references.
+// The per-pixel constants of the primal update: the step sizes and the linearised data term.
+struct PrimalConstants {
+  float2 tau;
+  float u0, iu, iz;
+};
+
+__device__ __forceinline__ PrimalConstants loadPrimalConstants(const PrimalDualDev& pd, int idx) {
+  PrimalConstants c;
+  c.tau = __ldg(reinterpret_cast<const float2*>(reinterpret_cast<const float4*>(pd.steps) + idx));
+  c.u0 = __ldg(&pd.u0[idx]);
+  c.iu = __ldg(&pd.iu[idx]);
+  c.iz = __ldg(&pd.iz[idx]);
+  return c;
+}
+
 template <class Tile>
-__device__ __forceinline__ void primalPixel(const PrimalDualDev& pd, const Tile& s, int lx, int ly, int idx,
-                                            const StepDev step, float uOld, float2 vOld, float& uNew, float2& vNew,
-                                            float& uBar, float2& vBar) {
+__device__ __forceinline__ void primalPixel(const PrimalDualDev& pd, const Tile& s, int lx, int ly,
+                                            const PrimalConstants& c, const StepDev step, float uOld, float2 vOld,
+                                            float& uNew, float2& vNew, float& uBar, float2& vBar) {
   const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
   const unsigned char f = s.flags[ly][lx];
   const bool ex = f & kLinkX, ey = f & kLinkY;
   const bool exLeft = s.flags[ly][lx - 1] & kLinkX, eyUp = s.flags[ly - 1][lx] & kLinkY;
-  const float2 tau = __ldg(reinterpret_cast<const float2*>(reinterpret_cast<const float4*>(pd.steps) + idx));
-  const float tauU = step.tauScale * tau.x;
-  const float tauV = step.tauScale * tau.y;
+  const float tauU = step.tauScale * c.tau.x;
+  const float tauV = step.tauScale * c.tau.y;
   float divDp = 0.f;
   if (ex) divDp += s.dp[ly][lx].x;
   if (exLeft) divDp -= s.dp[ly][lx - 1].x;
   if (ey) divDp += s.dp[ly][lx].y;
   if (eyUp) divDp -= s.dp[ly - 1][lx].y;
-  const float u0 = __ldg(&pd.u0[idx]), iu = __ldg(&pd.iu[idx]), iz = __ldg(&pd.iz[idx]);
   const float uHat = uOld + tauU * alpha1 * divDp;
-  uNew = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
+  uNew = dataProx(uHat, c.u0, c.iu, c.iz, tauU * pd.lambda);
   uBar = uNew + step.theta * (uNew - uOld);
   const float4 q = s.q[ly][lx], qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
   float div0 = 0.f, div1 = 0.f;
@@ -158,7 +170,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   float4* qOut = reinterpret_cast<float4*>(pd.q[1 - parity]);
   const float4* __restrict__ tensor = reinterpret_cast<const float4*>(pd.tensor);
   const float4* __restrict__ steps = reinterpret_cast<const float4*>(pd.steps);
-  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+  const float alpha1 = pd.alpha1;
   // u and v go from set `parity` to the other one, so that this kernel can alternate with
   // the two-iteration kernel.
   float* uIn = pd.u[parity];
@@ -198,7 +210,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
           vd = __ldg(&vBarIn[idx + w]);
         }
         flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
-        dualPixel(p, q, t, sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, step, alpha0, alpha1);
+        dualPixel(p, q, t, sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, step, alpha1);
       }
       if (lx > 0 && ly > 0) {  // the tile's own pixels: write the new (or unchanged) duals
         pOut[idx] = p;
@@ -232,7 +244,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   const float2 vOld = vIn[idx];
   float uNew, uBar;
   float2 vNew, vBar;
-  primalPixel(pd, s, lx, ly, idx, step, uOld, vOld, uNew, vNew, uBar, vBar);
+  primalPixel(pd, s, lx, ly, loadPrimalConstants(pd, idx), step, uOld, vOld, uNew, vNew, uBar, vBar);
   uOutP[idx] = uNew;
   uBarOut[idx] = uBar;
   vOutP[idx] = vNew;
@@ -247,130 +259,101 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocks)
   iterateTile(pd, step, parity, s);
 }
 
-// Two iterations per launch (temporal blocking) on the large levels: a block computes the
-// first iteration on its tile widened by a halo (duals: two pixels left / up and one right /
-// down; primals: one pixel all around), keeps it in shared memory, and runs the second
-// iteration on the tile from there. The state is read and written once per two iterations.
+// Two iterations per launch (temporal blocking) on the large levels, one cell per thread:
+// a block of 32x16 threads covers its tile (29x13 pixels) plus the halo the two iterations
+// need (two pixels left / up, one right / down), and each thread owns one cell for the
+// whole launch. A thread issues every global load of the first iteration at its start, so
+// that the block waits for memory once (the kernel is bound by latency as much as by
+// bandwidth; this replaced a 32x16 tile whose halo cells took second rounds of loads in
+// three of the four phases: 43 -> 35 us per launch at 848x800 under ncu on an H200). The phases
+// exchange neighbours' values through shared memory, each on one cell less per side.
 // Every per-pixel expression is the one of iterateTile, in the same order.
-constexpr int kPairW = 32, kPairH = 16;
-constexpr int kPairAW = kPairW + 3, kPairAH = kPairH + 3;  // x, y in [-2, tile]
-constexpr int kPairThreads = kPairW * kPairH;
-// 3 blocks of 512 threads on sm_80 / sm_86+ (42 registers), 2 on Turing's 1024 threads.
+constexpr int kPairW = 32, kPairH = 16;                          // threads = cells
+constexpr int kPairTileW = kPairW - 3, kPairTileH = kPairH - 3;  // pixels written
+// 3 blocks of 512 threads on sm_80 / sm_86+ (40 registers), 2 on Turing's 1024 threads.
+// The second iteration reloads its constants (L1 hits) rather than holding them in
+// registers from the first: holding them spills at 40 registers and measured slower.
 constexpr int kMinBlocksPair = kMinBlocks >= 6 ? 3 : 2;
 
 struct PairTile {
-  float2 p[kPairAH][kPairAW];
-  float2 dp[kPairAH][kPairAW];
-  float4 q[kPairAH][kPairAW];
-  float uBar[kPairAH][kPairAW];
-  float2 vBar[kPairAH][kPairAW];
-  float u[kPairH][kPairW];
-  float2 v[kPairH][kPairW];
-  unsigned char flags[kPairAH][kPairAW];
+  float2 p[kPairH][kPairW];
+  float2 dp[kPairH][kPairW];
+  float4 q[kPairH][kPairW];
+  float uBar[kPairH][kPairW];
+  float2 vBar[kPairH][kPairW];
+  unsigned char flags[kPairH][kPairW];
 };
 
-__global__ void __launch_bounds__(kPairThreads, kMinBlocksPair)
+__global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
     primalDualPairKernel(PrimalDualDev pd, StepDev stepA, StepDev stepB, int parity) {
   beginKernel();
   __shared__ PairTile s;
   const int w = pd.width, h = pd.height;
-  const int x0 = blockIdx.x * kPairW, y0 = blockIdx.y * kPairH;
-  const int tid = threadIdx.y * kPairW + threadIdx.x;
-  const float* uBarIn = pd.uBar[parity];
-  const float2* vBarIn = reinterpret_cast<const float2*>(pd.vBar[parity]);
-  const float2* pIn = reinterpret_cast<const float2*>(pd.p[parity]);
-  const float4* qIn = reinterpret_cast<const float4*>(pd.q[parity]);
-  const float* uIn = pd.u[parity];
-  const float2* vIn = reinterpret_cast<const float2*>(pd.v[parity]);
-  const float4* __restrict__ tensor = reinterpret_cast<const float4*>(pd.tensor);
-  const float4* __restrict__ steps = reinterpret_cast<const float4*>(pd.steps);
-  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+  const int lx = threadIdx.x, ly = threadIdx.y;
+  const int i = blockIdx.x * kPairTileW - 2 + lx, j = blockIdx.y * kPairTileH - 2 + ly;
+  const bool inImage = i >= 0 && j >= 0 && i < w && j < h;
+  const int idx = inImage ? j * w + i : 0;
+  const float alpha1 = pd.alpha1;
 
-  // --- first iteration, dual pass: x, y in [-2, tile] ---
-  for (int k = tid; k < kPairAW * kPairAH; k += kPairThreads) {
-    const int lx = k % kPairAW, ly = k / kPairAW;
-    const int i = x0 - 2 + lx, j = y0 - 2 + ly;
-    float2 p = make_float2(0.f, 0.f);
-    float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
-    float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
-    unsigned char flags = 0;
-    if (i >= 0 && j >= 0 && i < w && j < h) {
-      const int idx = j * w + i;
-      // Everything the pixel may need is requested at once, before the mask decides what
-      // is used: one memory round trip instead of three dependent ones (the kernel is
-      // bound by latency, not bandwidth). dualPixel ignores the neighbours it has no link to.
-      const bool right = i + 1 < w, down = j + 1 < h;
-      p = __ldg(&pIn[idx]);
-      q = __ldg(&qIn[idx]);
-      const float m = __ldg(&pd.mask[idx]);
-      const float mRight = right ? __ldg(&pd.mask[idx + 1]) : 0.f;
-      const float mDown = down ? __ldg(&pd.mask[idx + w]) : 0.f;
-      const float4 tensorHere = __ldg(&tensor[idx]);
-      const float2 sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
-      const float ub = __ldg(&uBarIn[idx]);
-      const float2 vb = __ldg(&vBarIn[idx]);
-      const float ur = right ? __ldg(&uBarIn[idx + 1]) : 0.f;
-      const float2 vr = right ? __ldg(&vBarIn[idx + 1]) : make_float2(0.f, 0.f);
-      const float ud = down ? __ldg(&uBarIn[idx + w]) : 0.f;
-      const float2 vd = down ? __ldg(&vBarIn[idx + w]) : make_float2(0.f, 0.f);
-      if (m != 0.f) {
-        const bool ex = mRight != 0.f, ey = mDown != 0.f;
-        t = tensorHere;
-        flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
-        dualPixel(p, q, t, sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, stepA, alpha0, alpha1);
-      }
-    }
-    s.p[ly][lx] = p;
-    s.q[ly][lx] = q;
-    s.dp[ly][lx] = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
-    s.flags[ly][lx] = flags;
-  }
-  __syncthreads();
-
-  // --- first iteration, primal pass: x, y in [-1, tile] ---
-  constexpr int kPW = kPairW + 2, kPH = kPairH + 2;
-  for (int k = tid; k < kPW * kPH; k += kPairThreads) {
-    const int lx = k % kPW + 1, ly = k / kPW + 1;
-    const int i = x0 - 2 + lx, j = y0 - 2 + ly;
-    float uBar = 0.f, uNew = 0.f;
-    float2 vBar = make_float2(0.f, 0.f), vNew = vBar;
-    if (i >= 0 && j >= 0 && i < w && j < h) {
-      const int idx = j * w + i;
-      const float uOld = uIn[idx];
-      const float2 vOld = vIn[idx];
-      if (s.flags[ly][lx] & kMasked) {
-        primalPixel(pd, s, lx, ly, idx, stepA, uOld, vOld, uNew, vNew, uBar, vBar);
-      } else {
-        uNew = uOld, vNew = vOld;
-        uBar = __ldg(&uBarIn[idx]);
-        vBar = __ldg(&vBarIn[idx]);
-      }
-    }
-    s.uBar[ly][lx] = uBar;
-    s.vBar[ly][lx] = vBar;
-    if (lx >= 2 && ly >= 2 && lx < kPairW + 2 && ly < kPairH + 2) {
-      s.u[ly - 2][lx - 2] = uNew;
-      s.v[ly - 2][lx - 2] = vNew;
+  // --- every load, then the first iteration's dual pass (all cells) ---
+  float2 p = make_float2(0.f, 0.f), sigmaP = p, vOld = p, vBar = p;
+  float4 q = make_float4(0.f, 0.f, 0.f, 0.f), t = q;
+  float uOld = 0.f, uBar = 0.f;
+  PrimalConstants c{};
+  unsigned char flags = 0;
+  if (inImage) {
+    const float* uBarIn = pd.uBar[parity];
+    const float2* vBarIn = reinterpret_cast<const float2*>(pd.vBar[parity]);
+    const bool right = i + 1 < w, down = j + 1 < h;
+    p = __ldg(reinterpret_cast<const float2*>(pd.p[parity]) + idx);
+    q = __ldg(reinterpret_cast<const float4*>(pd.q[parity]) + idx);
+    const float m = __ldg(&pd.mask[idx]);
+    const float mRight = right ? __ldg(&pd.mask[idx + 1]) : 0.f;
+    const float mDown = down ? __ldg(&pd.mask[idx + w]) : 0.f;
+    const float4 tensorHere = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);
+    const float4 st = __ldg(reinterpret_cast<const float4*>(pd.steps) + idx);
+    uBar = __ldg(&uBarIn[idx]);
+    vBar = __ldg(&vBarIn[idx]);
+    const float ur = right ? __ldg(&uBarIn[idx + 1]) : 0.f;
+    const float2 vr = right ? __ldg(&vBarIn[idx + 1]) : make_float2(0.f, 0.f);
+    const float ud = down ? __ldg(&uBarIn[idx + w]) : 0.f;
+    const float2 vd = down ? __ldg(&vBarIn[idx + w]) : make_float2(0.f, 0.f);
+    uOld = __ldg(&pd.u[parity][idx]);
+    vOld = __ldg(reinterpret_cast<const float2*>(pd.v[parity]) + idx);
+    c.tau = make_float2(st.x, st.y);
+    c.u0 = __ldg(&pd.u0[idx]);
+    c.iu = __ldg(&pd.iu[idx]);
+    c.iz = __ldg(&pd.iz[idx]);
+    sigmaP = make_float2(st.z, st.w);
+    if (m != 0.f) {
+      const bool ex = mRight != 0.f, ey = mDown != 0.f;
+      t = tensorHere;
+      flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
+      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, stepA, alpha1);
     }
   }
+  s.p[ly][lx] = p;
+  s.q[ly][lx] = q;
+  s.dp[ly][lx] = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
+  s.flags[ly][lx] = flags;
   __syncthreads();
 
-  // --- second iteration, dual pass: x, y in [-1, tile) (in place in shared memory) ---
-  float2* pOut = reinterpret_cast<float2*>(pd.p[1 - parity]);
-  float4* qOut = reinterpret_cast<float4*>(pd.q[1 - parity]);
-  constexpr int kDW = kPairW + 1, kDH = kPairH + 1;
-  for (int k = tid; k < kDW * kDH; k += kPairThreads) {
-    const int lx = k % kDW + 1, ly = k / kDW + 1;
-    const int i = x0 - 2 + lx, j = y0 - 2 + ly;
-    if (i < 0 || j < 0 || i >= w || j >= h) continue;
-    const int idx = j * w + i;
-    float2 p = s.p[ly][lx];
-    float4 q = s.q[ly][lx];
-    const unsigned char f = s.flags[ly][lx];
-    if (f & kMasked) {
-      const bool ex = f & kLinkX, ey = f & kLinkY;
-      const float4 t = __ldg(&tensor[idx]);
-      const float2 sigmaP = __ldg(reinterpret_cast<const float2*>(steps + idx) + 1);
+  // --- first iteration, primal pass: all but the left column and the top row ---
+  const bool masked = flags & kMasked;
+  float u = uOld;
+  float2 v = vOld;
+  if (masked && lx >= 1 && ly >= 1) primalPixel(pd, s, lx, ly, c, stepA, uOld, vOld, u, v, uBar, vBar);
+  s.uBar[ly][lx] = uBar;
+  s.vBar[ly][lx] = vBar;
+  __syncthreads();
+
+  // --- second iteration, dual pass: one cell less on every side (in place) ---
+  const bool interior = inImage && lx >= 1 && ly >= 1 && lx < kPairW - 1 && ly < kPairH - 1;
+  if (interior) {
+    if (masked) {
+      const bool ex = flags & kLinkX, ey = flags & kLinkY;
+      t = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);  // L1 hits (see above)
+      sigmaP = __ldg(reinterpret_cast<const float2*>(reinterpret_cast<const float4*>(pd.steps) + idx) + 1);
       float ur = 0.f, ud = 0.f;
       float2 vr = make_float2(0.f, 0.f), vd = vr;
       if (ex) {
@@ -381,43 +364,27 @@ __global__ void __launch_bounds__(kPairThreads, kMinBlocksPair)
         ud = s.uBar[ly + 1][lx];
         vd = s.vBar[ly + 1][lx];
       }
-      dualPixel(p, q, t, sigmaP, ex, ey, s.uBar[ly][lx], ur, ud, s.vBar[ly][lx], vr, vd, stepB, alpha0, alpha1);
+      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, stepB, alpha1);
       s.p[ly][lx] = p;
       s.q[ly][lx] = q;
       s.dp[ly][lx] = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
     }
     if (lx >= 2 && ly >= 2) {  // the tile's own pixels
-      pOut[idx] = p;
-      qOut[idx] = q;
+      reinterpret_cast<float2*>(pd.p[1 - parity])[idx] = p;
+      reinterpret_cast<float4*>(pd.q[1 - parity])[idx] = q;
     }
   }
   __syncthreads();
 
   // --- second iteration, primal pass over the tile ---
-  const int x = x0 + threadIdx.x, y = y0 + threadIdx.y;
-  if (x >= w || y >= h) return;
-  const int idx = y * w + x;
-  const int lx = threadIdx.x + 2, ly = threadIdx.y + 2;
-  float* uOut = pd.u[1 - parity];
-  float2* vOut = reinterpret_cast<float2*>(pd.v[1 - parity]);
-  float* uBarOut = pd.uBar[1 - parity];
-  float2* vBarOut = reinterpret_cast<float2*>(pd.vBar[1 - parity]);
-  const float uOld = s.u[threadIdx.y][threadIdx.x];
-  const float2 vOld = s.v[threadIdx.y][threadIdx.x];
-  if (!(s.flags[ly][lx] & kMasked)) {
-    uOut[idx] = uOld;
-    vOut[idx] = vOld;
-    uBarOut[idx] = s.uBar[ly][lx];
-    vBarOut[idx] = s.vBar[ly][lx];
-    return;
-  }
-  float uNew, uBar;
-  float2 vNew, vBar;
-  primalPixel(pd, s, lx, ly, idx, stepB, uOld, vOld, uNew, vNew, uBar, vBar);
-  uOut[idx] = uNew;
-  vOut[idx] = vNew;
-  uBarOut[idx] = uBar;
-  vBarOut[idx] = vBar;
+  if (!interior || lx < 2 || ly < 2) return;
+  float uNew = u, uBarNew = uBar;
+  float2 vNew = v, vBarNew = vBar;
+  if (masked) primalPixel(pd, s, lx, ly, loadPrimalConstants(pd, idx), stepB, u, v, uNew, vNew, uBarNew, vBarNew);
+  pd.u[1 - parity][idx] = uNew;
+  reinterpret_cast<float2*>(pd.v[1 - parity])[idx] = vNew;
+  pd.uBar[1 - parity][idx] = uBarNew;
+  reinterpret_cast<float2*>(pd.vBar[1 - parity])[idx] = vBarNew;
 }
 
 // All iterations of a schedule in one cooperative launch, one block per tile, a grid
@@ -484,7 +451,7 @@ __device__ __forceinline__ void haloDual(const PrimalDualDev& pd, const HaloPixe
         ud = __ldcg(&uBarIn[hp.idx + pd.width]);
         vd = __ldcg(&vBarIn[hp.idx + pd.width]);
       }
-      dualPixel(p, q, hp.t, hp.sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, step, pd.alpha0, pd.alpha1);
+      dualPixel(p, q, hp.t, hp.sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, step, pd.alpha1);
     }
   }
   *sp = p;
@@ -575,7 +542,7 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
           vd = __ldcg(vBarIn + idx + w);
         }
       }
-      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, step, alpha0, alpha1);
+      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, step, alpha1);
     }
     if (ty == 0) haloDual(pd, up, in, uBarIn, vBarIn, step, &s.p[0][tx + 1], &s.dp[0][tx + 1], &s.q[0][tx + 1]);
     if (tx == 0) haloDual(pd, left, in, uBarIn, vBarIn, step, &s.p[ty + 1][0], &s.dp[ty + 1][0], &s.q[ty + 1][0]);
@@ -686,7 +653,8 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
   PrimalDualDev first = pd;
   first.uBar[0] = const_cast<float*>(pd.uBarFirst);
   first.vBar[0] = const_cast<float*>(pd.vBarFirst);
-  const dim3 pairBlock(kPairW, kPairH), pairGrid = grid2d(pd.width, pd.height, pairBlock);
+  const dim3 pairBlock(kPairW, kPairH);
+  const dim3 pairGrid((pd.width + kPairTileW - 1) / kPairTileW, (pd.height + kPairTileH - 1) / kPairTileH);
   int k = 0;
   for (; k + 1 < count; k += 2, endSet ^= 1)
     CS_LAUNCH(primalDualPairKernel, pairGrid, pairBlock, 0, s, k == 0 ? first : pd, steps[k], steps[k + 1], endSet);
