@@ -17,15 +17,18 @@ __device__ __forceinline__ bool masked(const Img& m, int x, int y) { return insi
 __device__ __forceinline__ bool linkX(const Img& m, int x, int y) { return masked(m, x, y) && masked(m, x + 1, y); }
 __device__ __forceinline__ bool linkY(const Img& m, int x, int y) { return masked(m, x, y) && masked(m, x, y + 1); }
 
-// Same arithmetic, in the same order, as cs::cpu::sampleBilinear.
+// Same arithmetic, in the same order, as cs::cpu::sampleBilinear. Offsets in 32 bits (an
+// image has fewer than 2^31 values): the index arithmetic is most of a sample's work.
 __device__ __forceinline__ float sampleBilinear(const Img& v, float x, float y, int c = 0) {
   x = fminf(fmaxf(x, 0.f), float(v.width - 1));
   y = fminf(fmaxf(y, 0.f), float(v.height - 1));
   const int x0 = int(floorf(x)), y0 = int(floorf(y));
-  const int x1 = min(x0 + 1, v.width - 1), y1 = min(y0 + 1, v.height - 1);
+  const int right = x0 + 1 < v.width ? v.channels : 0;            // to x1 = min(x0 + 1, w - 1)
+  const int down = y0 + 1 < v.height ? v.width * v.channels : 0;  // to y1 = min(y0 + 1, h - 1)
   const float fx = x - float(x0), fy = y - float(y0);
-  const float top = __ldg(&at(v, x0, y0, c)) * (1.f - fx) + __ldg(&at(v, x1, y0, c)) * fx;
-  const float bottom = __ldg(&at(v, x0, y1, c)) * (1.f - fx) + __ldg(&at(v, x1, y1, c)) * fx;
+  const float* p = v.data + (y0 * v.width + x0) * v.channels + c;
+  const float top = __ldg(p) * (1.f - fx) + __ldg(p + right) * fx;
+  const float bottom = __ldg(p + down) * (1.f - fx) + __ldg(p + down + right) * fx;
   return top * (1.f - fy) + bottom * fy;
 }
 

@@ -22,15 +22,50 @@ __device__ __forceinline__ float median9(float p0, float p1, float p2, float p3,
   return p4;
 }
 
-// The masked median at (x, y) of a masked pixel.
-__device__ __forceinline__ float maskedMedian(const Img& src, const Img& mask, int x, int y) {
+// u and the mask of a block's pixels and their one-pixel ring, in shared memory: every
+// pixel reads nine of each, which from global memory cost more than the median itself.
+constexpr int kBlockW = 32, kBlockH = 8;
+constexpr int kRingW = kBlockW + 2, kRingH = kBlockH + 2;
+constexpr int kRingRounds = (kRingW * kRingH + kBlockW * kBlockH - 1) / (kBlockW * kBlockH);
+
+struct MedianTile {
+  float u[kRingH][kRingW];
+  bool masked[kRingH][kRingW];
+};
+
+// Loads every cell's value before storing any (one memory round trip for the block).
+__device__ __forceinline__ void loadTile(MedianTile& t, const Img& src, const Img& mask) {
+  const int tid = threadIdx.y * kBlockW + threadIdx.x;
+  const int x0 = int(blockIdx.x) * kBlockW - 1, y0 = int(blockIdx.y) * kBlockH - 1;
+  float value[kRingRounds];
+  bool in[kRingRounds];
+#pragma unroll
+  for (int r = 0; r < kRingRounds; ++r) {
+    const int k = tid + r * kBlockW * kBlockH;
+    const int x = x0 + k % kRingW, y = y0 + k / kRingW;
+    in[r] = k < kRingW * kRingH && masked(mask, x, y);
+    value[r] = in[r] ? __ldg(&at(src, x, y)) : 0.f;
+  }
+#pragma unroll
+  for (int r = 0; r < kRingRounds; ++r) {
+    const int k = tid + r * kBlockW * kBlockH;
+    if (k < kRingW * kRingH) {
+      t.u[k / kRingW][k % kRingW] = value[r];
+      t.masked[k / kRingW][k % kRingW] = in[r];
+    }
+  }
+}
+
+// The masked median of the thread's pixel (a masked one) from the tile.
+__device__ __forceinline__ float maskedMedian(const MedianTile& t) {
+  const int cx = threadIdx.x + 1, cy = threadIdx.y + 1;
   bool all = true;
 #pragma unroll
   for (int dy = -1; dy <= 1; ++dy)
 #pragma unroll
-    for (int dx = -1; dx <= 1; ++dx) all = all && masked(mask, x + dx, y + dy);
+    for (int dx = -1; dx <= 1; ++dx) all = all && t.masked[cy + dy][cx + dx];
   if (all) {
-    auto v = [&](int dx, int dy) { return __ldg(&at(src, x + dx, y + dy)); };
+    auto v = [&](int dx, int dy) { return t.u[cy + dy][cx + dx]; };
     return median9(v(-1, -1), v(0, -1), v(1, -1), v(-1, 0), v(0, 0), v(1, 0), v(-1, 1), v(0, 1), v(1, 1));
   }
   // Beside the mask's edge: insertion sort of the masked neighbours.
@@ -38,7 +73,7 @@ __device__ __forceinline__ float maskedMedian(const Img& src, const Img& mask, i
   int n = 0;
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx)
-      if (masked(mask, x + dx, y + dy)) values[n++] = __ldg(&at(src, x + dx, y + dy));
+      if (t.masked[cy + dy][cx + dx]) values[n++] = t.u[cy + dy][cx + dx];
   for (int i = 1; i < n; ++i) {
     const float v = values[i];
     int j = i - 1;
@@ -53,23 +88,30 @@ __device__ __forceinline__ float maskedMedian(const Img& src, const Img& mask, i
   return upper;
 }
 
-__global__ void medianKernel(Img dst, Img src, Img mask) {
+__global__ void __launch_bounds__(kBlockW* kBlockH) medianKernel(Img dst, Img src, Img mask) {
   beginKernel();
-  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  __shared__ MedianTile t;
+  loadTile(t, src, mask);
+  __syncthreads();
+  const int x = blockIdx.x * kBlockW + threadIdx.x, y = blockIdx.y * kBlockH + threadIdx.y;
   if (x >= dst.width || y >= dst.height) return;
-  at(dst, x, y) = masked(mask, x, y) ? maskedMedian(src, mask, x, y) : at(src, x, y);
+  at(dst, x, y) = t.masked[threadIdx.y + 1][threadIdx.x + 1] ? maskedMedian(t) : at(src, x, y);
 }
 
 // accumulateKernel (accumulate.cu) reading u from the median computed here.
-__global__ void medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask, float duMax) {
+__global__ void __launch_bounds__(kBlockW* kBlockH)
+    medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask, float duMax) {
   beginKernel();
-  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  __shared__ MedianTile t;
+  loadTile(t, u, mask);
+  __syncthreads();
+  const int x = blockIdx.x * kBlockW + threadIdx.x, y = blockIdx.y * kBlockH + threadIdx.y;
   if (x >= u.width || y >= u.height) return;
-  if (!masked(mask, x, y)) {
+  if (!t.masked[threadIdx.y + 1][threadIdx.x + 1]) {
     at(median, x, y) = at(uOut, x, y) = at(u, x, y);
     return;
   }
-  const float m = maskedMedian(u, mask, x, y);
+  const float m = maskedMedian(t);
   at(median, x, y) = m;
   accumulatePixel(uOut, w, u0, tangent, x, y, m, duMax);
 }
@@ -77,14 +119,14 @@ __global__ void medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u
 }  // namespace
 
 cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask) {
-  const dim3 block(32, 8);
+  const dim3 block(kBlockW, kBlockH);
   CS_LAUNCH(medianKernel, grid2d(dst.width, dst.height, block), block, 0, s, dst, src, mask);
   return cudaSuccess;
 }
 
 cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
                                    float duMax) {
-  const dim3 block(32, 8);
+  const dim3 block(kBlockW, kBlockH);
   CS_LAUNCH(medianAccumulateKernel, grid2d(u.width, u.height, block), block, 0, s, uOut, median, u, w, u0, tangent,
             mask, duMax);
   return cudaSuccess;
