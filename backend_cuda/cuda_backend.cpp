@@ -132,6 +132,7 @@ CudaBackend::CudaBackend(int device, CUstream_st* stream) : device_(device), str
                  std::to_string(prop.multiProcessorCount) + " SMs, " + memory + "), CUDA runtime " +
                  versionText(runtime) + ", driver " + versionText(driver);
   residentBlocks_ = cudak::primalDualResidentBlocks(device_);
+  clusterBlocks_ = cudak::primalDualClusterBlocks(device_);
 }
 
 CudaBackend::~CudaBackend() {
@@ -503,7 +504,8 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
   }
   int endSet = 0;
   check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()),
-                                persistentPrimalDual_ ? residentBlocks_ : 0, endSet),
+                                singleLaunch_.cooperative ? residentBlocks_ : 0,
+                                singleLaunch_.cluster ? clusterBlocks_ : 0, endSet),
         "primalDual");
   // The result is in the scratch set: it becomes the buffers' memory (later launches,
   // captured or not, take the pointers from the slots), the old memory the scratch set.

@@ -93,10 +93,16 @@ class CudaBackend final : public Backend {
   int deviceIndex() const { return device_; }
   // dst = the packed float image at src (device memory, rows srcPitchBytes apart), async.
   void copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes);
-  // Whether primalDual() may run a level's whole schedule as one cooperative launch when
-  // the level's tiles fit on the device at once (default true; false: one launch per
-  // iteration at every level, the path of large levels, e.g. to test it on small ones).
-  void setPersistentPrimalDual(bool on) { persistentPrimalDual_ = on; }
+  // Which single-launch paths primalDual() may take for a level's whole schedule (default
+  // both): one thread-block cluster when the level fits in one (sm_90+), one cooperative
+  // launch when its tiles fit on the device at once. Otherwise, and with both off, it
+  // launches once per two iterations, the path of large levels (e.g. to test it on small ones).
+  struct SingleLaunchPaths {
+    bool cluster = true, cooperative = true;
+  };
+  void setSingleLaunchPaths(SingleLaunchPaths paths) { singleLaunch_ = paths; }
+  // The most 32x32 tiles a level may have to take the cluster path (0 before sm_90).
+  int clusterPathTiles() const { return clusterBlocks_; }
 
  private:
   struct Slot {
@@ -147,7 +153,8 @@ class CudaBackend final : public Backend {
   std::vector<PendingOp> pending_;
   std::optional<PendingMedian> pendingMedian_;
   int residentBlocks_ = 0;  // of the persistent primal-dual kernel
-  bool persistentPrimalDual_ = true;
+  int clusterBlocks_ = 0;   // in one cluster of the primal-dual cluster kernel
+  SingleLaunchPaths singleLaunch_;
 
   CUgraph_st* graph_ = nullptr;
   CUgraphExec_st* exec_ = nullptr;

@@ -121,13 +121,16 @@ cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img ta
 // Blocks of the primal-dual kernel the device runs at once in one cooperative launch
 // (0: no cooperative launch).
 int primalDualResidentBlocks(int device);
+// Blocks the primal-dual cluster kernel may run in one cluster (0: before sm_90, none).
+int primalDualClusterBlocks(int device);
 // `count` iterations, the first reading set 0 (uBar, vBar from uBarFirst, vBarFirst). A
-// level whose tiles number at most residentBlocks runs them all in one cooperative launch,
-// a larger one launches once per two iterations, going from one set to the other.
+// level whose 32x32 tiles number at most clusterBlocks runs in one cluster launch, else one
+// whose 32x8 tiles number at most residentBlocks in one cooperative launch, and a larger
+// one launches once per two iterations, going from one set to the other.
 // endSet: the set that holds the result (0 or 1; the caller swaps the sets' roles rather
 // than copying). Pixels outside the mask keep their values.
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                             int residentBlocks, int& endSet);
+                             int residentBlocks, int clusterBlocks, int& endSet);
 cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask);
 cudaError_t launchAccumulate(cudaStream_t s, Img u, Img w, Img u0, Img tangent, Img mask, float duMax);
 // median = median(u) (launchMedian), then accumulate from it into uOut (launchAccumulate

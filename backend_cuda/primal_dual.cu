@@ -8,6 +8,10 @@
 // neighbouring block of the same launch wrote.
 #include <cooperative_groups.h>
 
+#include <cstdlib>
+#include <cstring>
+#include <utility>
+
 #include "common.cuh"
 
 namespace cs::cudak {
@@ -387,6 +391,86 @@ __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
   reinterpret_cast<float2*>(pd.vBar[1 - parity])[idx] = vBarNew;
 }
 
+// A pixel's constants and primal-dual state, held in registers across a schedule by the
+// single-launch kernels (persistent, cluster): the initial state from set 0.
+struct OwnPixel {
+  float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
+  float2 sigmaP = make_float2(0.f, 0.f);
+  PrimalConstants c{};
+  bool masked = false, ex = false, ey = false, exLeft = false, eyUp = false;
+  float u = 0.f, uBar = 0.f;
+  float2 v = make_float2(0.f, 0.f), vBar = make_float2(0.f, 0.f), p = make_float2(0.f, 0.f);
+  float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
+};
+
+__device__ __forceinline__ OwnPixel loadOwnPixel(const PrimalDualDev& pd, int x, int y) {
+  OwnPixel o;
+  const int w = pd.width, h = pd.height;
+  if (x >= w || y >= h) return o;
+  const int idx = y * w + x;
+  o.masked = __ldg(&pd.mask[idx]) != 0.f;
+  if (o.masked) {
+    o.ex = isMasked(pd.mask, w, h, x + 1, y);
+    o.ey = isMasked(pd.mask, w, h, x, y + 1);
+    o.exLeft = isMasked(pd.mask, w, h, x - 1, y);
+    o.eyUp = isMasked(pd.mask, w, h, x, y - 1);
+    o.t = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);
+    const float4 st = __ldg(reinterpret_cast<const float4*>(pd.steps) + idx);
+    o.c.tau = make_float2(st.x, st.y);
+    o.sigmaP = make_float2(st.z, st.w);
+    o.c.u0 = __ldg(&pd.u0[idx]);
+    o.c.iu = __ldg(&pd.iu[idx]);
+    o.c.iz = __ldg(&pd.iz[idx]);
+  }
+  o.u = pd.u[0][idx];
+  o.v = reinterpret_cast<const float2*>(pd.v[0])[idx];
+  o.uBar = pd.uBarFirst[idx];
+  o.vBar = reinterpret_cast<const float2*>(pd.vBarFirst)[idx];
+  o.p = reinterpret_cast<const float2*>(pd.p[0])[idx];
+  o.q = reinterpret_cast<const float4*>(pd.q[0])[idx];
+  return o;
+}
+
+__device__ __forceinline__ void storeOwnPixel(const PrimalDualDev& pd, const OwnPixel& o, int idx) {
+  pd.u[0][idx] = o.u;
+  reinterpret_cast<float2*>(pd.v[0])[idx] = o.v;
+  pd.uBar[0][idx] = o.uBar;
+  reinterpret_cast<float2*>(pd.vBar[0])[idx] = o.vBar;
+  reinterpret_cast<float2*>(pd.p[0])[idx] = o.p;
+  reinterpret_cast<float4*>(pd.q[0])[idx] = o.q;
+}
+
+// primalPixel's update of a masked own pixel, given its duals (dp = D p) and those of its
+// left and upper neighbours (read only where linked).
+__device__ __forceinline__ void primalUpdate(const PrimalDualDev& pd, OwnPixel& o, const StepDev step, float2 dp,
+                                             float2 dpLeft, float2 dpUp, float4 qLeft, float4 qUp) {
+  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+  const float tauU = step.tauScale * o.c.tau.x;
+  const float tauV = step.tauScale * o.c.tau.y;
+  float divDp = 0.f;
+  if (o.ex) divDp += dp.x;
+  if (o.exLeft) divDp -= dpLeft.x;
+  if (o.ey) divDp += dp.y;
+  if (o.eyUp) divDp -= dpUp.y;
+  const float uOld = o.u;
+  const float uHat = uOld + tauU * alpha1 * divDp;
+  o.u = dataProx(uHat, o.c.u0, o.c.iu, o.c.iz, tauU * pd.lambda);
+  o.uBar = o.u + step.theta * (o.u - uOld);
+  float div0 = 0.f, div1 = 0.f;
+  if (o.ex) div0 += o.q.x;
+  if (o.exLeft) div0 -= qLeft.x;
+  if (o.ey) div0 += o.q.y;
+  if (o.eyUp) div0 -= qUp.y;
+  if (o.ex) div1 += o.q.z;
+  if (o.exLeft) div1 -= qLeft.z;
+  if (o.ey) div1 += o.q.w;
+  if (o.eyUp) div1 -= qUp.w;
+  const float2 vOld = o.v;
+  o.v.x = vOld.x + tauV * (alpha1 * o.p.x + alpha0 * div0);
+  o.v.y = vOld.y + tauV * (alpha1 * o.p.y + alpha0 * div1);
+  o.vBar = make_float2(o.v.x + step.theta * (o.v.x - vOld.x), o.v.y + step.theta * (o.v.y - vOld.y));
+}
+
 // All iterations of a schedule in one cooperative launch, one block per tile, a grid
 // barrier between iterations (levels whose tiles all fit on the device at once: the
 // coarse levels, where one launch per iteration costs more than the iteration). Each
@@ -470,46 +554,15 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
   const int x = x0 + tx, y = y0 + ty;
   const bool own = x < w && y < h;
   const int idx = own ? y * w + x : 0;
-  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
-
-  // The own pixel: constants and the initial state (set 0).
-  float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
-  float2 sigmaP = make_float2(0.f, 0.f), tau = sigmaP;
-  float u0 = 0.f, iu = 0.f, iz = 0.f;
-  bool masked = false, ex = false, ey = false, exLeft = false, eyUp = false;
-  float u = 0.f, uBar = 0.f;
-  float2 v = make_float2(0.f, 0.f), vBar = v, p = v;
-  float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
-  if (own) {
-    masked = __ldg(&pd.mask[idx]) != 0.f;
-    if (masked) {
-      ex = isMasked(pd.mask, w, h, x + 1, y);
-      ey = isMasked(pd.mask, w, h, x, y + 1);
-      exLeft = isMasked(pd.mask, w, h, x - 1, y);
-      eyUp = isMasked(pd.mask, w, h, x, y - 1);
-      t = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);
-      const float4 st = __ldg(reinterpret_cast<const float4*>(pd.steps) + idx);
-      tau = make_float2(st.x, st.y);
-      sigmaP = make_float2(st.z, st.w);
-      u0 = __ldg(&pd.u0[idx]);
-      iu = __ldg(&pd.iu[idx]);
-      iz = __ldg(&pd.iz[idx]);
-    }
-    u = pd.u[0][idx];
-    v = reinterpret_cast<const float2*>(pd.v[0])[idx];
-    uBar = pd.uBarFirst[idx];
-    vBar = reinterpret_cast<const float2*>(pd.vBarFirst)[idx];
-    p = reinterpret_cast<const float2*>(pd.p[0])[idx];
-    q = reinterpret_cast<const float4*>(pd.q[0])[idx];
-  }
+  OwnPixel o = loadOwnPixel(pd, x, y);
   // The halo pixels this thread recomputes the duals of.
   const HaloPixel up = ty == 0 ? loadHalo(pd, x, y0 - 1) : HaloPixel{};
   const HaloPixel left = tx == 0 ? loadHalo(pd, x0 - 1, y) : HaloPixel{};
   // The border pixels whose values the neighbouring blocks read.
   const bool borderBar = tx == 0 || ty == 0 || tx == kTileW - 1 || ty == kTileH - 1;
   const bool borderDual = tx == kTileW - 1 || ty == kTileH - 1;
-  s.uBar[ty][tx] = uBar;
-  s.vBar[ty][tx] = vBar;
+  s.uBar[ty][tx] = o.uBar;
+  s.vBar[ty][tx] = o.vBar;
   __syncthreads();
 
   const int count = schedule.count;
@@ -521,10 +574,10 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
     if (k > 0) grid.sync();
     // --- dual pass: the own pixel (neighbours in the tile from shared memory, beyond it
     // from the set `in`) and the halo pixels ---
-    if (own && masked) {
+    if (own && o.masked) {
       float ur = 0.f, ud = 0.f;
       float2 vr = make_float2(0.f, 0.f), vd = vr;
-      if (ex) {
+      if (o.ex) {
         if (tx + 1 < kTileW) {
           ur = s.uBar[ty][tx + 1];
           vr = s.vBar[ty][tx + 1];
@@ -533,7 +586,7 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
           vr = __ldcg(vBarIn + idx + 1);
         }
       }
-      if (ey) {
+      if (o.ey) {
         if (ty + 1 < kTileH) {
           ud = s.uBar[ty + 1][tx];
           vd = s.vBar[ty + 1][tx];
@@ -542,70 +595,132 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
           vd = __ldcg(vBarIn + idx + w);
         }
       }
-      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, step, alpha1);
+      dualPixel(o.p, o.q, o.t, o.sigmaP, o.ex, o.ey, o.uBar, ur, ud, o.vBar, vr, vd, step, pd.alpha1);
     }
     if (ty == 0) haloDual(pd, up, in, uBarIn, vBarIn, step, &s.p[0][tx + 1], &s.dp[0][tx + 1], &s.q[0][tx + 1]);
     if (tx == 0) haloDual(pd, left, in, uBarIn, vBarIn, step, &s.p[ty + 1][0], &s.dp[ty + 1][0], &s.q[ty + 1][0]);
-    const float2 dp = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
-    s.p[ty + 1][tx + 1] = p;
-    s.q[ty + 1][tx + 1] = q;
+    const float2 dp = make_float2(o.t.x * o.p.x + o.t.y * o.p.y, o.t.y * o.p.x + o.t.z * o.p.y);
+    s.p[ty + 1][tx + 1] = o.p;
+    s.q[ty + 1][tx + 1] = o.q;
     s.dp[ty + 1][tx + 1] = dp;
     const bool last = k + 1 == count;
     if (own && borderDual && !last) {
-      reinterpret_cast<float2*>(pd.p[out])[idx] = p;
-      reinterpret_cast<float4*>(pd.q[out])[idx] = q;
+      reinterpret_cast<float2*>(pd.p[out])[idx] = o.p;
+      reinterpret_cast<float4*>(pd.q[out])[idx] = o.q;
     }
     __syncthreads();
 
     // --- primal pass over the own pixel ---
-    if (own && masked) {
+    if (own && o.masked) {
       const int lx = tx + 1, ly = ty + 1;
-      const float tauU = step.tauScale * tau.x;
-      const float tauV = step.tauScale * tau.y;
-      float divDp = 0.f;
-      if (ex) divDp += dp.x;
-      if (exLeft) divDp -= s.dp[ly][lx - 1].x;
-      if (ey) divDp += dp.y;
-      if (eyUp) divDp -= s.dp[ly - 1][lx].y;
-      const float uOld = u;
-      const float uHat = uOld + tauU * alpha1 * divDp;
-      u = dataProx(uHat, u0, iu, iz, tauU * pd.lambda);
-      uBar = u + step.theta * (u - uOld);
-
-      const float4 qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
-      float div0 = 0.f, div1 = 0.f;
-      if (ex) div0 += q.x;
-      if (exLeft) div0 -= qLeft.x;
-      if (ey) div0 += q.y;
-      if (eyUp) div0 -= qUp.y;
-      if (ex) div1 += q.z;
-      if (exLeft) div1 -= qLeft.z;
-      if (ey) div1 += q.w;
-      if (eyUp) div1 -= qUp.w;
-      const float2 vOld = v;
-      v.x = vOld.x + tauV * (alpha1 * p.x + alpha0 * div0);
-      v.y = vOld.y + tauV * (alpha1 * p.y + alpha0 * div1);
-      vBar = make_float2(v.x + step.theta * (v.x - vOld.x), v.y + step.theta * (v.y - vOld.y));
+      primalUpdate(pd, o, step, dp, s.dp[ly][lx - 1], s.dp[ly - 1][lx], s.q[ly][lx - 1], s.q[ly - 1][lx]);
     }
     // Read in this iteration's dual pass only, before the barrier above.
-    s.uBar[ty][tx] = uBar;
-    s.vBar[ty][tx] = vBar;
+    s.uBar[ty][tx] = o.uBar;
+    s.vBar[ty][tx] = o.vBar;
     if (own && borderBar && !last) {
-      pd.uBar[out][idx] = uBar;
-      reinterpret_cast<float2*>(pd.vBar[out])[idx] = vBar;
+      pd.uBar[out][idx] = o.uBar;
+      reinterpret_cast<float2*>(pd.vBar[out])[idx] = o.vBar;
     }
   }
   releaseNextKernel();
   // The final state into set 0 (after a barrier where the last iteration read set 0).
   if (count % 2 == 1) grid.sync();
-  if (own) {
-    pd.u[0][idx] = u;
-    reinterpret_cast<float2*>(pd.v[0])[idx] = v;
-    pd.uBar[0][idx] = uBar;
-    reinterpret_cast<float2*>(pd.vBar[0])[idx] = vBar;
-    reinterpret_cast<float2*>(pd.p[0])[idx] = p;
-    reinterpret_cast<float4*>(pd.q[0])[idx] = q;
+  if (own) storeOwnPixel(pd, o, idx);
+}
+
+// All iterations of a schedule in one launch of one thread-block cluster (sm_90 and newer),
+// on levels whose tiles fit in one cluster (at most 16 tiles: up to 128x128 pixels, e.g.
+// 106x100 and 53x50, the two coarsest levels of a T265 frame). As in the persistent kernel each thread keeps its
+// pixel's constants and state in registers, but a block reads its neighbours' tile borders straight from their shared
+// memory (distributed shared memory) after a cluster barrier, instead of through L2 after a grid barrier: two cluster
+// barriers per iteration and no global traffic until the end. There the grid barrier's round trips through L2 made an
+// iteration cost ~3.6 us whatever the level's size (ncu, 10 iterations of a 53x50 level in 36 us). The tile is the
+// smallest of 16x16, 32x16 and 32x32 that fits the level in one cluster: an SM issues four warp instructions per cycle,
+// so an iteration's time is set by the pixels per SM, and smaller tiles spread a small level over more SMs.
+template <int TileW, int TileH>
+struct ClusterTile {
+  float2 dp[TileH][TileW];
+  float4 q[TileH][TileW];
+  float uBar[TileH][TileW];
+  float2 vBar[TileH][TileW];
+};
+
+template <int TileW, int TileH>
+__global__ void __launch_bounds__(TileW* TileH, 1)
+    primalDualClusterKernel(PrimalDualDev pd, const __grid_constant__ PrimalDualSchedule schedule) {
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
+  awaitPreviousKernel();
+  __shared__ ClusterTile<TileW, TileH> s;
+  cg::cluster_group cluster = cg::this_cluster();
+  const int tx = threadIdx.x, ty = threadIdx.y;
+  const int x = blockIdx.x * TileW + tx, y = blockIdx.y * TileH + ty;
+  const bool own = x < pd.width && y < pd.height;
+  const int idx = own ? y * pd.width + x : 0;
+  OwnPixel o = loadOwnPixel(pd, x, y);
+  // The neighbouring tiles' shared memory (the grid is the cluster). A link to a pixel
+  // beyond the tile implies that the tile exists.
+  const dim3 at = cluster.block_index(), dim = cluster.dim_blocks();
+  auto tile = [&](int dx, int dy) {
+    const int bx = int(at.x) + dx, by = int(at.y) + dy;
+    const bool exists = bx >= 0 && by >= 0 && bx < int(dim.x) && by < int(dim.y);
+    return exists ? cluster.map_shared_rank(&s, unsigned(bx + by * int(dim.x))) : &s;
+  };
+  const ClusterTile<TileW, TileH>& right = *tile(1, 0);
+  const ClusterTile<TileW, TileH>& down = *tile(0, 1);
+  const ClusterTile<TileW, TileH>& left = *tile(-1, 0);
+  const ClusterTile<TileW, TileH>& up = *tile(0, -1);
+  constexpr int kLastX = TileW - 1, kLastY = TileH - 1;
+  s.uBar[ty][tx] = o.uBar;
+  s.vBar[ty][tx] = o.vBar;
+  cluster.sync();
+
+  for (int k = 0; k < schedule.count; ++k) {
+    const StepDev step = schedule.steps[k];
+    // --- dual pass: uBar, vBar right of and below the pixel ---
+    if (own && o.masked) {
+      float ur = 0.f, ud = 0.f;
+      float2 vr = make_float2(0.f, 0.f), vd = vr;
+      if (o.ex) {
+        const ClusterTile<TileW, TileH>& r = tx < kLastX ? s : right;
+        ur = r.uBar[ty][tx < kLastX ? tx + 1 : 0];
+        vr = r.vBar[ty][tx < kLastX ? tx + 1 : 0];
+      }
+      if (o.ey) {
+        const ClusterTile<TileW, TileH>& d = ty < kLastY ? s : down;
+        ud = d.uBar[ty < kLastY ? ty + 1 : 0][tx];
+        vd = d.vBar[ty < kLastY ? ty + 1 : 0][tx];
+      }
+      dualPixel(o.p, o.q, o.t, o.sigmaP, o.ex, o.ey, o.uBar, ur, ud, o.vBar, vr, vd, step, pd.alpha1);
+    }
+    const float2 dp = make_float2(o.t.x * o.p.x + o.t.y * o.p.y, o.t.y * o.p.x + o.t.z * o.p.y);
+    s.dp[ty][tx] = dp;
+    s.q[ty][tx] = o.q;
+    cluster.sync();  // the duals are written; every block has read this iteration's uBar
+
+    // --- primal pass: D p and q left of and above the pixel ---
+    if (own && o.masked) {
+      float2 dpLeft = make_float2(0.f, 0.f), dpUp = dpLeft;
+      float4 qLeft = make_float4(0.f, 0.f, 0.f, 0.f), qUp = qLeft;
+      if (o.exLeft) {
+        const ClusterTile<TileW, TileH>& l = tx > 0 ? s : left;
+        dpLeft = l.dp[ty][tx > 0 ? tx - 1 : kLastX];
+        qLeft = l.q[ty][tx > 0 ? tx - 1 : kLastX];
+      }
+      if (o.eyUp) {
+        const ClusterTile<TileW, TileH>& u = ty > 0 ? s : up;
+        dpUp = u.dp[ty > 0 ? ty - 1 : kLastY][tx];
+        qUp = u.q[ty > 0 ? ty - 1 : kLastY][tx];
+      }
+      primalUpdate(pd, o, step, dp, dpLeft, dpUp, qLeft, qUp);
+    }
+    s.uBar[ty][tx] = o.uBar;
+    s.vBar[ty][tx] = o.vBar;
+    cluster.sync();  // uBar is written; every block has read this iteration's duals
   }
+  releaseNextKernel();
+  if (own) storeOwnPixel(pd, o, idx);
+#endif
 }
 
 }  // namespace
@@ -621,31 +736,88 @@ int primalDualResidentBlocks(int device) {
   return sms * perSm;
 }
 
+int primalDualClusterBlocks(int device) {
+  // CURVESTEREO_CUDA_CLUSTER=0 leaves the small levels to the cooperative kernel (to
+  // measure what the cluster path brings, or to rule it out).
+  const char* off = std::getenv("CURVESTEREO_CUDA_CLUSTER");
+  if (off && std::strcmp(off, "0") == 0) return 0;
+  int major = 0;
+  if (cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, device) != cudaSuccess || major < 9) return 0;
+  for (auto kernel :
+       {primalDualClusterKernel<16, 16>, primalDualClusterKernel<32, 16>, primalDualClusterKernel<32, 32>})
+    if (cudaFuncSetAttribute(kernel, cudaFuncAttributeNonPortableClusterSizeAllowed, 1) != cudaSuccess) return 0;
+  // 16 blocks: the most Hopper runs in one cluster (a non-portable size); 8 is portable.
+  for (const dim3 cluster : {dim3(4, 4), dim3(4, 2), dim3(2, 2)}) {
+    cudaLaunchConfig_t config{};
+    config.gridDim = cluster;
+    config.blockDim = dim3(32, 32);  // the largest tile
+    cudaLaunchAttribute attribute{};
+    attribute.id = cudaLaunchAttributeClusterDimension;
+    attribute.val.clusterDim.x = cluster.x;
+    attribute.val.clusterDim.y = cluster.y;
+    attribute.val.clusterDim.z = 1;
+    config.attrs = &attribute;
+    config.numAttrs = 1;
+    int clusters = 0;
+    if (cudaOccupancyMaxActiveClusters(&clusters, primalDualClusterKernel<32, 32>, &config) == cudaSuccess &&
+        clusters > 0)
+      return int(cluster.x * cluster.y);
+  }
+  cudaGetLastError();  // clear the failed queries' error
+  return 0;
+}
+
+// The schedule in chunks of kMaxPersistentIterations, each one launch of `kernel` (the
+// state stays in set 0).
+static cudaError_t launchSingle(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
+                                void (*kernel)(PrimalDualDev, PrimalDualSchedule), dim3 grid, dim3 block,
+                                cudaLaunchAttribute* attributes, int attributeCount) {
+  PrimalDualDev chunk = pd;
+  for (int k0 = 0; k0 < count; k0 += kMaxPersistentIterations) {
+    PrimalDualSchedule schedule{};
+    schedule.count = count - k0 < kMaxPersistentIterations ? count - k0 : kMaxPersistentIterations;
+    for (int k = 0; k < schedule.count; ++k) schedule.steps[k] = steps[k0 + k];
+    cudaLaunchConfig_t config{};
+    config.gridDim = grid;
+    config.blockDim = block;
+    config.stream = s;
+    config.attrs = attributes;
+    config.numAttrs = unsigned(attributeCount);
+    const cudaError_t e = cudaLaunchKernelEx(&config, kernel, chunk, schedule);
+    if (e != cudaSuccess) return e;
+    chunk.uBarFirst = pd.uBar[0];  // later chunks continue from the state in set 0
+    chunk.vBarFirst = pd.vBar[0];
+  }
+  return cudaGetLastError();
+}
+
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                             int residentBlocks, int& endSet) {
+                             int residentBlocks, int clusterBlocks, int& endSet) {
   endSet = 0;
+  using ClusterKernel = void (*)(PrimalDualDev, PrimalDualSchedule);
+  const std::pair<dim3, ClusterKernel> clusterTiles[] = {{dim3(16, 16), primalDualClusterKernel<16, 16>},
+                                                         {dim3(32, 16), primalDualClusterKernel<32, 16>},
+                                                         {dim3(32, 32), primalDualClusterKernel<32, 32>}};
+  for (const auto& [tile, kernel] : clusterTiles) {
+    const dim3 clusterGrid = grid2d(pd.width, pd.height, tile);
+    if (int(clusterGrid.x * clusterGrid.y) > clusterBlocks) continue;
+    // A programmatic dependent launch as well (launch() in common.cuh): the cluster is
+    // scheduled while the previous kernel finishes.
+    cudaLaunchAttribute attributes[2]{};
+    attributes[0].id = cudaLaunchAttributeClusterDimension;
+    attributes[0].val.clusterDim.x = clusterGrid.x;
+    attributes[0].val.clusterDim.y = clusterGrid.y;
+    attributes[0].val.clusterDim.z = 1;
+    attributes[1].id = cudaLaunchAttributeProgrammaticStreamSerialization;
+    attributes[1].val.programmaticStreamSerializationAllowed = 1;
+    return launchSingle(s, pd, steps, count, kernel, clusterGrid, tile, attributes, dependentLaunchSupported() ? 2 : 1);
+  }
   const dim3 block(kTileW, kTileH), grid = grid2d(pd.width, pd.height, block);
   if (int(grid.x * grid.y) <= residentBlocks) {
-    PrimalDualDev chunk = pd;
-    for (int k0 = 0; k0 < count; k0 += kMaxPersistentIterations) {
-      PrimalDualSchedule schedule{};
-      schedule.count = count - k0 < kMaxPersistentIterations ? count - k0 : kMaxPersistentIterations;
-      for (int k = 0; k < schedule.count; ++k) schedule.steps[k] = steps[k0 + k];
-      cudaLaunchConfig_t config{};
-      config.gridDim = grid;
-      config.blockDim = block;
-      config.stream = s;
-      cudaLaunchAttribute attribute{};
-      attribute.id = cudaLaunchAttributeCooperative;
-      attribute.val.cooperative = 1;
-      config.attrs = &attribute;
-      config.numAttrs = 1;
-      const cudaError_t e = cudaLaunchKernelEx(&config, primalDualPersistentKernel, chunk, schedule);
-      if (e != cudaSuccess) return e;
-      chunk.uBarFirst = pd.uBar[0];  // later chunks continue from the state in set 0
-      chunk.vBarFirst = pd.vBar[0];
-    }
-    return cudaGetLastError();
+    cudaLaunchAttribute attribute{};
+    attribute.id = cudaLaunchAttributeCooperative;
+    attribute.val.cooperative = 1;
+    return launchSingle(s, pd, steps, count, primalDualPersistentKernel, grid, block, &attribute, 1);
   }
   // Two iterations per launch, the odd one last; every launch goes from one set to the
   // other. The first launch reads set 0 and writes set 1 only, so its uBar, vBar can be

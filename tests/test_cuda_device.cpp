@@ -53,6 +53,92 @@ synth::SynthPair smallPair(uint32_t seed) {
   return synth::renderPair(cfg);
 }
 
+// The primal-dual paths at one level size against the oracle (see the test case below).
+void checkPrimalDualPaths(int w, int h) {
+  const size_t n = size_t(w) * h;
+  auto noise = [&](int channels, uint32_t seed, float amp) {
+    std::vector<float> v(n * size_t(channels));
+    for (size_t i = 0; i < v.size(); ++i) v[i] = amp * (2.f * golden::hash01(uint32_t(i) * 2891336453U + seed) - 1.f);
+    return v;
+  };
+  std::vector<float> image(n), mask(n);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      image[i] = 0.5f + 0.3f * std::sin(0.21f * x) * std::cos(0.17f * y) + 0.05f * golden::hash01(uint32_t(i) + 99U);
+      const bool inDisc = std::hypot(x - 0.5 * (w - 1), y - 0.5 * (h - 1)) <= 0.47 * std::min(w, h);
+      mask[i] = inDisc && golden::hash01(uint32_t(i) * 7U + 3U) > 0.03f ? 1.f : 0.f;
+    }
+  auto cpu = createBackend("cpu");
+  std::vector<float> tensor(4 * n), steps(4 * n);
+  {
+    const Buffer t = cpu->create(w, h, 4), st = cpu->create(w, h, 4), im = cpu->create(w, h, 1),
+                 m = cpu->create(w, h, 1);
+    cpu->upload(im, image.data());
+    cpu->upload(m, mask.data());
+    cpu->structureTensor(t, st, im, m, TensorParams{9.f, 0.85f, 1e-4f, 1.f, 17.f, 1.2f});
+    cpu->download(t, tensor.data());
+    cpu->download(st, steps.data());
+  }
+  const std::vector<float> u = noise(1, 11, 1.f), v = noise(2, 12, 0.1f), p = noise(2, 13, 0.5f),
+                           q = noise(4, 14, 0.2f), u0 = noise(1, 15, 1.f), iu = noise(1, 16, 0.1f),
+                           iz = noise(1, 17, 0.05f);
+  // u, uBar, v, vBar, p, q after the solve.
+  auto solve = [&](Backend& b, int iterations) {
+    auto put = [&](const std::vector<float>& host, int channels) {
+      const Buffer buf = b.create(w, h, channels);
+      b.upload(buf, host.data());
+      return buf;
+    };
+    const PrimalDualBuffers pd{put(u, 1), put(u, 1), put(v, 2), put(v, 2), put(p, 2), put(q, 4)};
+    const DataTermBuffers data{put(u0, 1), put(iu, 1), put(iz, 1)};
+    PrimalDualParams prm{20.f, 17.f, 1.2f, {}};
+    float scale = 1.f;
+    for (int k = 0; k < iterations; ++k) {
+      const float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
+      prm.schedule.push_back({scale, 1.f / scale, theta});
+      scale *= theta;
+    }
+    b.primalDual(pd, data, put(tensor, 4), put(steps, 4), put(mask, 1), prm);
+    std::vector<std::vector<float> > out;
+    for (const Buffer& buf : {pd.u, pd.uBar, pd.v, pd.vBar, pd.p, pd.q}) {
+      out.emplace_back(buf.count());
+      b.download(buf, out.back().data());
+    }
+    return out;
+  };
+  for (int iterations : {3, 5, 6, 70}) {
+    const auto ref = solve(*cpu, iterations);
+    for (int path = 0; path < 3; ++path) {
+      cuda::CudaBackend cuda(0);
+      // Each path's level: the cluster one (when available and the level fits), then
+      // the cooperative one, then two iterations per launch.
+      cuda.setSingleLaunchPaths({path == 0, path <= 1});
+      if (path == 0) {
+        int major = 0;
+        ok(cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, 0));
+        CHECK((major < 9 || cuda.clusterPathTiles() >= 8));  // Hopper runs clusters of 8 at least
+        if (((w + 31) / 32) * ((h + 31) / 32) > cuda.clusterPathTiles()) continue;
+      }
+      const auto out = solve(cuda, iterations);
+      double maxAbs = 0;
+      long long nonFinite = 0;
+      for (size_t b = 0; b < out.size(); ++b)
+        for (size_t i = 0; i < out[b].size(); ++i) {
+          if (!std::isfinite(out[b][i]))
+            ++nonFinite;
+          else
+            maxAbs = std::max(maxAbs, double(std::abs(out[b][i] - ref[b][i])));
+        }
+      const char* name = path == 0 ? "cluster" : path == 1 ? "persistent" : "two iterations per launch";
+      MESSAGE("primal-dual " << name << ", " << w << "x" << h << ", " << iterations << " iterations: max abs " << maxAbs
+                             << " against the oracle");
+      CHECK(nonFinite == 0);
+      CHECK(maxAbs <= 1e-4);
+    }
+  }
+}
+
 }  // namespace
 
 TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream") {
@@ -139,87 +225,16 @@ TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream")
   cudaStreamDestroy(stream);
 }
 
-// primalDual runs a level's whole schedule as one cooperative launch when its tiles fit on
-// the device at once (every level of the other tests' small frames) and one launch per
-// iteration otherwise (large levels): both paths, odd and even schedules, against the
-// oracle on random state over several tiles with a ragged edge and a masked disc.
-TEST_CASE("CUDA primal-dual: the persistent and the per-iteration kernels match the oracle") {
+// primalDual runs a level's whole schedule in one thread-block cluster when the level fits
+// in one (sm_90+), as one cooperative launch when its tiles fit on the device at once, and
+// in launches of two iterations otherwise (large levels): every path, odd and even
+// schedules, against the oracle on random state over several tiles with ragged edges and
+// a masked disc. On Hopper 61x45, 90x70 and 101x75 fit in one cluster (16x16, 32x16 and
+// 32x32 tiles), 203x131 does not.
+TEST_CASE("CUDA primal-dual: the cluster, persistent and two-iteration kernels match the oracle") {
   if (noDevice("cuda primal-dual paths")) return;
-  const int w = 203, h = 131;
-  const size_t n = size_t(w) * h;
-  auto noise = [&](int channels, uint32_t seed, float amp) {
-    std::vector<float> v(n * size_t(channels));
-    for (size_t i = 0; i < v.size(); ++i) v[i] = amp * (2.f * golden::hash01(uint32_t(i) * 2891336453U + seed) - 1.f);
-    return v;
-  };
-  std::vector<float> image(n), mask(n);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const size_t i = size_t(y) * w + x;
-      image[i] = 0.5f + 0.3f * std::sin(0.21f * x) * std::cos(0.17f * y) + 0.05f * golden::hash01(uint32_t(i) + 99U);
-      const bool inDisc = std::hypot(x - 0.5 * (w - 1), y - 0.5 * (h - 1)) <= 0.47 * std::min(w, h);
-      mask[i] = inDisc && golden::hash01(uint32_t(i) * 7U + 3U) > 0.03f ? 1.f : 0.f;
-    }
-  auto cpu = createBackend("cpu");
-  std::vector<float> tensor(4 * n), steps(4 * n);
-  {
-    const Buffer t = cpu->create(w, h, 4), st = cpu->create(w, h, 4), im = cpu->create(w, h, 1),
-                 m = cpu->create(w, h, 1);
-    cpu->upload(im, image.data());
-    cpu->upload(m, mask.data());
-    cpu->structureTensor(t, st, im, m, TensorParams{9.f, 0.85f, 1e-4f, 1.f, 17.f, 1.2f});
-    cpu->download(t, tensor.data());
-    cpu->download(st, steps.data());
-  }
-  const std::vector<float> u = noise(1, 11, 1.f), v = noise(2, 12, 0.1f), p = noise(2, 13, 0.5f),
-                           q = noise(4, 14, 0.2f), u0 = noise(1, 15, 1.f), iu = noise(1, 16, 0.1f),
-                           iz = noise(1, 17, 0.05f);
-  // u, uBar, v, vBar, p, q after the solve.
-  auto solve = [&](Backend& b, int iterations) {
-    auto put = [&](const std::vector<float>& host, int channels) {
-      const Buffer buf = b.create(w, h, channels);
-      b.upload(buf, host.data());
-      return buf;
-    };
-    const PrimalDualBuffers pd{put(u, 1), put(u, 1), put(v, 2), put(v, 2), put(p, 2), put(q, 4)};
-    const DataTermBuffers data{put(u0, 1), put(iu, 1), put(iz, 1)};
-    PrimalDualParams prm{20.f, 17.f, 1.2f, {}};
-    float scale = 1.f;
-    for (int k = 0; k < iterations; ++k) {
-      const float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
-      prm.schedule.push_back({scale, 1.f / scale, theta});
-      scale *= theta;
-    }
-    b.primalDual(pd, data, put(tensor, 4), put(steps, 4), put(mask, 1), prm);
-    std::vector<std::vector<float> > out;
-    for (const Buffer& buf : {pd.u, pd.uBar, pd.v, pd.vBar, pd.p, pd.q}) {
-      out.emplace_back(buf.count());
-      b.download(buf, out.back().data());
-    }
-    return out;
-  };
-  for (int iterations : {3, 5, 6, 70}) {
-    const auto ref = solve(*cpu, iterations);
-    for (bool persistent : {true, false}) {
-      cuda::CudaBackend cuda(0);
-      cuda.setPersistentPrimalDual(persistent);
-      const auto out = solve(cuda, iterations);
-      double maxAbs = 0;
-      long long nonFinite = 0;
-      for (size_t b = 0; b < out.size(); ++b)
-        for (size_t i = 0; i < out[b].size(); ++i) {
-          if (!std::isfinite(out[b][i]))
-            ++nonFinite;
-          else
-            maxAbs = std::max(maxAbs, double(std::abs(out[b][i] - ref[b][i])));
-        }
-      const std::string path = persistent ? "persistent" : "per iteration";
-      MESSAGE("primal-dual " << path << ", " << iterations << " iterations: max abs " << maxAbs
-                             << " against the oracle");
-      CHECK(nonFinite == 0);
-      CHECK(maxAbs <= 1e-4);
-    }
-  }
+  for (const auto& [w, h] : {std::pair{61, 45}, std::pair{90, 70}, std::pair{101, 75}, std::pair{203, 131}})
+    checkPrimalDualPaths(w, h);
 }
 
 TEST_CASE("CUDA device-pointer API: the initialiser's confidence stays on the device, as the host API gives it") {
