@@ -1,6 +1,7 @@
 // Preconditioned primal-dual iterations of anisotropic TGV-L1 (cpu/primal_dual.cpp): two
-// iterations per launch on large levels, one cooperative launch for the whole schedule
-// (a grid barrier between iterations) on levels whose tiles fit on the device at once.
+// iterations per launch on large levels; the whole schedule in one launch on levels small
+// enough: one thread-block cluster (sm_90+) for the smallest, else one cooperative launch
+// (a grid barrier between iterations) where the level's tiles fit on the device at once.
 // Each iteration fuses the dual and the primal pass: a block computes the new
 // duals p, q (and D p) of its tile plus a one-pixel halo to the left and above into
 // shared memory, then the primal update of its tile from there. The state ping-pongs
@@ -631,13 +632,15 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
 
 // All iterations of a schedule in one launch of one thread-block cluster (sm_90 and newer),
 // on levels whose tiles fit in one cluster (at most 16 tiles: up to 128x128 pixels, e.g.
-// 106x100 and 53x50, the two coarsest levels of a T265 frame). As in the persistent kernel each thread keeps its
-// pixel's constants and state in registers, but a block reads its neighbours' tile borders straight from their shared
-// memory (distributed shared memory) after a cluster barrier, instead of through L2 after a grid barrier: two cluster
-// barriers per iteration and no global traffic until the end. There the grid barrier's round trips through L2 made an
-// iteration cost ~3.6 us whatever the level's size (ncu, 10 iterations of a 53x50 level in 36 us). The tile is the
-// smallest of 16x16, 32x16 and 32x32 that fits the level in one cluster: an SM issues four warp instructions per cycle,
-// so an iteration's time is set by the pixels per SM, and smaller tiles spread a small level over more SMs.
+// 106x100 and 53x50, the two coarsest levels of a T265 frame). As in the persistent kernel
+// each thread keeps its pixel's constants and state in registers, but a block reads its
+// neighbours' tile borders straight from their shared memory (distributed shared memory)
+// after a cluster barrier, instead of through L2 after a grid barrier: two cluster barriers
+// per iteration and no global traffic until the end. (The grid barrier's round trips made
+// an iteration cost ~3.6 us whatever the level's size: ncu, 10 iterations at 53x50 in
+// 36 us; here 20 us.) The tile is the smallest of 16x16, 32x16 and 32x32 that fits the
+// level in one cluster: an SM issues four warp instructions per cycle, so an iteration's
+// time is set by the pixels per SM, and smaller tiles spread a small level over more SMs.
 template <int TileW, int TileH>
 struct ClusterTile {
   float2 dp[TileH][TileW];
