@@ -34,12 +34,18 @@ __device__ __forceinline__ float sampleBilinear(const Img& v, float x, float y, 
 
 // accumulate at one masked pixel (cpu/accumulate.cpp) from the estimate `uIn`:
 // du = clamp(uIn - u0, +-duMax); u = u0 + du; w += du * tangent.
-__device__ __forceinline__ void accumulatePixel(const Img& u, const Img& w, const Img& u0, const Img& tangent, int x,
-                                                int y, float uIn, float duMax) {
-  const float du = fminf(fmaxf(uIn - at(u0, x, y), -duMax), duMax);
-  at(u, x, y) = at(u0, x, y) + du;
-  at(w, x, y, 0) += du * at(tangent, x, y, 0);
-  at(w, x, y, 1) += du * at(tangent, x, y, 1);
+// Returns the new u; the new w through wx, wy.
+__device__ __forceinline__ float accumulatePixel(const Img& u, const Img& w, const Img& u0, const Img& tangent, int x,
+                                                 int y, float uIn, float duMax, float& wx, float& wy) {
+  const float base = at(u0, x, y);
+  const float du = fminf(fmaxf(uIn - base, -duMax), duMax);
+  const float uNew = base + du;
+  at(u, x, y) = uNew;
+  wx = at(w, x, y, 0) + du * at(tangent, x, y, 0);
+  wy = at(w, x, y, 1) + du * at(tangent, x, y, 1);
+  at(w, x, y, 0) = wx;
+  at(w, x, y, 1) = wy;
+  return uNew;
 }
 
 inline dim3 grid2d(int w, int h, dim3 block) { return dim3((w + block.x - 1) / block.x, (h + block.y - 1) / block.y); }

@@ -131,7 +131,6 @@ CudaBackend::CudaBackend(int device, CUstream_st* stream) : device_(device), str
   description_ = std::string(prop.name) + " (sm_" + std::to_string(prop.major * 10 + prop.minor) + ", " +
                  std::to_string(prop.multiProcessorCount) + " SMs, " + memory + "), CUDA runtime " +
                  versionText(runtime) + ", driver " + versionText(driver);
-  residentBlocks_ = cudak::primalDualResidentBlocks(device_);
   clusterBlocks_ = cudak::primalDualClusterBlocks(device_);
 }
 
@@ -240,6 +239,29 @@ void CudaBackend::runPendingMedian() {
         "median");
 }
 
+// The derivatives' buffers, for runPendingAccumulate().
+struct CudaBackend::NextWarp {
+  cudak::DataTermOut out;
+  cudak::DataTermIn in;
+};
+
+void CudaBackend::runPendingAccumulate(const NextWarp* next) {
+  if (!pendingAccumulate_) return;
+  const PendingAccumulate a = *pendingAccumulate_;
+  pendingAccumulate_.reset();
+  const cudak::Img w = img(slot(a.w).dev, a.w), u0 = img(slot(a.u0).dev, a.u0);
+  const cudak::Img tangent = img(slot(a.tangent).dev, a.tangent), mask = img(slot(a.mask).dev, a.mask);
+  const cudak::DataTermOut* nextOut = next ? &next->out : nullptr;
+  const cudak::DataTermIn* nextIn = next ? &next->in : nullptr;
+  if (a.median.id >= 0)
+    check(cudak::launchMedianAccumulate(stream_, img(a.uOut, a.u), img(slot(a.median).dev, a.median), img(a.uIn, a.u),
+                                        w, u0, tangent, mask, a.duMax, nextOut, nextIn),
+          next ? "median + accumulate + derivatives" : "median + accumulate");
+  else
+    check(cudak::launchAccumulate(stream_, img(a.uOut, a.u), w, u0, tangent, mask, a.duMax, nextOut, nextIn),
+          next ? "accumulate + derivatives" : "accumulate");
+}
+
 void CudaBackend::enqueue(const PendingOp& op) {
   // Ops of one launch run concurrently: queue only what touches none of the buffers the
   // queued ops write (and writes none they read).
@@ -254,6 +276,7 @@ void CudaBackend::enqueue(const PendingOp& op) {
 
 void CudaBackend::flush() {
   runPendingMedian();
+  runPendingAccumulate();
   if (pending_.empty()) return;
   cudak::MemOps ops{};
   ops.count = int(pending_.size());
@@ -448,16 +471,27 @@ void CudaBackend::structureTensor(const Buffer& tensor, const Buffer& steps, con
         "structureTensor");
 }
 
+// The pipeline's warps end with accumulate() and begin with warpDerivatives() of the same
+// u, w and tangent: both work on a pixel's own values, so the pending accumulate pass
+// computes the derivatives too (one launch and one round trip of u and w less per warp).
 void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
                                   const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
                                   const Buffer& mask, const Buffer& confidence, float weightFloor) {
-  flush();
   const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
-  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), img(slot(data.iu).dev, data.iu),
-                                     img(slot(data.iz).dev, data.iz), img(slot(tangent).dev, tangent),
-                                     img(slot(i0).dev, i0), img(slot(i1).dev, i1),
-                                     img(slot(trajectory).dev, trajectory), img(slot(w).dev, w), img(slot(u).dev, u),
-                                     img(slot(mask).dev, mask), weight, weightFloor),
+  const NextWarp next{
+      {img(slot(data.iu).dev, data.iu), img(slot(data.iz).dev, data.iz), img(slot(tangent).dev, tangent)},
+      {img(slot(i0).dev, i0), img(slot(i1).dev, i1), img(slot(trajectory).dev, trajectory), img(slot(mask).dev, mask),
+       weight, weightFloor}};
+  const PendingAccumulate* a = pendingAccumulate_ ? &*pendingAccumulate_ : nullptr;
+  if (a && pending_.empty() && a->u.id == u.id && a->w.id == w.id && a->u0.id == data.u0.id &&
+      a->tangent.id == tangent.id && a->mask.id == mask.id) {
+    runPendingAccumulate(&next);
+    return;
+  }
+  flush();
+  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), next.out.iu, next.out.iz,
+                                     next.out.tangent, next.in.i0, next.in.i1, next.in.trajectory, img(slot(w).dev, w),
+                                     img(slot(u).dev, u), next.in.mask, weight, weightFloor),
         "warpDerivatives");
 }
 
@@ -503,9 +537,8 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
     return;
   }
   int endSet = 0;
-  check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()),
-                                singleLaunch_.cooperative ? residentBlocks_ : 0,
-                                singleLaunch_.cluster ? clusterBlocks_ : 0, endSet),
+  check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()), clusterPath_ ? clusterBlocks_ : 0,
+                                endSet),
         "primalDual");
   // The result is in the scratch set: it becomes the buffers' memory (later launches,
   // captured or not, take the pointers from the slots), the old memory the scratch set.
@@ -529,6 +562,7 @@ void CudaBackend::median(const Buffer& dst, const Buffer& src, const Buffer& mas
 
 void CudaBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
                              const Buffer& mask, float duMax) {
+  slot(w), slot(u0), slot(tangent), slot(mask);  // checked now, like every other call
   // median(scratch, u) -> copy(u, scratch) -> accumulate(u): one pass that writes the
   // median to scratch and the accumulated u to a spare buffer, which then becomes u's
   // memory (u is read around each pixel, so it cannot be written in place).
@@ -538,17 +572,13 @@ void CudaBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0,
     pendingMedian_.reset();
     pending_.clear();
     float*& spare = scratchSlot(u.count(), 2);
-    check(cudak::launchMedianAccumulate(stream_, img(spare, u), img(slot(median).dev, median), img(slot(u).dev, u),
-                                        img(slot(w).dev, w), img(slot(u0).dev, u0), img(slot(tangent).dev, tangent),
-                                        img(slot(mask).dev, mask), duMax),
-          "median + accumulate");
+    float* const uIn = slot(u).dev;
     std::swap(slots_[size_t(u.id)].dev, spare);
+    pendingAccumulate_ = PendingAccumulate{u, w, u0, tangent, mask, uIn, slot(u).dev, median, duMax};
     return;
   }
   flush();
-  check(cudak::launchAccumulate(stream_, img(slot(u).dev, u), img(slot(w).dev, w), img(slot(u0).dev, u0),
-                                img(slot(tangent).dev, tangent), img(slot(mask).dev, mask), duMax),
-        "accumulate");
+  pendingAccumulate_ = PendingAccumulate{u, w, u0, tangent, mask, slot(u).dev, slot(u).dev, Buffer{}, duMax};
 }
 
 void CudaBackend::synchronize() {

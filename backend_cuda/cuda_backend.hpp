@@ -93,15 +93,11 @@ class CudaBackend final : public Backend {
   int deviceIndex() const { return device_; }
   // dst = the packed float image at src (device memory, rows srcPitchBytes apart), async.
   void copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes);
-  // Which single-launch paths primalDual() may take for a level's whole schedule (default
-  // both): one thread-block cluster when the level fits in one (sm_90+), one cooperative
-  // launch when its tiles fit on the device at once. Otherwise, and with both off, it
-  // launches once per two iterations, the path of large levels (e.g. to test it on small ones).
-  struct SingleLaunchPaths {
-    bool cluster = true, cooperative = true;
-  };
-  void setSingleLaunchPaths(SingleLaunchPaths paths) { singleLaunch_ = paths; }
-  // The most 32x32 tiles a level may have to take the cluster path (0 before sm_90).
+  // Whether primalDual() may run a level's whole schedule in one thread-block cluster when
+  // the level fits in one (sm_90+; default on). Off, every level launches once per two
+  // iterations (e.g. to test that path on small levels).
+  void setClusterPath(bool on) { clusterPath_ = on; }
+  // The most 16x16 tiles a level may have to take the cluster path (0 before sm_90).
   int clusterPathTiles() const { return clusterBlocks_; }
 
  private:
@@ -127,9 +123,22 @@ class CudaBackend final : public Backend {
   struct PendingMedian {
     Buffer dst, src, mask;
   };
+  // So is accumulate() (see warpDerivatives()). u's memory is that of the call (the
+  // fused pass reads one block and writes another, which becomes u's); the other buffers'
+  // memory does not move before the pending pass runs.
+  struct PendingAccumulate {
+    Buffer u, w, u0, tangent, mask;
+    float* uIn;     // u's memory before the call
+    float* uOut;    // and after it
+    Buffer median;  // id -1: no median pass (launchAccumulate, u in place)
+    float duMax;
+  };
   void enqueue(const PendingOp& op);
   void flush();  // runs the deferred median, then the queued ops
   void runPendingMedian();
+  // With nextWarp: the next warp's derivatives in the same pass (warpDerivatives()).
+  struct NextWarp;
+  void runPendingAccumulate(const NextWarp* nextWarp = nullptr);
   // Moves the buffers handed out by devicePointer() back to that memory (endFrame()).
   void returnHandedOutBuffers();
   float** scratchHolding(const float* memory);
@@ -152,9 +161,9 @@ class CudaBackend final : public Backend {
   std::map<int, PrimalDualScratch> pdScratch_;        // by the id of pd.p
   std::vector<PendingOp> pending_;
   std::optional<PendingMedian> pendingMedian_;
-  int residentBlocks_ = 0;  // of the persistent primal-dual kernel
-  int clusterBlocks_ = 0;   // in one cluster of the primal-dual cluster kernel
-  SingleLaunchPaths singleLaunch_;
+  std::optional<PendingAccumulate> pendingAccumulate_;
+  int clusterBlocks_ = 0;  // in one cluster of the primal-dual cluster kernel
+  bool clusterPath_ = true;
 
   CUgraph_st* graph_ = nullptr;
   CUgraphExec_st* exec_ = nullptr;

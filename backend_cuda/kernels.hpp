@@ -115,28 +115,39 @@ cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float 
 // tmpRows, tmpSmooth: scratch of image.width * image.height floats each.
 cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorDev& p,
                                   float* tmpRows, float* tmpSmooth);
+// What warpDerivatives writes besides u0 (the data term's slope and offset, and the
+// tangent of the epipolar curve at x + w), and what it reads besides w and u.
+struct DataTermOut {
+  Img iu, iz, tangent;
+};
+struct DataTermIn {
+  Img i0, i1, trajectory, mask;
+  Img confidence;  // data null: every pixel weighs 1
+  float weightFloor;
+};
 cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory,
                                   Img w, Img u, Img mask, Img confidence,
                                   float weightFloor);  // confidence.data may be null
-// Blocks of the primal-dual kernel the device runs at once in one cooperative launch
-// (0: no cooperative launch).
-int primalDualResidentBlocks(int device);
 // Blocks the primal-dual cluster kernel may run in one cluster (0: before sm_90, none).
 int primalDualClusterBlocks(int device);
 // `count` iterations, the first reading set 0 (uBar, vBar from uBarFirst, vBarFirst). A
-// level whose 32x32 tiles number at most clusterBlocks runs in one cluster launch, else one
-// whose 32x8 tiles number at most residentBlocks in one cooperative launch, and a larger
-// one launches once per two iterations, going from one set to the other.
+// level whose 16x16 tiles number at most clusterBlocks runs in one cluster launch; a
+// larger one launches once per two iterations, going from one set to the other.
 // endSet: the set that holds the result (0 or 1; the caller swaps the sets' roles rather
 // than copying). Pixels outside the mask keep their values.
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                             int residentBlocks, int clusterBlocks, int& endSet);
+                             int clusterBlocks, int& endSet);
 cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask);
-cudaError_t launchAccumulate(cudaStream_t s, Img u, Img w, Img u0, Img tangent, Img mask, float duMax);
+// With `next` (not null), each pixel then goes on to the next warp's launchWarpDerivatives
+// (u0 = the accumulated u; next->mask must be `mask`): a warp's last stage and the next
+// warp's first in one pass, since both work on the pixel's own u and w alone.
+cudaError_t launchAccumulate(cudaStream_t s, Img u, Img w, Img u0, Img tangent, Img mask, float duMax,
+                             const DataTermOut* nextOut = nullptr, const DataTermIn* next = nullptr);
 // median = median(u) (launchMedian), then accumulate from it into uOut (launchAccumulate
-// with uIn = median, written to uOut instead of u): the warp's two last stages in one pass.
+// with uIn = median, written to uOut instead of u): the warp's two last stages in one pass;
+// with `next`, the next warp's derivatives too (as launchAccumulate).
 cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
-                                   float duMax);
+                                   float duMax, const DataTermOut* nextOut = nullptr, const DataTermIn* next = nullptr);
 
 // volume, costs, aggregated: p.planes channels. best: 2 channels (q, cost). other: the
 // reverse sweep's best. launchSweepAggregate: p.planes <= kMaxSweepPlanes (else

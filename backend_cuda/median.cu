@@ -1,6 +1,6 @@
 // 3x3 median of u over the masked neighbours (cpu/median.cpp); even counts take the mean
 // of the two middle values. Also the fused median + accumulate of the warp's last stages.
-#include "common.cuh"
+#include "warp_derivatives.cuh"
 
 namespace cs::cudak {
 
@@ -98,22 +98,31 @@ __global__ void __launch_bounds__(kBlockW* kBlockH) medianKernel(Img dst, Img sr
   at(dst, x, y) = t.masked[threadIdx.y + 1][threadIdx.x + 1] ? maskedMedian(t) : at(src, x, y);
 }
 
-// accumulateKernel (accumulate.cu) reading u from the median computed here.
+// accumulateKernel (accumulate.cu) reading u from the median computed here, and, with
+// kNextWarp, the next warp's derivatives of the pixel.
+template <bool kNextWarp>
 __global__ void __launch_bounds__(kBlockW* kBlockH)
-    medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask, float duMax) {
+    medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask, float duMax,
+                           DataTermOut nextOut, DataTermIn next) {
   beginKernel();
   __shared__ MedianTile t;
   loadTile(t, u, mask);
   __syncthreads();
   const int x = blockIdx.x * kBlockW + threadIdx.x, y = blockIdx.y * kBlockH + threadIdx.y;
   if (x >= u.width || y >= u.height) return;
-  if (!t.masked[threadIdx.y + 1][threadIdx.x + 1]) {
-    at(median, x, y) = at(uOut, x, y) = at(u, x, y);
-    return;
+  const bool isMasked = t.masked[threadIdx.y + 1][threadIdx.x + 1];
+  float uNew, wx = 0.f, wy = 0.f;
+  if (!isMasked) {
+    uNew = at(u, x, y);
+    at(median, x, y) = at(uOut, x, y) = uNew;
+  } else {
+    const float m = maskedMedian(t);
+    at(median, x, y) = m;
+    uNew = accumulatePixel(uOut, w, u0, tangent, x, y, m, duMax, wx, wy);
   }
-  const float m = maskedMedian(t);
-  at(median, x, y) = m;
-  accumulatePixel(uOut, w, u0, tangent, x, y, m, duMax);
+  if (!kNextWarp) return;
+  at(u0, x, y) = uNew;
+  dataTermAt(nextOut, next, x, y, isMasked, wx, wy);
 }
 
 }  // namespace
@@ -125,10 +134,15 @@ cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask) {
 }
 
 cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
-                                   float duMax) {
+                                   float duMax, const DataTermOut* nextOut, const DataTermIn* next) {
   const dim3 block(kBlockW, kBlockH);
-  CS_LAUNCH(medianAccumulateKernel, grid2d(u.width, u.height, block), block, 0, s, uOut, median, u, w, u0, tangent,
-            mask, duMax);
+  const dim3 grid = grid2d(u.width, u.height, block);
+  if (next)
+    CS_LAUNCH(medianAccumulateKernel<true>, grid, block, 0, s, uOut, median, u, w, u0, tangent, mask, duMax, *nextOut,
+              *next);
+  else
+    CS_LAUNCH(medianAccumulateKernel<false>, grid, block, 0, s, uOut, median, u, w, u0, tangent, mask, duMax,
+              DataTermOut{}, DataTermIn{});
   return cudaSuccess;
 }
 

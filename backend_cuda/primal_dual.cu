@@ -1,7 +1,6 @@
 // Preconditioned primal-dual iterations of anisotropic TGV-L1 (cpu/primal_dual.cpp): two
-// iterations per launch on large levels; the whole schedule in one launch on levels small
-// enough: one thread-block cluster (sm_90+) for the smallest, else one cooperative launch
-// (a grid barrier between iterations) where the level's tiles fit on the device at once.
+// iterations per launch, and the whole schedule in one launch of one thread-block cluster
+// (sm_90+) on levels of at most 64x64 pixels.
 // Each iteration fuses the dual and the primal pass: a block computes the new
 // duals p, q (and D p) of its tile plus a one-pixel halo to the left and above into
 // shared memory, then the primal update of its tile from there. The state ping-pongs
@@ -32,10 +31,6 @@ constexpr int kMinBlocks = 6;
 #else
 constexpr int kMinBlocks = 4;
 #endif
-// The persistent kernel keeps its pixel's constants and state and those of its halo pixels
-// in registers across the iterations: 3 blocks per SM (80 registers, no spills; 64 spill),
-// enough for the levels it runs (~400 tiles on an H100 / H200).
-constexpr int kMinBlocksPersistent = kMinBlocks > 3 ? 3 : kMinBlocks;
 constexpr int kDualW = kTileW + 1, kDualH = kTileH + 1;  // tile plus the left / upper halo
 
 __device__ __forceinline__ float dataProx(float uHat, float u0, float iu, float iz, float tauLambda) {
@@ -289,8 +284,18 @@ struct PairTile {
   unsigned char flags[kPairH][kPairW];
 };
 
+// Pixels outside the mask never change, and no masked pixel reads them, so only the first
+// launch of a call copies them into the other set (`home`: also set 0's uBar, vBar where
+// that launch read uBarFirst, vBarFirst instead); later launches neither read nor write
+// them: the two sets already agree there. (A fisheye frame's corners are a fifth of it.)
+struct MaskedOutCopy {
+  bool copy;  // the first launch of the call
+  float* uBarHome;
+  float* vBarHome;  // null: set 0's uBar, vBar were what the launch read
+};
+
 __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
-    primalDualPairKernel(PrimalDualDev pd, StepDev stepA, StepDev stepB, int parity) {
+    primalDualPairKernel(PrimalDualDev pd, StepDev stepA, StepDev stepB, int parity, MaskedOutCopy outside) {
   beginKernel();
   __shared__ PairTile s;
   const int w = pd.width, h = pd.height;
@@ -299,6 +304,9 @@ __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
   const bool inImage = i >= 0 && j >= 0 && i < w && j < h;
   const int idx = inImage ? j * w + i : 0;
   const float alpha1 = pd.alpha1;
+  const bool right = i + 1 < w, down = j + 1 < h;
+  const float m = inImage ? __ldg(&pd.mask[idx]) : 0.f;
+  const bool live = inImage && (m != 0.f || outside.copy);
 
   // --- every load, then the first iteration's dual pass (all cells) ---
   float2 p = make_float2(0.f, 0.f), sigmaP = p, vOld = p, vBar = p;
@@ -306,13 +314,11 @@ __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
   float uOld = 0.f, uBar = 0.f;
   PrimalConstants c{};
   unsigned char flags = 0;
-  if (inImage) {
+  if (live) {
     const float* uBarIn = pd.uBar[parity];
     const float2* vBarIn = reinterpret_cast<const float2*>(pd.vBar[parity]);
-    const bool right = i + 1 < w, down = j + 1 < h;
     p = __ldg(reinterpret_cast<const float2*>(pd.p[parity]) + idx);
     q = __ldg(reinterpret_cast<const float4*>(pd.q[parity]) + idx);
-    const float m = __ldg(&pd.mask[idx]);
     const float mRight = right ? __ldg(&pd.mask[idx + 1]) : 0.f;
     const float mDown = down ? __ldg(&pd.mask[idx + w]) : 0.f;
     const float4 tensorHere = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);
@@ -374,7 +380,7 @@ __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
       s.q[ly][lx] = q;
       s.dp[ly][lx] = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
     }
-    if (lx >= 2 && ly >= 2) {  // the tile's own pixels
+    if (lx >= 2 && ly >= 2 && live) {  // the tile's own pixels
       reinterpret_cast<float2*>(pd.p[1 - parity])[idx] = p;
       reinterpret_cast<float4*>(pd.q[1 - parity])[idx] = q;
     }
@@ -382,7 +388,11 @@ __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
   __syncthreads();
 
   // --- second iteration, primal pass over the tile ---
-  if (!interior || lx < 2 || ly < 2) return;
+  if (!interior || lx < 2 || ly < 2 || !live) return;
+  if (!masked && outside.uBarHome) {
+    outside.uBarHome[idx] = uBar;
+    reinterpret_cast<float2*>(outside.vBarHome)[idx] = vBar;
+  }
   float uNew = u, uBarNew = uBar;
   float2 vNew = v, vBarNew = vBar;
   if (masked) primalPixel(pd, s, lx, ly, loadPrimalConstants(pd, idx), stepB, u, v, uNew, vNew, uBarNew, vBarNew);
@@ -393,7 +403,7 @@ __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
 }
 
 // A pixel's constants and primal-dual state, held in registers across a schedule by the
-// single-launch kernels (persistent, cluster): the initial state from set 0.
+// cluster kernel: the initial state from set 0.
 struct OwnPixel {
   float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
   float2 sigmaP = make_float2(0.f, 0.f);
@@ -472,175 +482,18 @@ __device__ __forceinline__ void primalUpdate(const PrimalDualDev& pd, OwnPixel& 
   o.vBar = make_float2(o.v.x + step.theta * (o.v.x - vOld.x), o.v.y + step.theta * (o.v.y - vOld.y));
 }
 
-// All iterations of a schedule in one cooperative launch, one block per tile, a grid
-// barrier between iterations (levels whose tiles all fit on the device at once: the
-// coarse levels, where one launch per iteration costs more than the iteration). Each
-// thread keeps its own pixel's constants and state (u, v, uBar, vBar, p, q) in registers
-// across the iterations; thread (tx, 0) also owns the halo pixel above it and thread
-// (0, ty) the one left of it (their constants; their duals are recomputed from the
-// exchanged values). An iteration exchanges only the tile's border through global memory
-// (one L2 round trip): uBar, vBar of the border pixels, p, q of the right column and the
-// bottom row, ping-ponging between the two buffer sets. The state starts in set 0 and
-// ends there. Every per-pixel expression is the one of iterateTile, in the same order.
-struct PersistentTile {
-  float2 p[kDualH][kDualW];  // [ly + 1][lx + 1]: the tile and its left / upper halo
-  float2 dp[kDualH][kDualW];
-  float4 q[kDualH][kDualW];
-  float uBar[kTileH][kTileW];  // the tile's uBar, vBar of the last iteration
-  float2 vBar[kTileH][kTileW];
-};
-
-struct HaloPixel {
-  float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
-  float2 sigmaP = make_float2(0.f, 0.f);
-  int idx = 0;
-  unsigned char flags = 0;  // kMasked, kLinkX, kLinkY; 0 outside the image
-  bool inside = false;
-};
-
-__device__ __forceinline__ HaloPixel loadHalo(const PrimalDualDev& pd, int i, int j) {
-  HaloPixel hp;
-  const int w = pd.width, h = pd.height;
-  if (i < 0 || j < 0 || i >= w || j >= h) return hp;
-  hp.inside = true;
-  hp.idx = j * w + i;
-  if (__ldg(&pd.mask[hp.idx]) != 0.f) {
-    const bool ex = isMasked(pd.mask, w, h, i + 1, j), ey = isMasked(pd.mask, w, h, i, j + 1);
-    hp.flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
-    hp.t = __ldg(reinterpret_cast<const float4*>(pd.tensor) + hp.idx);
-    hp.sigmaP = __ldg(reinterpret_cast<const float2*>(reinterpret_cast<const float4*>(pd.steps) + hp.idx) + 1);
-  }
-  return hp;
-}
-
-// The halo pixel's new duals (from the set `in`) into the shared tile at (lx, ly).
-__device__ __forceinline__ void haloDual(const PrimalDualDev& pd, const HaloPixel& hp, int in, const float* uBarIn,
-                                         const float2* vBarIn, const StepDev step, float2* sp, float2* sdp,
-                                         float4* sq) {
-  float2 p = make_float2(0.f, 0.f);
-  float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
-  if (hp.inside) {
-    p = __ldcg(reinterpret_cast<const float2*>(pd.p[in]) + hp.idx);
-    q = __ldcg(reinterpret_cast<const float4*>(pd.q[in]) + hp.idx);
-    if (hp.flags & kMasked) {
-      const bool ex = hp.flags & kLinkX, ey = hp.flags & kLinkY;
-      const float ub = __ldcg(&uBarIn[hp.idx]);
-      const float2 vb = __ldcg(&vBarIn[hp.idx]);
-      float ur = 0.f, ud = 0.f;
-      float2 vr = make_float2(0.f, 0.f), vd = vr;
-      if (ex) {
-        ur = __ldcg(&uBarIn[hp.idx + 1]);
-        vr = __ldcg(&vBarIn[hp.idx + 1]);
-      }
-      if (ey) {
-        ud = __ldcg(&uBarIn[hp.idx + pd.width]);
-        vd = __ldcg(&vBarIn[hp.idx + pd.width]);
-      }
-      dualPixel(p, q, hp.t, hp.sigmaP, ex, ey, ub, ur, ud, vb, vr, vd, step, pd.alpha1);
-    }
-  }
-  *sp = p;
-  *sq = q;
-  *sdp = make_float2(hp.t.x * p.x + hp.t.y * p.y, hp.t.y * p.x + hp.t.z * p.y);
-}
-
-__global__ void __launch_bounds__(kTileW* kTileH, kMinBlocksPersistent)
-    primalDualPersistentKernel(PrimalDualDev pd, const __grid_constant__ PrimalDualSchedule schedule) {
-  awaitPreviousKernel();
-  __shared__ PersistentTile s;
-  cg::grid_group grid = cg::this_grid();
-  const int w = pd.width, h = pd.height;
-  const int tx = threadIdx.x, ty = threadIdx.y;
-  const int x0 = blockIdx.x * kTileW, y0 = blockIdx.y * kTileH;
-  const int x = x0 + tx, y = y0 + ty;
-  const bool own = x < w && y < h;
-  const int idx = own ? y * w + x : 0;
-  OwnPixel o = loadOwnPixel(pd, x, y);
-  // The halo pixels this thread recomputes the duals of.
-  const HaloPixel up = ty == 0 ? loadHalo(pd, x, y0 - 1) : HaloPixel{};
-  const HaloPixel left = tx == 0 ? loadHalo(pd, x0 - 1, y) : HaloPixel{};
-  // The border pixels whose values the neighbouring blocks read.
-  const bool borderBar = tx == 0 || ty == 0 || tx == kTileW - 1 || ty == kTileH - 1;
-  const bool borderDual = tx == kTileW - 1 || ty == kTileH - 1;
-  s.uBar[ty][tx] = o.uBar;
-  s.vBar[ty][tx] = o.vBar;
-  __syncthreads();
-
-  const int count = schedule.count;
-  for (int k = 0; k < count; ++k) {
-    const StepDev step = schedule.steps[k];
-    const int in = k & 1, out = 1 - in;
-    const float* uBarIn = k == 0 ? pd.uBarFirst : pd.uBar[in];
-    const float2* vBarIn = reinterpret_cast<const float2*>(k == 0 ? pd.vBarFirst : pd.vBar[in]);
-    if (k > 0) grid.sync();
-    // --- dual pass: the own pixel (neighbours in the tile from shared memory, beyond it
-    // from the set `in`) and the halo pixels ---
-    if (own && o.masked) {
-      float ur = 0.f, ud = 0.f;
-      float2 vr = make_float2(0.f, 0.f), vd = vr;
-      if (o.ex) {
-        if (tx + 1 < kTileW) {
-          ur = s.uBar[ty][tx + 1];
-          vr = s.vBar[ty][tx + 1];
-        } else {
-          ur = __ldcg(&uBarIn[idx + 1]);
-          vr = __ldcg(vBarIn + idx + 1);
-        }
-      }
-      if (o.ey) {
-        if (ty + 1 < kTileH) {
-          ud = s.uBar[ty + 1][tx];
-          vd = s.vBar[ty + 1][tx];
-        } else {
-          ud = __ldcg(&uBarIn[idx + w]);
-          vd = __ldcg(vBarIn + idx + w);
-        }
-      }
-      dualPixel(o.p, o.q, o.t, o.sigmaP, o.ex, o.ey, o.uBar, ur, ud, o.vBar, vr, vd, step, pd.alpha1);
-    }
-    if (ty == 0) haloDual(pd, up, in, uBarIn, vBarIn, step, &s.p[0][tx + 1], &s.dp[0][tx + 1], &s.q[0][tx + 1]);
-    if (tx == 0) haloDual(pd, left, in, uBarIn, vBarIn, step, &s.p[ty + 1][0], &s.dp[ty + 1][0], &s.q[ty + 1][0]);
-    const float2 dp = make_float2(o.t.x * o.p.x + o.t.y * o.p.y, o.t.y * o.p.x + o.t.z * o.p.y);
-    s.p[ty + 1][tx + 1] = o.p;
-    s.q[ty + 1][tx + 1] = o.q;
-    s.dp[ty + 1][tx + 1] = dp;
-    const bool last = k + 1 == count;
-    if (own && borderDual && !last) {
-      reinterpret_cast<float2*>(pd.p[out])[idx] = o.p;
-      reinterpret_cast<float4*>(pd.q[out])[idx] = o.q;
-    }
-    __syncthreads();
-
-    // --- primal pass over the own pixel ---
-    if (own && o.masked) {
-      const int lx = tx + 1, ly = ty + 1;
-      primalUpdate(pd, o, step, dp, s.dp[ly][lx - 1], s.dp[ly - 1][lx], s.q[ly][lx - 1], s.q[ly - 1][lx]);
-    }
-    // Read in this iteration's dual pass only, before the barrier above.
-    s.uBar[ty][tx] = o.uBar;
-    s.vBar[ty][tx] = o.vBar;
-    if (own && borderBar && !last) {
-      pd.uBar[out][idx] = o.uBar;
-      reinterpret_cast<float2*>(pd.vBar[out])[idx] = o.vBar;
-    }
-  }
-  releaseNextKernel();
-  // The final state into set 0 (after a barrier where the last iteration read set 0).
-  if (count % 2 == 1) grid.sync();
-  if (own) storeOwnPixel(pd, o, idx);
-}
-
 // All iterations of a schedule in one launch of one thread-block cluster (sm_90 and newer),
-// on levels whose tiles fit in one cluster (at most 16 tiles: up to 128x128 pixels, e.g.
-// 106x100 and 53x50, the two coarsest levels of a T265 frame). As in the persistent kernel
-// each thread keeps its pixel's constants and state in registers, but a block reads its
-// neighbours' tile borders straight from their shared memory (distributed shared memory)
-// after a cluster barrier, instead of through L2 after a grid barrier: two cluster barriers
-// per iteration and no global traffic until the end. (The grid barrier's round trips made
-// an iteration cost ~3.6 us whatever the level's size: ncu, 10 iterations at 53x50 in
-// 36 us; here 20 us.) The tile is the smallest of 16x16, 32x16 and 32x32 that fits the
-// level in one cluster: an SM issues four warp instructions per cycle, so an iteration's
-// time is set by the pixels per SM, and smaller tiles spread a small level over more SMs.
+// on levels whose 16x16 tiles fit in one cluster (at most 16 tiles: up to 64x64 pixels,
+// e.g. 53x50, the coarsest level of a T265 frame). Each thread keeps its pixel's constants
+// and state in registers, and a block reads its neighbours' tile borders straight from
+// their shared memory (distributed shared memory) after a cluster barrier: two cluster
+// barriers per iteration and no global traffic until the end. Measured on an H200 (T265,
+// N=20): 0.05 ms a frame faster than two-iteration launches at 53x50, but 0.11 ms slower
+// with 32x32 tiles at 106x100 (an iteration's dependent shared-memory round trips and
+// barriers cost more than a launch does under programmatic dependent launch), so larger
+// levels take the launches; a cooperative kernel with a grid barrier per iteration for the
+// 212x200 level measured 0.13 ms slower too and was removed.
+constexpr int kClusterTile = 16;
 template <int TileW, int TileH>
 struct ClusterTile {
   float2 dp[TileH][TileW];
@@ -728,32 +581,20 @@ __global__ void __launch_bounds__(TileW* TileH, 1)
 
 }  // namespace
 
-int primalDualResidentBlocks(int device) {
-  int sms = 0, perSm = 0, cooperative = 0;
-  if (cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device) != cudaSuccess || !cooperative)
-    return 0;
-  if (cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device) != cudaSuccess) return 0;
-  if (cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, primalDualPersistentKernel, kTileW * kTileH, 0) !=
-      cudaSuccess)
-    return 0;
-  return sms * perSm;
-}
-
 int primalDualClusterBlocks(int device) {
-  // CURVESTEREO_CUDA_CLUSTER=0 leaves the small levels to the cooperative kernel (to
+  // CURVESTEREO_CUDA_CLUSTER=0 leaves the small levels to the two-iteration launches (to
   // measure what the cluster path brings, or to rule it out).
   const char* off = std::getenv("CURVESTEREO_CUDA_CLUSTER");
   if (off && std::strcmp(off, "0") == 0) return 0;
   int major = 0;
   if (cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, device) != cudaSuccess || major < 9) return 0;
-  for (auto kernel :
-       {primalDualClusterKernel<16, 16>, primalDualClusterKernel<32, 16>, primalDualClusterKernel<32, 32>})
-    if (cudaFuncSetAttribute(kernel, cudaFuncAttributeNonPortableClusterSizeAllowed, 1) != cudaSuccess) return 0;
+  const auto kernel = primalDualClusterKernel<kClusterTile, kClusterTile>;
+  if (cudaFuncSetAttribute(kernel, cudaFuncAttributeNonPortableClusterSizeAllowed, 1) != cudaSuccess) return 0;
   // 16 blocks: the most Hopper runs in one cluster (a non-portable size); 8 is portable.
   for (const dim3 cluster : {dim3(4, 4), dim3(4, 2), dim3(2, 2)}) {
     cudaLaunchConfig_t config{};
     config.gridDim = cluster;
-    config.blockDim = dim3(32, 32);  // the largest tile
+    config.blockDim = dim3(kClusterTile, kClusterTile);
     cudaLaunchAttribute attribute{};
     attribute.id = cudaLaunchAttributeClusterDimension;
     attribute.val.clusterDim.x = cluster.x;
@@ -762,8 +603,7 @@ int primalDualClusterBlocks(int device) {
     config.attrs = &attribute;
     config.numAttrs = 1;
     int clusters = 0;
-    if (cudaOccupancyMaxActiveClusters(&clusters, primalDualClusterKernel<32, 32>, &config) == cudaSuccess &&
-        clusters > 0)
+    if (cudaOccupancyMaxActiveClusters(&clusters, kernel, &config) == cudaSuccess && clusters > 0)
       return int(cluster.x * cluster.y);
   }
   cudaGetLastError();  // clear the failed queries' error
@@ -795,15 +635,10 @@ static cudaError_t launchSingle(cudaStream_t s, const PrimalDualDev& pd, const S
 }
 
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                             int residentBlocks, int clusterBlocks, int& endSet) {
+                             int clusterBlocks, int& endSet) {
   endSet = 0;
-  using ClusterKernel = void (*)(PrimalDualDev, PrimalDualSchedule);
-  const std::pair<dim3, ClusterKernel> clusterTiles[] = {{dim3(16, 16), primalDualClusterKernel<16, 16>},
-                                                         {dim3(32, 16), primalDualClusterKernel<32, 16>},
-                                                         {dim3(32, 32), primalDualClusterKernel<32, 32>}};
-  for (const auto& [tile, kernel] : clusterTiles) {
-    const dim3 clusterGrid = grid2d(pd.width, pd.height, tile);
-    if (int(clusterGrid.x * clusterGrid.y) > clusterBlocks) continue;
+  const dim3 tile(kClusterTile, kClusterTile), clusterGrid = grid2d(pd.width, pd.height, tile);
+  if (int(clusterGrid.x * clusterGrid.y) <= clusterBlocks) {
     // A programmatic dependent launch as well (launch() in common.cuh): the cluster is
     // scheduled while the previous kernel finishes.
     cudaLaunchAttribute attributes[2]{};
@@ -813,15 +648,10 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
     attributes[0].val.clusterDim.z = 1;
     attributes[1].id = cudaLaunchAttributeProgrammaticStreamSerialization;
     attributes[1].val.programmaticStreamSerializationAllowed = 1;
-    return launchSingle(s, pd, steps, count, kernel, clusterGrid, tile, attributes, dependentLaunchSupported() ? 2 : 1);
+    return launchSingle(s, pd, steps, count, primalDualClusterKernel<kClusterTile, kClusterTile>, clusterGrid, tile,
+                        attributes, dependentLaunchSupported() ? 2 : 1);
   }
   const dim3 block(kTileW, kTileH), grid = grid2d(pd.width, pd.height, block);
-  if (int(grid.x * grid.y) <= residentBlocks) {
-    cudaLaunchAttribute attribute{};
-    attribute.id = cudaLaunchAttributeCooperative;
-    attribute.val.cooperative = 1;
-    return launchSingle(s, pd, steps, count, primalDualPersistentKernel, grid, block, &attribute, 1);
-  }
   // Two iterations per launch, the odd one last; every launch goes from one set to the
   // other. The first launch reads set 0 and writes set 1 only, so its uBar, vBar can be
   // read from uBarFirst, vBarFirst in place of set 0's.
@@ -830,9 +660,13 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
   first.vBar[0] = const_cast<float*>(pd.vBarFirst);
   const dim3 pairBlock(kPairW, kPairH);
   const dim3 pairGrid((pd.width + kPairTileW - 1) / kPairTileW, (pd.height + kPairTileH - 1) / kPairTileH);
+  const bool barsElsewhere = pd.uBarFirst != pd.uBar[0];
+  const MaskedOutCopy copyOutside{true, barsElsewhere ? pd.uBar[0] : nullptr, barsElsewhere ? pd.vBar[0] : nullptr};
+  const MaskedOutCopy leaveOutside{false, nullptr, nullptr};
   int k = 0;
   for (; k + 1 < count; k += 2, endSet ^= 1)
-    CS_LAUNCH(primalDualPairKernel, pairGrid, pairBlock, 0, s, k == 0 ? first : pd, steps[k], steps[k + 1], endSet);
+    CS_LAUNCH(primalDualPairKernel, pairGrid, pairBlock, 0, s, k == 0 ? first : pd, steps[k], steps[k + 1], endSet,
+              k == 0 ? copyOutside : leaveOutside);
   if (k < count) {
     CS_LAUNCH(primalDualKernel, grid, block, 0, s, k == 0 ? first : pd, steps[k], endSet);
     endSet ^= 1;
