@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace cs {
 
@@ -263,43 +264,37 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress) {
   backend_.triangulate(radial_, points_, levels_[0].w, levels_[0].mask, toCameraParams(levels_[0].cam0), tp);
 }
 
-Pipeline::Output Pipeline::download() {
+// Straight into the result's images: a warp pixel is two floats and a point three, laid
+// out as the backend's 2- and 3-channel buffers.
+static_assert(sizeof(Vec2f) == 2 * sizeof(float) && std::is_standard_layout_v<Vec2f>, "Vec2f must be 2 floats");
+static_assert(sizeof(Point3f) == 3 * sizeof(float) && std::is_standard_layout_v<Point3f>, "Point3f must be 3 floats");
+
+void Pipeline::download(DepthResult& out) {
   stage("download");
   const Level& L0 = levels_[0];
   const int w = L0.size.width, h = L0.size.height;
-  const size_t n = size_t(w) * h;
-  Output out;
-  std::vector<float> mask(n);
-  backend_.download(L0.mask, mask.data());
-  out.valid = ImageU8(w, h);
-  for (size_t i = 0; i < n; ++i) out.valid.data[i] = mask[i] != 0.f;
-  out.radial = ImageF(w, h);
-  backend_.download(radial_, out.radial.data.data());
-  if (initialising()) {
-    out.confidence = ImageF(w, h);
-    backend_.download(L0.confidence, out.confidence.data.data());
-  }
-  if (selection_.disparity) {
-    out.disparity = ImageF(w, h);
-    backend_.download(L0.pd.u, out.disparity.data.data());
-  }
-  if (selection_.warp) {
-    std::vector<float> warp(2 * n);
-    backend_.download(L0.w, warp.data());
-    out.warp = FlowImage(w, h);
-    for (size_t i = 0; i < n; ++i) out.warp.data[i] = {warp[2 * i], warp[2 * i + 1]};
-  }
-  if (selection_.points) {
-    std::vector<float> points(3 * n);
-    backend_.download(points_, points.data());
-    out.points = Image<Point3f>(w, h);
-    for (size_t i = 0; i < n; ++i) out.points.data[i] = {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
-  }
-  return out;
+  // No mask: the caller derives the valid mask from radial, NaN wherever the mask is 0.
+  backend_.download(radial_, fitImage(out.depth.radial, w, h));
+  if (initialising())
+    backend_.download(L0.confidence, fitImage(out.confidence, w, h));
+  else
+    out.confidence = ImageF();
+  if (selection_.disparity)
+    backend_.download(L0.pd.u, fitImage(out.disparity, w, h));
+  else
+    out.disparity = ImageF();
+  if (selection_.warp)
+    backend_.download(L0.w, reinterpret_cast<float*>(fitImage(out.warp, w, h)));
+  else
+    out.warp = FlowImage();
+  if (selection_.points)
+    backend_.download(points_, reinterpret_cast<float*>(fitImage(out.depth.points, w, h)));
+  else
+    out.depth.points = Image<Point3f>();
 }
 
-Pipeline::Output Pipeline::run(const ImageF& left, const ImageF& right, bool profile,
-                               const std::function<void(double)>& progress) {
+void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
+                   DepthResult& out) {
   profiling_ = profile;
   upload(left, right);
   if (!profiling_ && backend_.canReplayFrame()) {
@@ -309,9 +304,11 @@ Pipeline::Output Pipeline::run(const ImageF& left, const ImageF& right, bool pro
     issueFrame(progress);
     backend_.endFrame();
   }
-  Output out = download();
-  if (profiling_) out.stages = backend_.takeStageTimes();
-  return out;
+  download(out);
+  if (profiling_)
+    out.stages = backend_.takeStageTimes();
+  else
+    out.stages.clear();
 }
 
 Pipeline::DeviceIO Pipeline::deviceIO() const {

@@ -11,6 +11,16 @@
 
 namespace cs {
 
+// Makes img a w x h image for the next frame to overwrite: its storage stays when the size
+// already matches (no allocation, no zero fill). Returns its first element.
+template <class T>
+T* fitImage(Image<T>& img, int w, int h) {
+  img.width = w;
+  img.height = h;
+  img.data.resize(size_t(w) * size_t(h));
+  return img.data.data();
+}
+
 class Pipeline {
  public:
   // Allocates every buffer of every level once. userMask (optional, full resolution)
@@ -25,24 +35,22 @@ class Pipeline {
   // Replaces the user's mask (empty: none); takes effect with the next setPose().
   void setUserMask(const ImageU8& userMask);
 
-  // Which of the optional outputs run() downloads; the valid mask and radial depth always
-  // come back. Skipping the rest saves most of a GPU frame's transfer time.
+  // Which of the optional outputs run() downloads; radial depth (and from it the valid
+  // mask) always comes back. Skipping the rest saves most of a GPU frame's transfer time.
   struct Selection {
     bool disparity = true, warp = true, points = true;
   };
   void select(const Selection& selection) { selection_ = selection; }
 
-  struct Output {
-    ImageU8 valid;
-    ImageF disparity;
-    FlowImage warp;
-    ImageF radial;
-    ImageF confidence;  // only with the plane-sweep initialiser
-    Image<Point3f> points;
-    std::vector<StageTime> stages;
-  };
-  // profile: time each stage (synchronising at each boundary) instead of replaying.
-  Output run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress);
+  // One frame: uploads the images, solves, and downloads into `out`: depth.radial, the
+  // selected disparity, warp and depth.points, and the confidence with the initialiser
+  // (the others become empty images), and out.stages (empty unless `profile`: time each
+  // stage, synchronising at each boundary, instead of replaying). Images of the right
+  // size keep their storage, so a caller reusing `out` allocates nothing. out.valid and
+  // out.depth.z are left to the caller: the mask is not downloaded, since triangulate
+  // leaves radial NaN wherever it is 0 (backend.hpp).
+  void run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
+           DepthResult& out);
 
   // For callers whose images are already on the backend's device (cs::cuda::DeviceStereo):
   // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
@@ -90,7 +98,7 @@ class Pipeline {
   void initialiseLevel(size_t l);
   void solveLevel(Level& level, const std::function<void(int)>& warpDone);
   PrimalDualParams primalDualParams() const;
-  Output download();
+  void download(DepthResult& out);
 
   Backend& backend_;
   Params params_;

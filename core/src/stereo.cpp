@@ -1,9 +1,13 @@
 #include "curvestereo/stereo.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <new>
+#include <type_traits>
 
 #include "curvestereo/backend.hpp"
 #include "pipeline.hpp"
@@ -20,44 +24,97 @@ void checkImage(const ImageF& img, const Camera& cam, const char* which) {
   if (img.width != cam.width || img.height != cam.height)
     throw Error(std::string(which) + " image is " + sizeText(img.width, img.height) + " but the calibration says " +
                 sizeText(cam.width, cam.height));
-  for (float v : img.data)
-    if (!std::isfinite(v)) throw Error(std::string(which) + " image contains NaN or infinite pixels");
+  // Branch-free within a block, so the compiler vectorises it: v - v is 0 for a finite v
+  // and NaN for NaN or +-inf, which compares unequal to 0. (A float sum of v - v would not
+  // vectorise: without -ffast-math the additions must stay in order.)
+  constexpr size_t kBlock = 4096;
+  const float* data = img.data.data();
+  const size_t n = img.data.size();
+  for (size_t start = 0; start < n; start += kBlock) {
+    const size_t end = std::min(n, start + kBlock);
+    int bad = 0;
+    for (size_t i = start; i < end; ++i) bad |= !(data[i] - data[i] == 0.f);
+    if (bad) throw Error(std::string(which) + " image contains NaN or infinite pixels");
+  }
 }
 
-// The pipeline's output as the public result. A solved pixel whose depth came out NaN
-// (a solver failure, or a warp that left the camera model's valid region) is reported
-// unsolved rather than passed on as if it were depth. Outputs not selected stay empty.
-DepthResult finish(Pipeline::Output&& out, std::chrono::steady_clock::time_point t0) {
-  DepthResult r;
-  r.valid = std::move(out.valid);
-  r.disparity = std::move(out.disparity);
-  r.warp = std::move(out.warp);
-  r.depth.radial = std::move(out.radial);
-  r.depth.points = std::move(out.points);
-  r.confidence = std::move(out.confidence);
-  const bool hasConfidence = !r.confidence.empty();
-  const bool hasDisparity = !r.disparity.empty(), hasWarp = !r.warp.empty(), hasPoints = !r.depth.points.empty();
-  if (hasPoints) r.depth.z = ImageF(r.valid.width, r.valid.height);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (size_t i = 0; i < r.valid.size(); ++i) {
-    const bool solved = r.valid.data[i] && !std::isnan(r.depth.radial.data[i]) &&
-                        (!hasDisparity || std::isfinite(r.disparity.data[i])) &&
-                        (!hasWarp || (std::isfinite(r.warp.data[i].x) && std::isfinite(r.warp.data[i].y)));
-    if (!solved) {
-      r.valid.data[i] = 0;
-      r.depth.radial.data[i] = nan;
-      if (hasDisparity) r.disparity.data[i] = nan;
-      if (hasWarp) r.warp.data[i] = {nan, nan};
-      if (hasPoints) r.depth.points.data[i] = {nan, nan, nan};
-      if (hasConfidence) r.confidence.data[i] = nan;
+// v where keep is all ones, the quiet NaN where it is zero: a select written as bit
+// operations, which the compiler vectorises where it would not if-convert `c ? v : nan`.
+inline float keepOrNaN(float v, uint32_t keep) {
+  constexpr uint32_t kQuietNaN = 0x7fc00000u;  // std::numeric_limits<float>::quiet_NaN()
+  uint32_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  bits = (bits & keep) | (kQuietNaN & ~keep);
+  std::memcpy(&v, &bits, sizeof v);
+  return v;
+}
+
+// finish()'s pass over the pixels, with the outputs present fixed at compile time. No
+// control flow in the loop: every value is loaded and every output stored, unsolved
+// pixels' values replaced by keepOrNaN. (It vectorises; with the points too only where
+// the target can shuffle 3-float groups, SSSE3 and later.)
+template <bool kDisparity, bool kWarp, bool kPoints, bool kConfidence>
+void finishPixels(DepthResult& r) {
+  const float inf = std::numeric_limits<float>::infinity();
+  const size_t n = r.depth.radial.size();
+  uint8_t* __restrict valid = r.valid.data.data();
+  float* __restrict radial = r.depth.radial.data.data();
+  float* __restrict disparity = r.disparity.data.data();
+  Vec2f* __restrict warp = r.warp.data.data();
+  Point3f* __restrict points = r.depth.points.data.data();
+  float* __restrict z = r.depth.z.data.data();
+  float* __restrict confidence = r.confidence.data.data();
+  for (size_t i = 0; i < n; ++i) {
+    const float rad = radial[i];
+    const float d = kDisparity ? disparity[i] : 0.f;
+    const Vec2f wi = kWarp ? warp[i] : Vec2f{};
+    // radial is NaN wherever the mask is 0 (Backend::triangulate), so this includes the mask.
+    const bool solved = !std::isnan(rad) & std::isfinite(d) & std::isfinite(wi.x) & std::isfinite(wi.y);
+    const uint32_t keep = 0u - uint32_t(solved);
+    valid[i] = solved;
+    const float radOut = keepOrNaN(rad, keep);
+    radial[i] = radOut;
+    if constexpr (kDisparity) disparity[i] = keepOrNaN(d, keep);
+    if constexpr (kWarp) warp[i] = {keepOrNaN(wi.x, keep), keepOrNaN(wi.y, keep)};
+    if constexpr (kConfidence) confidence[i] = keepOrNaN(confidence[i], keep);
+    if constexpr (kPoints) {
+      const Point3f p = points[i];
+      const Point3f pOut{keepOrNaN(p.x, keep), keepOrNaN(p.y, keep), keepOrNaN(p.z, keep)};
+      points[i] = pOut;
+      // A point at infinity has infinite z too (reported as +inf, also beyond 90 degrees).
+      z[i] = std::fabs(radOut) == inf ? radOut : pOut.z;
     }
-    // A point at infinity has infinite z too (reported as +inf, also beyond 90 degrees).
-    const float radial = r.depth.radial.data[i];
-    if (hasPoints) r.depth.z.data[i] = std::isinf(radial) ? radial : r.depth.points.data[i].z;
   }
-  r.stages = std::move(out.stages);
-  r.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  return r;
+}
+
+// The pipeline's output as the public result, in one pass. A pixel is solved where the
+// radial depth is not NaN (which includes the mask) and the disparity and warp, where
+// selected, are finite: a solver failure, or a warp that left the camera model's valid
+// region, is reported unsolved rather than passed on as if it were depth. Unsolved pixels
+// are NaN in every output. Outputs not selected stay empty.
+void finish(DepthResult& r) {
+  const int w = r.depth.radial.width, h = r.depth.radial.height;
+  fitImage(r.valid, w, h);
+  if (r.depth.points.empty())
+    r.depth.z = ImageF();
+  else
+    fitImage(r.depth.z, w, h);
+  // The 16 combinations of outputs present, each its own loop.
+  auto with = [&](auto disparity, auto warp, auto points, auto confidence) {
+    finishPixels<decltype(disparity)::value, decltype(warp)::value, decltype(points)::value,
+                 decltype(confidence)::value>(r);
+  };
+  auto flag = [](bool on, auto next) {
+    if (on)
+      next(std::true_type{});
+    else
+      next(std::false_type{});
+  };
+  flag(!r.disparity.empty(), [&](auto d) {
+    flag(!r.warp.empty(), [&](auto wp) {
+      flag(!r.depth.points.empty(), [&](auto p) { flag(!r.confidence.empty(), [&](auto c) { with(d, wp, p, c); }); });
+    });
+  });
 }
 
 }  // namespace
@@ -133,16 +190,24 @@ void Stereo::setProgress(std::function<void(double)> progress) { progress_ = std
 const std::string& Stereo::backendName() const { return backendName_; }
 std::string Stereo::deviceName() const { return backend_->device(); }
 
-DepthResult Stereo::compute(const ImageF& left, const ImageF& right) {
+void Stereo::compute(const ImageF& left, const ImageF& right, DepthResult& result) {
   checkImage(left, rig_.cam0, "left");
   checkImage(right, rig_.cam1, "right");
   const auto t0 = std::chrono::steady_clock::now();
   if (!pipeline_) throw Error("this Stereo object failed to set up (see the earlier error)");
   try {
-    return finish(pipeline_->run(left, right, profiling_, progress_), t0);
+    pipeline_->run(left, right, profiling_, progress_, result);
+    finish(result);
   } catch (const std::bad_alloc&) {
     throw Error("out of memory computing a " + sizeText(left.width, left.height) + " frame (host result images)");
   }
+  result.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+DepthResult Stereo::compute(const ImageF& left, const ImageF& right) {
+  DepthResult result;
+  compute(left, right, result);
+  return result;
 }
 
 }  // namespace cs

@@ -180,6 +180,8 @@ class Backend {
 
   // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w where mask
   // is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.
+  // radial is NaN outside the mask: Stereo derives the valid mask from radial instead of
+  // downloading the mask.
   virtual void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                            const CameraParams& cam0, const double tPrime[3]) = 0;
 

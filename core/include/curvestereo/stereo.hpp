@@ -2,6 +2,7 @@
 //
 //   cs::Stereo stereo(cs::loadKalibr("camchain.yaml"), cs::preset("default"));
 //   cs::DepthResult r = stereo.compute(left, right);   // r.depth: radial metres
+//   stereo.compute(left, right, r);                     // the next frame, into r's buffers
 //
 // A Stereo object is not thread-safe; use one per thread (they share nothing).
 #pragma once
@@ -70,6 +71,12 @@ class Stereo {
   // Images: float gray in [0,1], both of the rig's resolution. Throws cs::Error on
   // mismatched sizes or non-finite pixels.
   DepthResult compute(const ImageF& left, const ImageF& right);
+  // The same result, written into `result`: its images keep their storage where their size
+  // already matches, so a loop that passes the same DepthResult every frame allocates
+  // nothing after the first. Every field is overwritten (outputs not selected and, without
+  // the initialiser, the confidence become empty images). If it throws, `result` is left
+  // in an unspecified but valid state.
+  void compute(const ImageF& left, const ImageF& right, DepthResult& result);
 
   const std::string& backendName() const;
   std::string deviceName() const;
