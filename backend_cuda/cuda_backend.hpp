@@ -134,7 +134,7 @@ class CudaBackend final : public Backend {
     float duMax;
   };
   void enqueue(const PendingOp& op);
-  void flush();  // runs the deferred median, then the queued ops
+  void flush();  // runs the deferred median or accumulate, then the queued ops
   void runPendingMedian();
   // With nextWarp: the next warp's derivatives in the same pass (warpDerivatives()).
   struct NextWarp;
