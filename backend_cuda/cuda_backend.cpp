@@ -132,6 +132,7 @@ CudaBackend::CudaBackend(int device, CUstream_st* stream) : device_(device), str
                  std::to_string(prop.multiProcessorCount) + " SMs, " + memory + "), CUDA runtime " +
                  versionText(runtime) + ", driver " + versionText(driver);
   clusterBlocks_ = cudak::primalDualClusterBlocks(device_);
+  residentTiledBlocks_ = cudak::primalDualTiledResidentBlocks(device_);
 }
 
 CudaBackend::~CudaBackend() {
@@ -537,8 +538,8 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
     return;
   }
   int endSet = 0;
-  check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()), clusterPath_ ? clusterBlocks_ : 0,
-                                endSet),
+  check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()), paths_.cluster ? clusterBlocks_ : 0,
+                                paths_.fiveIterationLaunches ? residentTiledBlocks_ : 0, endSet),
         "primalDual");
   // The result is in the scratch set: it becomes the buffers' memory (later launches,
   // captured or not, take the pointers from the slots), the old memory the scratch set.

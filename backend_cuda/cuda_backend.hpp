@@ -93,10 +93,14 @@ class CudaBackend final : public Backend {
   int deviceIndex() const { return device_; }
   // dst = the packed float image at src (device memory, rows srcPitchBytes apart), async.
   void copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes);
-  // Whether primalDual() may run a level's whole schedule in one thread-block cluster when
-  // the level fits in one (sm_90+; default on). Off, every level launches once per two
-  // iterations (e.g. to test that path on small levels).
-  void setClusterPath(bool on) { clusterPath_ = on; }
+  // Which paths primalDual() may take besides launches of two iterations (default both):
+  // the whole schedule in one thread-block cluster when the level fits in one (sm_90+),
+  // five iterations per launch when the level's tiles then fit on the device at once.
+  // Turning them off sends small levels down the path of large ones (to test it).
+  struct PrimalDualPaths {
+    bool cluster = true, fiveIterationLaunches = true;
+  };
+  void setPrimalDualPaths(PrimalDualPaths paths) { paths_ = paths; }
   // The most 16x16 tiles a level may have to take the cluster path (0 before sm_90).
   int clusterPathTiles() const { return clusterBlocks_; }
 
@@ -162,8 +166,9 @@ class CudaBackend final : public Backend {
   std::vector<PendingOp> pending_;
   std::optional<PendingMedian> pendingMedian_;
   std::optional<PendingAccumulate> pendingAccumulate_;
-  int clusterBlocks_ = 0;  // in one cluster of the primal-dual cluster kernel
-  bool clusterPath_ = true;
+  int clusterBlocks_ = 0;        // in one cluster of the primal-dual cluster kernel
+  int residentTiledBlocks_ = 0;  // of the tiled primal-dual kernel, on the device at once
+  PrimalDualPaths paths_;
 
   CUgraph_st* graph_ = nullptr;
   CUgraphExec_st* exec_ = nullptr;

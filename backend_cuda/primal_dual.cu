@@ -1,6 +1,6 @@
 // Preconditioned primal-dual iterations of anisotropic TGV-L1 (cpu/primal_dual.cpp): two
-// iterations per launch, and the whole schedule in one launch of one thread-block cluster
-// (sm_90+) on levels of at most 64x64 pixels.
+// or five iterations per launch (primalDualTiledKernel), and the whole schedule in one
+// launch of one thread-block cluster (sm_90+) on levels of at most 64x64 pixels.
 // Each iteration fuses the dual and the primal pass: a block computes the new
 // duals p, q (and D p) of its tile plus a one-pixel halo to the left and above into
 // shared memory, then the primal update of its tile from there. The state ping-pongs
@@ -10,6 +10,7 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <type_traits>
 #include <utility>
 
 #include "common.cuh"
@@ -172,7 +173,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   const float4* __restrict__ steps = reinterpret_cast<const float4*>(pd.steps);
   const float alpha1 = pd.alpha1;
   // u and v go from set `parity` to the other one, so that this kernel can alternate with
-  // the two-iteration kernel.
+  // the tiled kernel.
   float* uIn = pd.u[parity];
   float* uOutP = pd.u[1 - parity];
   float2* vIn = reinterpret_cast<float2*>(pd.v[parity]);
@@ -259,29 +260,33 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocks)
   iterateTile(pd, step, parity, s);
 }
 
-// Two iterations per launch (temporal blocking) on the large levels, one cell per thread:
-// a block of 32x16 threads covers its tile (29x13 pixels) plus the halo the two iterations
-// need (two pixels left / up, one right / down), and each thread owns one cell for the
-// whole launch. A thread issues every global load of the first iteration at its start, so
-// that the block waits for memory once (the kernel is bound by latency as much as by
-// bandwidth; this replaced a 32x16 tile whose halo cells took second rounds of loads in
-// three of the four phases: 43 -> 35 us per launch at 848x800 under ncu on an H200). The phases
-// exchange neighbours' values through shared memory, each on one cell less per side.
-// Every per-pixel expression is the one of iterateTile, in the same order.
-constexpr int kPairW = 32, kPairH = 16;                          // threads = cells
-constexpr int kPairTileW = kPairW - 3, kPairTileH = kPairH - 3;  // pixels written
+// Several iterations per launch (temporal blocking), one cell per thread: a block of
+// 32x16 threads covers its tile plus the halo the iterations need, and each thread owns one
+// cell for the whole launch. A thread issues every global load of the first iteration at
+// its start, so that the block waits for memory once (the kernel is bound by latency as
+// much as by bandwidth: this replaced a 32x16 tile whose halo cells took second rounds of
+// loads in three of the four phases of a two-iteration launch, 43 -> 35 us per launch at
+// 848x800 under ncu on an H200). The phases exchange neighbours' values through shared
+// memory, each on one cell less than the last. Every per-pixel expression is the one of
+// iterateTile, in the same order. Large levels take two iterations per launch (a 29x13
+// tile: the halo's redundant work grows with the iterations, and memory traffic matters
+// there); levels whose five-iteration tiles (23x7) all fit on the device at once take
+// five, since there the launches' latency is what costs (H200, T265 frame, N=20: levels
+// 212x200 and 106x100, 6.39 -> 6.35 ms a frame).
+constexpr int kCellsW = 32, kCellsH = 16;  // threads = cells
+constexpr int kDeepIterations = 5;
 // 3 blocks of 512 threads on sm_80 / sm_86+ (40 registers), 2 on Turing's 1024 threads.
-// The second iteration reloads its constants (L1 hits) rather than holding them in
+// Later iterations reload their constants (L1 hits) rather than holding them in
 // registers from the first: holding them spills at 40 registers and measured slower.
-constexpr int kMinBlocksPair = kMinBlocks >= 6 ? 3 : 2;
+constexpr int kMinBlocksTiled = kMinBlocks >= 6 ? 3 : 2;
 
-struct PairTile {
-  float2 p[kPairH][kPairW];
-  float2 dp[kPairH][kPairW];
-  float4 q[kPairH][kPairW];
-  float uBar[kPairH][kPairW];
-  float2 vBar[kPairH][kPairW];
-  unsigned char flags[kPairH][kPairW];
+struct CellTile {
+  float2 p[kCellsH][kCellsW];
+  float2 dp[kCellsH][kCellsW];
+  float4 q[kCellsH][kCellsW];
+  float uBar[kCellsH][kCellsW];
+  float2 vBar[kCellsH][kCellsW];
+  unsigned char flags[kCellsH][kCellsW];
 };
 
 // Pixels outside the mask never change, and no masked pixel reads them, so only the first
@@ -294,13 +299,24 @@ struct MaskedOutCopy {
   float* vBarHome;  // null: set 0's uBar, vBar were what the launch read
 };
 
-__global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
-    primalDualPairKernel(PrimalDualDev pd, StepDev stepA, StepDev stepB, int parity, MaskedOutCopy outside) {
+// kIters iterations in one launch: a block of 32x16 cells writes a (33 - 2 kIters) x
+// (17 - 2 kIters) tile; iteration `it`'s dual pass runs on the cells [it, 31 - it] and its
+// primal pass on [it + 1, 31 - it] (each needs one more neighbour than the last left), so
+// the written tile is [kIters, 32 - kIters] (pixel (0, 0) of the tile at cell kIters).
+template <int kIters>
+struct StepBatch {
+  StepDev step[kIters];
+};
+
+template <int kIters>
+__global__ void __launch_bounds__(kCellsW* kCellsH, kMinBlocksTiled)
+    primalDualTiledKernel(PrimalDualDev pd, StepBatch<kIters> steps, int parity, MaskedOutCopy outside) {
   beginKernel();
-  __shared__ PairTile s;
+  __shared__ CellTile s;
+  constexpr int kTileW = kCellsW + 1 - 2 * kIters, kTileH = kCellsH + 1 - 2 * kIters;
   const int w = pd.width, h = pd.height;
   const int lx = threadIdx.x, ly = threadIdx.y;
-  const int i = blockIdx.x * kPairTileW - 2 + lx, j = blockIdx.y * kPairTileH - 2 + ly;
+  const int i = blockIdx.x * kTileW - kIters + lx, j = blockIdx.y * kTileH - kIters + ly;
   const bool inImage = i >= 0 && j >= 0 && i < w && j < h;
   const int idx = inImage ? j * w + i : 0;
   const float alpha1 = pd.alpha1;
@@ -340,7 +356,7 @@ __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
       const bool ex = mRight != 0.f, ey = mDown != 0.f;
       t = tensorHere;
       flags = kMasked | (ex ? kLinkX : 0) | (ey ? kLinkY : 0);
-      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, stepA, alpha1);
+      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, steps.step[0], alpha1);
     }
   }
   s.p[ly][lx] = p;
@@ -353,17 +369,19 @@ __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
   const bool masked = flags & kMasked;
   float u = uOld;
   float2 v = vOld;
-  if (masked && lx >= 1 && ly >= 1) primalPixel(pd, s, lx, ly, c, stepA, uOld, vOld, u, v, uBar, vBar);
+  if (masked && lx >= 1 && ly >= 1) primalPixel(pd, s, lx, ly, c, steps.step[0], uOld, vOld, u, v, uBar, vBar);
   s.uBar[ly][lx] = uBar;
   s.vBar[ly][lx] = vBar;
   __syncthreads();
 
-  // --- second iteration, dual pass: one cell less on every side (in place) ---
-  const bool interior = inImage && lx >= 1 && ly >= 1 && lx < kPairW - 1 && ly < kPairH - 1;
-  if (interior) {
-    if (masked) {
+  // Iterations 1 .. kIters - 1: the dual pass on [it, 31 - it] (in place), then the
+  // primal pass on [it + 1, 31 - it]; the last one's primal pass on the written tile only.
+#pragma unroll
+  for (int it = 1; it < kIters; ++it) {
+    const bool dualCell = inImage && lx >= it && ly >= it && lx < kCellsW - it && ly < kCellsH - it;
+    if (dualCell && masked) {
       const bool ex = flags & kLinkX, ey = flags & kLinkY;
-      t = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);  // L1 hits (see above)
+      t = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);  // L1 hits
       sigmaP = __ldg(reinterpret_cast<const float2*>(reinterpret_cast<const float4*>(pd.steps) + idx) + 1);
       float ur = 0.f, ud = 0.f;
       float2 vr = make_float2(0.f, 0.f), vd = vr;
@@ -375,31 +393,43 @@ __global__ void __launch_bounds__(kPairW* kPairH, kMinBlocksPair)
         ud = s.uBar[ly + 1][lx];
         vd = s.vBar[ly + 1][lx];
       }
-      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, stepB, alpha1);
+      dualPixel(p, q, t, sigmaP, ex, ey, uBar, ur, ud, vBar, vr, vd, steps.step[it], alpha1);
       s.p[ly][lx] = p;
       s.q[ly][lx] = q;
       s.dp[ly][lx] = make_float2(t.x * p.x + t.y * p.y, t.y * p.x + t.z * p.y);
     }
-    if (lx >= 2 && ly >= 2 && live) {  // the tile's own pixels
+    const bool last = it + 1 == kIters;
+    // The written tile: [kIters, 32 - kIters].
+    const bool own = last && live && lx >= kIters && ly >= kIters && lx <= kCellsW - kIters && ly <= kCellsH - kIters;
+    if (own) {
       reinterpret_cast<float2*>(pd.p[1 - parity])[idx] = p;
       reinterpret_cast<float4*>(pd.q[1 - parity])[idx] = q;
     }
+    __syncthreads();
+    if (last) {
+      if (!own) return;
+      float uNew = u, uBarNew = uBar;
+      float2 vNew = v, vBarNew = vBar;
+      if (masked)
+        primalPixel(pd, s, lx, ly, loadPrimalConstants(pd, idx), steps.step[it], u, v, uNew, vNew, uBarNew, vBarNew);
+      u = uNew, v = vNew, uBar = uBarNew, vBar = vBarNew;
+    } else {
+      if (dualCell && lx > it && ly > it && masked)
+        primalPixel(pd, s, lx, ly, loadPrimalConstants(pd, idx), steps.step[it], u, v, u, v, uBar, vBar);
+      s.uBar[ly][lx] = uBar;
+      s.vBar[ly][lx] = vBar;
+      __syncthreads();
+    }
   }
-  __syncthreads();
 
-  // --- second iteration, primal pass over the tile ---
-  if (!interior || lx < 2 || ly < 2 || !live) return;
   if (!masked && outside.uBarHome) {
     outside.uBarHome[idx] = uBar;
     reinterpret_cast<float2*>(outside.vBarHome)[idx] = vBar;
   }
-  float uNew = u, uBarNew = uBar;
-  float2 vNew = v, vBarNew = vBar;
-  if (masked) primalPixel(pd, s, lx, ly, loadPrimalConstants(pd, idx), stepB, u, v, uNew, vNew, uBarNew, vBarNew);
-  pd.u[1 - parity][idx] = uNew;
-  reinterpret_cast<float2*>(pd.v[1 - parity])[idx] = vNew;
-  pd.uBar[1 - parity][idx] = uBarNew;
-  reinterpret_cast<float2*>(pd.vBar[1 - parity])[idx] = vBarNew;
+  pd.u[1 - parity][idx] = u;
+  reinterpret_cast<float2*>(pd.v[1 - parity])[idx] = v;
+  pd.uBar[1 - parity][idx] = uBar;
+  reinterpret_cast<float2*>(pd.vBar[1 - parity])[idx] = vBar;
 }
 
 // A pixel's constants and primal-dual state, held in registers across a schedule by the
@@ -581,6 +611,17 @@ __global__ void __launch_bounds__(TileW* TileH, 1)
 
 }  // namespace
 
+int primalDualTiledResidentBlocks(int device) {
+  int sms = 0, perSm = 0;
+  if (cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, device) != cudaSuccess ||
+      cudaOccupancyMaxActiveBlocksPerMultiprocessor(&perSm, primalDualTiledKernel<kDeepIterations>, kCellsW * kCellsH,
+                                                    0) != cudaSuccess) {
+    cudaGetLastError();
+    return 0;
+  }
+  return sms * perSm;
+}
+
 int primalDualClusterBlocks(int device) {
   // CURVESTEREO_CUDA_CLUSTER=0 leaves the small levels to the two-iteration launches (to
   // measure what the cluster path brings, or to rule it out).
@@ -634,8 +675,14 @@ static cudaError_t launchSingle(cudaStream_t s, const PrimalDualDev& pd, const S
   return cudaGetLastError();
 }
 
+// The grid of primalDualTiledKernel<iterations> over the level.
+static dim3 tiledGrid(const PrimalDualDev& pd, int iterations) {
+  const int tileW = kCellsW + 1 - 2 * iterations, tileH = kCellsH + 1 - 2 * iterations;
+  return dim3((pd.width + tileW - 1) / tileW, (pd.height + tileH - 1) / tileH);
+}
+
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                             int clusterBlocks, int& endSet) {
+                             int clusterBlocks, int residentTiledBlocks, int& endSet) {
   endSet = 0;
   const dim3 tile(kClusterTile, kClusterTile), clusterGrid = grid2d(pd.width, pd.height, tile);
   if (int(clusterGrid.x * clusterGrid.y) <= clusterBlocks) {
@@ -658,15 +705,28 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
   PrimalDualDev first = pd;
   first.uBar[0] = const_cast<float*>(pd.uBarFirst);
   first.vBar[0] = const_cast<float*>(pd.vBarFirst);
-  const dim3 pairBlock(kPairW, kPairH);
-  const dim3 pairGrid((pd.width + kPairTileW - 1) / kPairTileW, (pd.height + kPairTileH - 1) / kPairTileH);
   const bool barsElsewhere = pd.uBarFirst != pd.uBar[0];
   const MaskedOutCopy copyOutside{true, barsElsewhere ? pd.uBar[0] : nullptr, barsElsewhere ? pd.vBar[0] : nullptr};
   const MaskedOutCopy leaveOutside{false, nullptr, nullptr};
+  const dim3 deepGrid = tiledGrid(pd, kDeepIterations);
+  const bool deep = int(deepGrid.x * deepGrid.y) <= residentTiledBlocks;
   int k = 0;
-  for (; k + 1 < count; k += 2, endSet ^= 1)
-    CS_LAUNCH(primalDualPairKernel, pairGrid, pairBlock, 0, s, k == 0 ? first : pd, steps[k], steps[k + 1], endSet,
-              k == 0 ? copyOutside : leaveOutside);
+  while (k + 1 < count) {
+    const MaskedOutCopy outside = k == 0 ? copyOutside : leaveOutside;
+    const PrimalDualDev& state = k == 0 ? first : pd;
+    if (deep && count - k >= kDeepIterations) {
+      StepBatch<kDeepIterations> batch{};
+      for (int i = 0; i < kDeepIterations; ++i) batch.step[i] = steps[k + i];
+      CS_LAUNCH(primalDualTiledKernel<kDeepIterations>, deepGrid, dim3(kCellsW, kCellsH), 0, s, state, batch, endSet,
+                outside);
+      k += kDeepIterations;
+    } else {
+      CS_LAUNCH(primalDualTiledKernel<2>, tiledGrid(pd, 2), dim3(kCellsW, kCellsH), 0, s, state,
+                StepBatch<2>{{steps[k], steps[k + 1]}}, endSet, outside);
+      k += 2;
+    }
+    endSet ^= 1;
+  }
   if (k < count) {
     CS_LAUNCH(primalDualKernel, grid, block, 0, s, k == 0 ? first : pd, steps[k], endSet);
     endSet ^= 1;

@@ -110,15 +110,16 @@ void checkPrimalDualPaths(int w, int h) {
     }
     return out;
   };
-  // 4 iterations: two launches, which end in the first set (the pixels outside the mask
-  // are copied by the first launch only).
-  for (int iterations : {3, 4, 5, 6, 70})
+  // 4 iterations in launches of two end in the first set (the pixels outside the mask are
+  // copied by the first launch only); 6 and 7 in launches of five leave one or two over.
+  for (int iterations : {3, 4, 5, 6, 7, 10, 70})
     for (bool copyBars : {false, true}) {
       const auto ref = solve(*cpu, iterations, copyBars);
-      for (int path = 0; path < 2; ++path) {
+      for (int path = 0; path < 3; ++path) {
         cuda::CudaBackend cuda(0);
-        // The cluster path (when available and the level fits), then two iterations per launch.
-        cuda.setClusterPath(path == 0);
+        // The cluster path (when available and the level fits), five iterations per launch
+        // (when the level's tiles fit on the device at once), two iterations per launch.
+        cuda.setPrimalDualPaths({path == 0, path <= 1});
         if (path == 0) {
           int major = 0;
           ok(cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, 0));
@@ -135,9 +136,9 @@ void checkPrimalDualPaths(int w, int h) {
             else
               maxAbs = std::max(maxAbs, double(std::abs(out[b][i] - ref[b][i])));
           }
-        const char* name = path == 0 ? "cluster" : "two iterations per launch";
+        const std::string name = path == 0 ? "cluster" : path == 1 ? "five iterations per launch" : "two per launch";
         MESSAGE("primal-dual " << name << ", " << w << "x" << h << ", " << iterations << " iterations"
-                               << (copyBars ? " after uBar = u" : "") << ": max abs " << maxAbs
+                               << std::string(copyBars ? " after uBar = u" : "") << ": max abs " << maxAbs
                                << " against the oracle");
         CHECK(nonFinite == 0);
         CHECK(maxAbs <= 1e-4);
@@ -232,11 +233,12 @@ TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream")
 }
 
 // primalDual runs a level's whole schedule in one thread-block cluster when the level fits
-// in one (sm_90+), and in launches of two iterations otherwise: both paths, odd and even
-// schedules, with and without the pipeline's uBar = u copies, against the oracle on random
-// state over several tiles with ragged edges and a masked disc. On Hopper 61x45 and 64x64
-// fit in one cluster of 16x16 tiles, 90x70 and 203x131 do not.
-TEST_CASE("CUDA primal-dual: the cluster and two-iteration kernels match the oracle") {
+// in one (sm_90+), in launches of five iterations when its tiles then fit on the device at
+// once, and of two otherwise: every path, schedules that end in either set and with
+// iterations left over, with and without the pipeline's uBar = u copies, against the
+// oracle on random state over several tiles with ragged edges and a masked disc. On Hopper
+// 61x45 and 64x64 fit in one cluster of 16x16 tiles, 90x70 and 203x131 do not.
+TEST_CASE("CUDA primal-dual: the cluster and tiled kernels match the oracle") {
   if (noDevice("cuda primal-dual paths")) return;
   for (const auto& [w, h] : {std::pair{61, 45}, std::pair{64, 64}, std::pair{90, 70}, std::pair{203, 131}})
     checkPrimalDualPaths(w, h);
