@@ -32,20 +32,33 @@ __device__ __forceinline__ float sampleBilinear(const Img& v, float x, float y, 
   return top * (1.f - fy) + bottom * fy;
 }
 
-// accumulate at one masked pixel (cpu/accumulate.cpp) from the estimate `uIn`:
-// du = clamp(uIn - u0, +-duMax); u = u0 + du; w += du * tangent.
-// Returns the new u; the new w through wx, wy.
-__device__ __forceinline__ float accumulatePixel(const Img& u, const Img& w, const Img& u0, const Img& tangent, int x,
-                                                 int y, float uIn, float duMax, float& wx, float& wy) {
-  const float base = at(u0, x, y);
-  const float du = fminf(fmaxf(uIn - base, -duMax), duMax);
-  const float uNew = base + du;
+// A pixel's inputs of accumulate (cpu/accumulate.cpp), which a kernel may load before the
+// estimate is known.
+struct AccumulateInputs {
+  float u0, wx, wy, tx, ty;
+};
+__device__ __forceinline__ AccumulateInputs loadAccumulateInputs(const Img& w, const Img& u0, const Img& tangent, int x,
+                                                                 int y) {
+  return {at(u0, x, y), at(w, x, y, 0), at(w, x, y, 1), at(tangent, x, y, 0), at(tangent, x, y, 1)};
+}
+
+// accumulate at one masked pixel from the estimate `uIn`: du = clamp(uIn - u0, +-duMax);
+// u = u0 + du; w += du * tangent. Returns the new u; the new w through wx, wy.
+__device__ __forceinline__ float accumulateFrom(const AccumulateInputs& in, const Img& u, const Img& w, int x, int y,
+                                                float uIn, float duMax, float& wx, float& wy) {
+  const float du = fminf(fmaxf(uIn - in.u0, -duMax), duMax);
+  const float uNew = in.u0 + du;
   at(u, x, y) = uNew;
-  wx = at(w, x, y, 0) + du * at(tangent, x, y, 0);
-  wy = at(w, x, y, 1) + du * at(tangent, x, y, 1);
+  wx = in.wx + du * in.tx;
+  wy = in.wy + du * in.ty;
   at(w, x, y, 0) = wx;
   at(w, x, y, 1) = wy;
   return uNew;
+}
+
+__device__ __forceinline__ float accumulatePixel(const Img& u, const Img& w, const Img& u0, const Img& tangent, int x,
+                                                 int y, float uIn, float duMax, float& wx, float& wy) {
+  return accumulateFrom(loadAccumulateInputs(w, u0, tangent, x, y), u, w, x, y, uIn, duMax, wx, wy);
 }
 
 inline dim3 grid2d(int w, int h, dim3 block) { return dim3((w + block.x - 1) / block.x, (h + block.y - 1) / block.y); }
