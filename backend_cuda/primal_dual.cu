@@ -310,8 +310,12 @@ struct StepBatch {
 
 template <int kIters>
 __global__ void __launch_bounds__(kCellsW* kCellsH, kMinBlocksTiled)
-    primalDualTiledKernel(PrimalDualDev pd, StepBatch<kIters> steps, int parity, MaskedOutCopy outside) {
-  beginKernel();
+    primalDualTiledKernel(PrimalDualDev pd, StepBatch<kIters> steps, int parity, MaskedOutCopy outside,
+                          bool afterOwnLaunch) {
+  // No launch of a primalDual call writes the level's constants (mask, tensor, steps, the
+  // data term): a launch that follows another of the same call loads them while that one
+  // finishes, and waits for it before it loads the state.
+  if (!afterOwnLaunch) awaitPreviousKernel();
   __shared__ CellTile s;
   constexpr int kTileW = kCellsW + 1 - 2 * kIters, kTileH = kCellsH + 1 - 2 * kIters;
   const int w = pd.width, h = pd.height;
@@ -330,15 +334,24 @@ __global__ void __launch_bounds__(kCellsW* kCellsH, kMinBlocksTiled)
   float uOld = 0.f, uBar = 0.f;
   PrimalConstants c{};
   unsigned char flags = 0;
+  float mRight = 0.f, mDown = 0.f;
+  float4 tensorHere = t, st = t;
+  if (live) {
+    mRight = right ? __ldg(&pd.mask[idx + 1]) : 0.f;
+    mDown = down ? __ldg(&pd.mask[idx + w]) : 0.f;
+    tensorHere = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);
+    st = __ldg(reinterpret_cast<const float4*>(pd.steps) + idx);
+    c.u0 = __ldg(&pd.u0[idx]);
+    c.iu = __ldg(&pd.iu[idx]);
+    c.iz = __ldg(&pd.iz[idx]);
+  }
+  if (afterOwnLaunch) awaitPreviousKernel();
+  releaseNextKernel();
   if (live) {
     const float* uBarIn = pd.uBar[parity];
     const float2* vBarIn = reinterpret_cast<const float2*>(pd.vBar[parity]);
     p = __ldg(reinterpret_cast<const float2*>(pd.p[parity]) + idx);
     q = __ldg(reinterpret_cast<const float4*>(pd.q[parity]) + idx);
-    const float mRight = right ? __ldg(&pd.mask[idx + 1]) : 0.f;
-    const float mDown = down ? __ldg(&pd.mask[idx + w]) : 0.f;
-    const float4 tensorHere = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);
-    const float4 st = __ldg(reinterpret_cast<const float4*>(pd.steps) + idx);
     uBar = __ldg(&uBarIn[idx]);
     vBar = __ldg(&vBarIn[idx]);
     const float ur = right ? __ldg(&uBarIn[idx + 1]) : 0.f;
@@ -348,9 +361,6 @@ __global__ void __launch_bounds__(kCellsW* kCellsH, kMinBlocksTiled)
     uOld = __ldg(&pd.u[parity][idx]);
     vOld = __ldg(reinterpret_cast<const float2*>(pd.v[parity]) + idx);
     c.tau = make_float2(st.x, st.y);
-    c.u0 = __ldg(&pd.u0[idx]);
-    c.iu = __ldg(&pd.iu[idx]);
-    c.iz = __ldg(&pd.iz[idx]);
     sigmaP = make_float2(st.z, st.w);
     if (m != 0.f) {
       const bool ex = mRight != 0.f, ey = mDown != 0.f;
@@ -718,11 +728,11 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
       StepBatch<kDeepIterations> batch{};
       for (int i = 0; i < kDeepIterations; ++i) batch.step[i] = steps[k + i];
       CS_LAUNCH(primalDualTiledKernel<kDeepIterations>, deepGrid, dim3(kCellsW, kCellsH), 0, s, state, batch, endSet,
-                outside);
+                outside, k > 0);
       k += kDeepIterations;
     } else {
       CS_LAUNCH(primalDualTiledKernel<2>, tiledGrid(pd, 2), dim3(kCellsW, kCellsH), 0, s, state,
-                StepBatch<2>{{steps[k], steps[k + 1]}}, endSet, outside);
+                StepBatch<2>{{steps[k], steps[k + 1]}}, endSet, outside, k > 0);
       k += 2;
     }
     endSet ^= 1;
