@@ -43,9 +43,13 @@ __device__ __forceinline__ void loadTile(MedianTile& t, const Img& src, const Im
   for (int r = 0; r < kRingRounds; ++r) {
     const int k = tid + r * kBlockW * kBlockH;
     const int x = x0 + k % kRingW, y = y0 + k / kRingW;
-    in[r] = k < kRingW * kRingH && masked(mask, x, y);
-    value[r] = in[r] ? __ldg(&at(src, x, y)) : 0.f;
+    // u is loaded beside the mask, not after it: one round trip, not two.
+    const bool cell = k < kRingW * kRingH && inside(mask, x, y);
+    in[r] = cell && __ldg(&at(mask, x, y)) != 0.f;
+    value[r] = cell ? __ldg(&at(src, x, y)) : 0.f;
   }
+#pragma unroll
+  for (int r = 0; r < kRingRounds; ++r) value[r] = in[r] ? value[r] : 0.f;
 #pragma unroll
   for (int r = 0; r < kRingRounds; ++r) {
     const int k = tid + r * kBlockW * kBlockH;

@@ -28,22 +28,29 @@ __device__ __forceinline__ void dataTermAt(const DataTermOut& out, const DataTer
   float iuv = 0.f, izv = 0.f, tx = 0.f, ty = 0.f;
   if (isMasked) {
     const float px = float(x) + wx, py = float(y) + wy;
+    // Loaded beside the sample, not after it: the fallback below needs it only rarely.
+    const float ownGx = at(in.trajectory, x, y, 0), ownGy = at(in.trajectory, x, y, 1);
     float gx = sampleBilinear(in.trajectory, px, py, 0), gy = sampleBilinear(in.trajectory, px, py, 1);
     float n = sqrtf(gx * gx + gy * gy);
     if (n < 1e-3f) {  // interpolated across a flip of the field: keep the pixel's own tangent
-      gx = at(in.trajectory, x, y, 0);
-      gy = at(in.trajectory, x, y, 1);
+      gx = ownGx;
+      gy = ownGy;
       n = sqrtf(gx * gx + gy * gy);
     }
     gx /= n;
     gy /= n;
     tx = gx;
     ty = gy;
-    if (sampleable(in.mask, px, py, gx, gy)) {
-      const float weight = in.confidence.data ? fmaxf(at(in.confidence, x, y), in.weightFloor) : 1.f;
-      izv = weight * (sampleBilinear(in.i1, px, py) - at(in.i0, x, y));
-      iuv =
-          weight * 0.5f * (derivativeAlong(in.i1, px, py, gx, gy) + derivativeAlong(in.i0, float(x), float(y), gx, gy));
+    // The samples are taken beside the mask test rather than after it (one round trip to
+    // memory instead of two; sampleBilinear clamps to the image) and used where it passes.
+    const bool reachable = sampleable(in.mask, px, py, gx, gy);
+    const float weight = in.confidence.data ? fmaxf(at(in.confidence, x, y), in.weightFloor) : 1.f;
+    const float i1Here = sampleBilinear(in.i1, px, py), i0Here = at(in.i0, x, y);
+    const float d1 = derivativeAlong(in.i1, px, py, gx, gy);
+    const float d0 = derivativeAlong(in.i0, float(x), float(y), gx, gy);
+    if (reachable) {
+      izv = weight * (i1Here - i0Here);
+      iuv = weight * 0.5f * (d1 + d0);
     }
   }
   at(out.iu, x, y) = iuv;
