@@ -131,7 +131,6 @@ CudaBackend::CudaBackend(int device, CUstream_st* stream) : device_(device), str
   description_ = std::string(prop.name) + " (sm_" + std::to_string(prop.major * 10 + prop.minor) + ", " +
                  std::to_string(prop.multiProcessorCount) + " SMs, " + memory + "), CUDA runtime " +
                  versionText(runtime) + ", driver " + versionText(driver);
-  clusterBlocks_ = cudak::primalDualClusterBlocks(device_);
   residentTiledBlocks_ = cudak::primalDualTiledResidentBlocks(device_);
 }
 
@@ -164,7 +163,8 @@ CudaBackend::~CudaBackend() {
   if (ownsStream_) cudaStreamDestroy(stream_);
 }
 
-void CudaBackend::check(int launchResult, const char* what) const {
+void CudaBackend::check(int launchResult, const char* what) {
+  lastLaunchWroteDataTerm_ = false;
   if (launchResult != cudaSuccess) fail(std::string("kernel ") + what, cudaError_t(launchResult));
 }
 
@@ -261,6 +261,7 @@ void CudaBackend::runPendingAccumulate(const NextWarp* next) {
   else
     check(cudak::launchAccumulate(stream_, img(a.uOut, a.u), w, u0, tangent, mask, a.duMax, nextOut, nextIn),
           next ? "accumulate + derivatives" : "accumulate");
+  lastLaunchWroteDataTerm_ = true;
 }
 
 void CudaBackend::enqueue(const PendingOp& op) {
@@ -494,6 +495,7 @@ void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tan
                                      next.out.tangent, next.in.i0, next.in.i1, next.in.trajectory, img(slot(w).dev, w),
                                      img(slot(u).dev, u), next.in.mask, weight, weightFloor),
         "warpDerivatives");
+  lastLaunchWroteDataTerm_ = true;
 }
 
 void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
@@ -538,8 +540,8 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
     return;
   }
   int endSet = 0;
-  check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()), paths_.cluster ? clusterBlocks_ : 0,
-                                paths_.fiveIterationLaunches ? residentTiledBlocks_ : 0, endSet),
+  check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()),
+                                fiveIterationLaunches_ ? residentTiledBlocks_ : 0, lastLaunchWroteDataTerm_, endSet),
         "primalDual");
   // The result is in the scratch set: it becomes the buffers' memory (later launches,
   // captured or not, take the pointers from the slots), the old memory the scratch set.

@@ -93,16 +93,10 @@ class CudaBackend final : public Backend {
   int deviceIndex() const { return device_; }
   // dst = the packed float image at src (device memory, rows srcPitchBytes apart), async.
   void copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes);
-  // Which paths primalDual() may take besides launches of two iterations (default both):
-  // the whole schedule in one thread-block cluster when the level fits in one (sm_90+),
-  // five iterations per launch when the level's tiles then fit on the device at once.
-  // Turning them off sends small levels down the path of large ones (to test it).
-  struct PrimalDualPaths {
-    bool cluster = true, fiveIterationLaunches = true;
-  };
-  void setPrimalDualPaths(PrimalDualPaths paths) { paths_ = paths; }
-  // The most 16x16 tiles a level may have to take the cluster path (0 before sm_90).
-  int clusterPathTiles() const { return clusterBlocks_; }
+  // Whether primalDual() may run five iterations per launch on levels whose tiles then fit
+  // on the device at once (default on). Off, every level launches once per two iterations
+  // (the path of large levels, e.g. to test it on small ones).
+  void setFiveIterationLaunches(bool on) { fiveIterationLaunches_ = on; }
 
  private:
   struct Slot {
@@ -151,7 +145,9 @@ class CudaBackend final : public Backend {
   const Slot& slot(const Buffer& b) const;
   float* pinnedFor(Slot& s);
   void dropGraph();
-  void check(int launchResult, const char* what) const;
+  // Every launch goes through check(); it clears lastLaunchWroteDataTerm_, which the
+  // launches of warpDerivatives() and accumulate() set after it.
+  void check(int launchResult, const char* what);
   float* scratch(size_t floats, int key);
   float*& scratchSlot(size_t floats, int key);  // the map entry itself, to swap memory with a slot
 
@@ -166,9 +162,11 @@ class CudaBackend final : public Backend {
   std::vector<PendingOp> pending_;
   std::optional<PendingMedian> pendingMedian_;
   std::optional<PendingAccumulate> pendingAccumulate_;
-  int clusterBlocks_ = 0;        // in one cluster of the primal-dual cluster kernel
   int residentTiledBlocks_ = 0;  // of the tiled primal-dual kernel, on the device at once
-  PrimalDualPaths paths_;
+  // The last kernel wrote only a level's data term, w, u, the tangent and the median
+  // (never the mask, tensor or steps that primalDual() reads).
+  bool lastLaunchWroteDataTerm_ = false;
+  bool fiveIterationLaunches_ = true;
 
   CUgraph_st* graph_ = nullptr;
   CUgraphExec_st* exec_ = nullptr;

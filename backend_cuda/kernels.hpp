@@ -85,12 +85,6 @@ struct PrimalDualDev {
   float lambda, alpha0, alpha1;
 };
 
-constexpr int kMaxPersistentIterations = 64;  // even: every chunk starts at parity 0
-struct PrimalDualSchedule {
-  int count;
-  StepDev steps[kMaxPersistentIterations];
-};
-
 // Queued copies and fills that touch disjoint buffers, run by one launch (src null: fill).
 constexpr int kMaxMemOps = 8;
 struct MemOp {
@@ -128,18 +122,17 @@ struct DataTermIn {
 cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory,
                                   Img w, Img u, Img mask, Img confidence,
                                   float weightFloor);  // confidence.data may be null
-// Blocks the primal-dual cluster kernel may run in one cluster (0: before sm_90, none).
-int primalDualClusterBlocks(int device);
 // Blocks of the tiled primal-dual kernel the device holds at once.
 int primalDualTiledResidentBlocks(int device);
-// `count` iterations, the first reading set 0 (uBar, vBar from uBarFirst, vBarFirst). A
-// level whose 16x16 tiles number at most clusterBlocks runs in one cluster launch; a
-// larger one launches once per five iterations if its five-iteration tiles number at most
-// residentTiledBlocks, else once per two, going from one set to the other each launch.
+// `count` iterations, the first reading set 0 (uBar, vBar from uBarFirst, vBarFirst), in
+// launches of five iterations if the level's five-iteration tiles number at most
+// residentTiledBlocks, else of two, going from one set to the other each launch.
+// geometrySettled: the kernel launched last on the stream wrote none of pd.mask, .tensor,
+// .steps (the first launch then loads them before it waits for that kernel to finish).
 // endSet: the set that holds the result (0 or 1; the caller swaps the sets' roles rather
 // than copying). Pixels outside the mask keep their values.
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                             int clusterBlocks, int residentTiledBlocks, int& endSet);
+                             int residentTiledBlocks, bool geometrySettled, int& endSet);
 cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask);
 // With `next` (not null), each pixel then goes on to the next warp's launchWarpDerivatives
 // (u0 = the accumulated u; next->mask must be `mask`): a warp's last stage and the next

@@ -1,23 +1,15 @@
 // Preconditioned primal-dual iterations of anisotropic TGV-L1 (cpu/primal_dual.cpp): two
-// or five iterations per launch (primalDualTiledKernel), and the whole schedule in one
-// launch of one thread-block cluster (sm_90+) on levels of at most 64x64 pixels.
+// or five iterations per launch (primalDualTiledKernel), an odd one left over in a launch
+// of its own (primalDualKernel).
 // Each iteration fuses the dual and the primal pass: a block computes the new
 // duals p, q (and D p) of its tile plus a one-pixel halo to the left and above into
 // shared memory, then the primal update of its tile from there. The state ping-pongs
 // between two buffer sets (read one, write the other), so a block never reads what a
 // neighbouring block of the same launch wrote.
-#include <cooperative_groups.h>
-
-#include <cstdlib>
-#include <cstring>
-#include <type_traits>
-#include <utility>
 
 #include "common.cuh"
 
 namespace cs::cudak {
-
-namespace cg = cooperative_groups;
 
 namespace {
 
@@ -308,14 +300,15 @@ struct StepBatch {
   StepDev step[kIters];
 };
 
+enum : int { kNothingSettled, kGeometrySettled, kAllSettled };
+
 template <int kIters>
 __global__ void __launch_bounds__(kCellsW* kCellsH, kMinBlocksTiled)
-    primalDualTiledKernel(PrimalDualDev pd, StepBatch<kIters> steps, int parity, MaskedOutCopy outside,
-                          bool afterOwnLaunch) {
-  // No launch of a primalDual call writes the level's constants (mask, tensor, steps, the
-  // data term): a launch that follows another of the same call loads them while that one
-  // finishes, and waits for it before it loads the state.
-  if (!afterOwnLaunch) awaitPreviousKernel();
+    primalDualTiledKernel(PrimalDualDev pd, StepBatch<kIters> steps, int parity, MaskedOutCopy outside, int settled) {
+  // What the previous kernel cannot have written (kGeometrySettled: mask, tensor, steps;
+  // kAllSettled: the data term too) is loaded while it finishes (programmatic dependent
+  // launch); the rest after waiting for it.
+  if (settled == kNothingSettled) awaitPreviousKernel();
   __shared__ CellTile s;
   constexpr int kTileW = kCellsW + 1 - 2 * kIters, kTileH = kCellsH + 1 - 2 * kIters;
   const int w = pd.width, h = pd.height;
@@ -341,11 +334,14 @@ __global__ void __launch_bounds__(kCellsW* kCellsH, kMinBlocksTiled)
     mDown = down ? __ldg(&pd.mask[idx + w]) : 0.f;
     tensorHere = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);
     st = __ldg(reinterpret_cast<const float4*>(pd.steps) + idx);
+  }
+  if (settled == kGeometrySettled) awaitPreviousKernel();
+  if (live) {
     c.u0 = __ldg(&pd.u0[idx]);
     c.iu = __ldg(&pd.iu[idx]);
     c.iz = __ldg(&pd.iz[idx]);
   }
-  if (afterOwnLaunch) awaitPreviousKernel();
+  if (settled == kAllSettled) awaitPreviousKernel();
   releaseNextKernel();
   if (live) {
     const float* uBarIn = pd.uBar[parity];
@@ -442,183 +438,6 @@ __global__ void __launch_bounds__(kCellsW* kCellsH, kMinBlocksTiled)
   reinterpret_cast<float2*>(pd.vBar[1 - parity])[idx] = vBar;
 }
 
-// A pixel's constants and primal-dual state, held in registers across a schedule by the
-// cluster kernel: the initial state from set 0.
-struct OwnPixel {
-  float4 t = make_float4(0.f, 0.f, 0.f, 0.f);
-  float2 sigmaP = make_float2(0.f, 0.f);
-  PrimalConstants c{};
-  bool masked = false, ex = false, ey = false, exLeft = false, eyUp = false;
-  float u = 0.f, uBar = 0.f;
-  float2 v = make_float2(0.f, 0.f), vBar = make_float2(0.f, 0.f), p = make_float2(0.f, 0.f);
-  float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
-};
-
-__device__ __forceinline__ OwnPixel loadOwnPixel(const PrimalDualDev& pd, int x, int y) {
-  OwnPixel o;
-  const int w = pd.width, h = pd.height;
-  if (x >= w || y >= h) return o;
-  const int idx = y * w + x;
-  o.masked = __ldg(&pd.mask[idx]) != 0.f;
-  if (o.masked) {
-    o.ex = isMasked(pd.mask, w, h, x + 1, y);
-    o.ey = isMasked(pd.mask, w, h, x, y + 1);
-    o.exLeft = isMasked(pd.mask, w, h, x - 1, y);
-    o.eyUp = isMasked(pd.mask, w, h, x, y - 1);
-    o.t = __ldg(reinterpret_cast<const float4*>(pd.tensor) + idx);
-    const float4 st = __ldg(reinterpret_cast<const float4*>(pd.steps) + idx);
-    o.c.tau = make_float2(st.x, st.y);
-    o.sigmaP = make_float2(st.z, st.w);
-    o.c.u0 = __ldg(&pd.u0[idx]);
-    o.c.iu = __ldg(&pd.iu[idx]);
-    o.c.iz = __ldg(&pd.iz[idx]);
-  }
-  o.u = pd.u[0][idx];
-  o.v = reinterpret_cast<const float2*>(pd.v[0])[idx];
-  o.uBar = pd.uBarFirst[idx];
-  o.vBar = reinterpret_cast<const float2*>(pd.vBarFirst)[idx];
-  o.p = reinterpret_cast<const float2*>(pd.p[0])[idx];
-  o.q = reinterpret_cast<const float4*>(pd.q[0])[idx];
-  return o;
-}
-
-__device__ __forceinline__ void storeOwnPixel(const PrimalDualDev& pd, const OwnPixel& o, int idx) {
-  pd.u[0][idx] = o.u;
-  reinterpret_cast<float2*>(pd.v[0])[idx] = o.v;
-  pd.uBar[0][idx] = o.uBar;
-  reinterpret_cast<float2*>(pd.vBar[0])[idx] = o.vBar;
-  reinterpret_cast<float2*>(pd.p[0])[idx] = o.p;
-  reinterpret_cast<float4*>(pd.q[0])[idx] = o.q;
-}
-
-// primalPixel's update of a masked own pixel, given its duals (dp = D p) and those of its
-// left and upper neighbours (read only where linked).
-__device__ __forceinline__ void primalUpdate(const PrimalDualDev& pd, OwnPixel& o, const StepDev step, float2 dp,
-                                             float2 dpLeft, float2 dpUp, float4 qLeft, float4 qUp) {
-  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
-  const float tauU = step.tauScale * o.c.tau.x;
-  const float tauV = step.tauScale * o.c.tau.y;
-  float divDp = 0.f;
-  if (o.ex) divDp += dp.x;
-  if (o.exLeft) divDp -= dpLeft.x;
-  if (o.ey) divDp += dp.y;
-  if (o.eyUp) divDp -= dpUp.y;
-  const float uOld = o.u;
-  const float uHat = uOld + tauU * alpha1 * divDp;
-  o.u = dataProx(uHat, o.c.u0, o.c.iu, o.c.iz, tauU * pd.lambda);
-  o.uBar = o.u + step.theta * (o.u - uOld);
-  float div0 = 0.f, div1 = 0.f;
-  if (o.ex) div0 += o.q.x;
-  if (o.exLeft) div0 -= qLeft.x;
-  if (o.ey) div0 += o.q.y;
-  if (o.eyUp) div0 -= qUp.y;
-  if (o.ex) div1 += o.q.z;
-  if (o.exLeft) div1 -= qLeft.z;
-  if (o.ey) div1 += o.q.w;
-  if (o.eyUp) div1 -= qUp.w;
-  const float2 vOld = o.v;
-  o.v.x = vOld.x + tauV * (alpha1 * o.p.x + alpha0 * div0);
-  o.v.y = vOld.y + tauV * (alpha1 * o.p.y + alpha0 * div1);
-  o.vBar = make_float2(o.v.x + step.theta * (o.v.x - vOld.x), o.v.y + step.theta * (o.v.y - vOld.y));
-}
-
-// All iterations of a schedule in one launch of one thread-block cluster (sm_90 and newer),
-// on levels whose 16x16 tiles fit in one cluster (at most 16 tiles: up to 64x64 pixels,
-// e.g. 53x50, the coarsest level of a T265 frame). Each thread keeps its pixel's constants
-// and state in registers, and a block reads its neighbours' tile borders straight from
-// their shared memory (distributed shared memory) after a cluster barrier: two cluster
-// barriers per iteration and no global traffic until the end. Measured on an H200 (T265,
-// N=20): 0.05 ms a frame faster than two-iteration launches at 53x50, but 0.11 ms slower
-// with 32x32 tiles at 106x100 (an iteration's dependent shared-memory round trips and
-// barriers cost more than a launch does under programmatic dependent launch), so larger
-// levels take the launches; a cooperative kernel with a grid barrier per iteration for the
-// 212x200 level measured 0.13 ms slower too and was removed.
-constexpr int kClusterTile = 16;
-template <int TileW, int TileH>
-struct ClusterTile {
-  float2 dp[TileH][TileW];
-  float4 q[TileH][TileW];
-  float uBar[TileH][TileW];
-  float2 vBar[TileH][TileW];
-};
-
-template <int TileW, int TileH>
-__global__ void __launch_bounds__(TileW* TileH, 1)
-    primalDualClusterKernel(PrimalDualDev pd, const __grid_constant__ PrimalDualSchedule schedule) {
-#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
-  awaitPreviousKernel();
-  __shared__ ClusterTile<TileW, TileH> s;
-  cg::cluster_group cluster = cg::this_cluster();
-  const int tx = threadIdx.x, ty = threadIdx.y;
-  const int x = blockIdx.x * TileW + tx, y = blockIdx.y * TileH + ty;
-  const bool own = x < pd.width && y < pd.height;
-  const int idx = own ? y * pd.width + x : 0;
-  OwnPixel o = loadOwnPixel(pd, x, y);
-  // The neighbouring tiles' shared memory (the grid is the cluster). A link to a pixel
-  // beyond the tile implies that the tile exists.
-  const dim3 at = cluster.block_index(), dim = cluster.dim_blocks();
-  auto tile = [&](int dx, int dy) {
-    const int bx = int(at.x) + dx, by = int(at.y) + dy;
-    const bool exists = bx >= 0 && by >= 0 && bx < int(dim.x) && by < int(dim.y);
-    return exists ? cluster.map_shared_rank(&s, unsigned(bx + by * int(dim.x))) : &s;
-  };
-  const ClusterTile<TileW, TileH>& right = *tile(1, 0);
-  const ClusterTile<TileW, TileH>& down = *tile(0, 1);
-  const ClusterTile<TileW, TileH>& left = *tile(-1, 0);
-  const ClusterTile<TileW, TileH>& up = *tile(0, -1);
-  constexpr int kLastX = TileW - 1, kLastY = TileH - 1;
-  s.uBar[ty][tx] = o.uBar;
-  s.vBar[ty][tx] = o.vBar;
-  cluster.sync();
-
-  for (int k = 0; k < schedule.count; ++k) {
-    const StepDev step = schedule.steps[k];
-    // --- dual pass: uBar, vBar right of and below the pixel ---
-    if (own && o.masked) {
-      float ur = 0.f, ud = 0.f;
-      float2 vr = make_float2(0.f, 0.f), vd = vr;
-      if (o.ex) {
-        const ClusterTile<TileW, TileH>& r = tx < kLastX ? s : right;
-        ur = r.uBar[ty][tx < kLastX ? tx + 1 : 0];
-        vr = r.vBar[ty][tx < kLastX ? tx + 1 : 0];
-      }
-      if (o.ey) {
-        const ClusterTile<TileW, TileH>& d = ty < kLastY ? s : down;
-        ud = d.uBar[ty < kLastY ? ty + 1 : 0][tx];
-        vd = d.vBar[ty < kLastY ? ty + 1 : 0][tx];
-      }
-      dualPixel(o.p, o.q, o.t, o.sigmaP, o.ex, o.ey, o.uBar, ur, ud, o.vBar, vr, vd, step, pd.alpha1);
-    }
-    const float2 dp = make_float2(o.t.x * o.p.x + o.t.y * o.p.y, o.t.y * o.p.x + o.t.z * o.p.y);
-    s.dp[ty][tx] = dp;
-    s.q[ty][tx] = o.q;
-    cluster.sync();  // the duals are written; every block has read this iteration's uBar
-
-    // --- primal pass: D p and q left of and above the pixel ---
-    if (own && o.masked) {
-      float2 dpLeft = make_float2(0.f, 0.f), dpUp = dpLeft;
-      float4 qLeft = make_float4(0.f, 0.f, 0.f, 0.f), qUp = qLeft;
-      if (o.exLeft) {
-        const ClusterTile<TileW, TileH>& l = tx > 0 ? s : left;
-        dpLeft = l.dp[ty][tx > 0 ? tx - 1 : kLastX];
-        qLeft = l.q[ty][tx > 0 ? tx - 1 : kLastX];
-      }
-      if (o.eyUp) {
-        const ClusterTile<TileW, TileH>& u = ty > 0 ? s : up;
-        dpUp = u.dp[ty > 0 ? ty - 1 : kLastY][tx];
-        qUp = u.q[ty > 0 ? ty - 1 : kLastY][tx];
-      }
-      primalUpdate(pd, o, step, dp, dpLeft, dpUp, qLeft, qUp);
-    }
-    s.uBar[ty][tx] = o.uBar;
-    s.vBar[ty][tx] = o.vBar;
-    cluster.sync();  // uBar is written; every block has read this iteration's duals
-  }
-  releaseNextKernel();
-  if (own) storeOwnPixel(pd, o, idx);
-#endif
-}
-
 }  // namespace
 
 int primalDualTiledResidentBlocks(int device) {
@@ -632,59 +451,6 @@ int primalDualTiledResidentBlocks(int device) {
   return sms * perSm;
 }
 
-int primalDualClusterBlocks(int device) {
-  // CURVESTEREO_CUDA_CLUSTER=0 leaves the small levels to the two-iteration launches (to
-  // measure what the cluster path brings, or to rule it out).
-  const char* off = std::getenv("CURVESTEREO_CUDA_CLUSTER");
-  if (off && std::strcmp(off, "0") == 0) return 0;
-  int major = 0;
-  if (cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, device) != cudaSuccess || major < 9) return 0;
-  const auto kernel = primalDualClusterKernel<kClusterTile, kClusterTile>;
-  if (cudaFuncSetAttribute(kernel, cudaFuncAttributeNonPortableClusterSizeAllowed, 1) != cudaSuccess) return 0;
-  // 16 blocks: the most Hopper runs in one cluster (a non-portable size); 8 is portable.
-  for (const dim3 cluster : {dim3(4, 4), dim3(4, 2), dim3(2, 2)}) {
-    cudaLaunchConfig_t config{};
-    config.gridDim = cluster;
-    config.blockDim = dim3(kClusterTile, kClusterTile);
-    cudaLaunchAttribute attribute{};
-    attribute.id = cudaLaunchAttributeClusterDimension;
-    attribute.val.clusterDim.x = cluster.x;
-    attribute.val.clusterDim.y = cluster.y;
-    attribute.val.clusterDim.z = 1;
-    config.attrs = &attribute;
-    config.numAttrs = 1;
-    int clusters = 0;
-    if (cudaOccupancyMaxActiveClusters(&clusters, kernel, &config) == cudaSuccess && clusters > 0)
-      return int(cluster.x * cluster.y);
-  }
-  cudaGetLastError();  // clear the failed queries' error
-  return 0;
-}
-
-// The schedule in chunks of kMaxPersistentIterations, each one launch of `kernel` (the
-// state stays in set 0).
-static cudaError_t launchSingle(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                                void (*kernel)(PrimalDualDev, PrimalDualSchedule), dim3 grid, dim3 block,
-                                cudaLaunchAttribute* attributes, int attributeCount) {
-  PrimalDualDev chunk = pd;
-  for (int k0 = 0; k0 < count; k0 += kMaxPersistentIterations) {
-    PrimalDualSchedule schedule{};
-    schedule.count = count - k0 < kMaxPersistentIterations ? count - k0 : kMaxPersistentIterations;
-    for (int k = 0; k < schedule.count; ++k) schedule.steps[k] = steps[k0 + k];
-    cudaLaunchConfig_t config{};
-    config.gridDim = grid;
-    config.blockDim = block;
-    config.stream = s;
-    config.attrs = attributes;
-    config.numAttrs = unsigned(attributeCount);
-    const cudaError_t e = cudaLaunchKernelEx(&config, kernel, chunk, schedule);
-    if (e != cudaSuccess) return e;
-    chunk.uBarFirst = pd.uBar[0];  // later chunks continue from the state in set 0
-    chunk.vBarFirst = pd.vBar[0];
-  }
-  return cudaGetLastError();
-}
-
 // The grid of primalDualTiledKernel<iterations> over the level.
 static dim3 tiledGrid(const PrimalDualDev& pd, int iterations) {
   const int tileW = kCellsW + 1 - 2 * iterations, tileH = kCellsH + 1 - 2 * iterations;
@@ -692,22 +458,8 @@ static dim3 tiledGrid(const PrimalDualDev& pd, int iterations) {
 }
 
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
-                             int clusterBlocks, int residentTiledBlocks, int& endSet) {
+                             int residentTiledBlocks, bool geometrySettled, int& endSet) {
   endSet = 0;
-  const dim3 tile(kClusterTile, kClusterTile), clusterGrid = grid2d(pd.width, pd.height, tile);
-  if (int(clusterGrid.x * clusterGrid.y) <= clusterBlocks) {
-    // A programmatic dependent launch as well (launch() in common.cuh): the cluster is
-    // scheduled while the previous kernel finishes.
-    cudaLaunchAttribute attributes[2]{};
-    attributes[0].id = cudaLaunchAttributeClusterDimension;
-    attributes[0].val.clusterDim.x = clusterGrid.x;
-    attributes[0].val.clusterDim.y = clusterGrid.y;
-    attributes[0].val.clusterDim.z = 1;
-    attributes[1].id = cudaLaunchAttributeProgrammaticStreamSerialization;
-    attributes[1].val.programmaticStreamSerializationAllowed = 1;
-    return launchSingle(s, pd, steps, count, primalDualClusterKernel<kClusterTile, kClusterTile>, clusterGrid, tile,
-                        attributes, dependentLaunchSupported() ? 2 : 1);
-  }
   const dim3 block(kTileW, kTileH), grid = grid2d(pd.width, pd.height, block);
   // Two iterations per launch, the odd one last; every launch goes from one set to the
   // other. The first launch reads set 0 and writes set 1 only, so its uBar, vBar can be
@@ -728,11 +480,17 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
       StepBatch<kDeepIterations> batch{};
       for (int i = 0; i < kDeepIterations; ++i) batch.step[i] = steps[k + i];
       CS_LAUNCH(primalDualTiledKernel<kDeepIterations>, deepGrid, dim3(kCellsW, kCellsH), 0, s, state, batch, endSet,
-                outside, k > 0);
+                outside,
+                k > 0             ? kAllSettled
+                : geometrySettled ? kGeometrySettled
+                                  : kNothingSettled);
       k += kDeepIterations;
     } else {
       CS_LAUNCH(primalDualTiledKernel<2>, tiledGrid(pd, 2), dim3(kCellsW, kCellsH), 0, s, state,
-                StepBatch<2>{{steps[k], steps[k + 1]}}, endSet, outside, k > 0);
+                StepBatch<2>{{steps[k], steps[k + 1]}}, endSet, outside,
+                k > 0             ? kAllSettled
+                : geometrySettled ? kGeometrySettled
+                                  : kNothingSettled);
       k += 2;
     }
     endSet ^= 1;

@@ -115,17 +115,11 @@ void checkPrimalDualPaths(int w, int h) {
   for (int iterations : {3, 4, 5, 6, 7, 10, 70})
     for (bool copyBars : {false, true}) {
       const auto ref = solve(*cpu, iterations, copyBars);
-      for (int path = 0; path < 3; ++path) {
+      for (bool fiveIterationLaunches : {true, false}) {
         cuda::CudaBackend cuda(0);
-        // The cluster path (when available and the level fits), five iterations per launch
-        // (when the level's tiles fit on the device at once), two iterations per launch.
-        cuda.setPrimalDualPaths({path == 0, path <= 1});
-        if (path == 0) {
-          int major = 0;
-          ok(cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, 0));
-          CHECK((major < 9 || cuda.clusterPathTiles() >= 8));  // Hopper runs clusters of 8 at least
-          if (((w + 15) / 16) * ((h + 15) / 16) > cuda.clusterPathTiles()) continue;
-        }
+        // Five iterations per launch (where the level's tiles fit on the device at once: every
+        // size here on an H100 / H200), then two.
+        cuda.setFiveIterationLaunches(fiveIterationLaunches);
         const auto out = solve(cuda, iterations, copyBars);
         double maxAbs = 0;
         long long nonFinite = 0;
@@ -136,7 +130,7 @@ void checkPrimalDualPaths(int w, int h) {
             else
               maxAbs = std::max(maxAbs, double(std::abs(out[b][i] - ref[b][i])));
           }
-        const std::string name = path == 0 ? "cluster" : path == 1 ? "five iterations per launch" : "two per launch";
+        const std::string name = fiveIterationLaunches ? "five iterations per launch" : "two per launch";
         MESSAGE("primal-dual " << name << ", " << w << "x" << h << ", " << iterations << " iterations"
                                << std::string(copyBars ? " after uBar = u" : "") << ": max abs " << maxAbs
                                << " against the oracle");
@@ -232,13 +226,11 @@ TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream")
   cudaStreamDestroy(stream);
 }
 
-// primalDual runs a level's whole schedule in one thread-block cluster when the level fits
-// in one (sm_90+), in launches of five iterations when its tiles then fit on the device at
-// once, and of two otherwise: every path, schedules that end in either set and with
+// primalDual runs five iterations per launch on levels whose tiles then fit on the device
+// at once, and two otherwise: both paths, schedules that end in either set and with
 // iterations left over, with and without the pipeline's uBar = u copies, against the
-// oracle on random state over several tiles with ragged edges and a masked disc. On Hopper
-// 61x45 and 64x64 fit in one cluster of 16x16 tiles, 90x70 and 203x131 do not.
-TEST_CASE("CUDA primal-dual: the cluster and tiled kernels match the oracle") {
+// oracle on random state over several tiles with ragged edges and a masked disc.
+TEST_CASE("CUDA primal-dual: launches of five and of two iterations match the oracle") {
   if (noDevice("cuda primal-dual paths")) return;
   for (const auto& [w, h] : {std::pair{61, 45}, std::pair{64, 64}, std::pair{90, 70}, std::pair{203, 131}})
     checkPrimalDualPaths(w, h);
