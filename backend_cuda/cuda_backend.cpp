@@ -165,6 +165,7 @@ CudaBackend::~CudaBackend() {
 
 void CudaBackend::check(int launchResult, const char* what) {
   lastLaunchWroteDataTerm_ = false;
+  lastLaunchWasPrimalDual_ = false;
   if (launchResult != cudaSuccess) fail(std::string("kernel ") + what, cudaError_t(launchResult));
 }
 
@@ -256,7 +257,7 @@ void CudaBackend::runPendingAccumulate(const NextWarp* next) {
   const cudak::DataTermIn* nextIn = next ? &next->in : nullptr;
   if (a.median.id >= 0)
     check(cudak::launchMedianAccumulate(stream_, img(a.uOut, a.u), img(slot(a.median).dev, a.median), img(a.uIn, a.u),
-                                        w, u0, tangent, mask, a.duMax, nextOut, nextIn),
+                                        w, u0, tangent, mask, a.duMax, nextOut, nextIn, lastLaunchWasPrimalDual_),
           next ? "median + accumulate + derivatives" : "median + accumulate");
   else
     check(cudak::launchAccumulate(stream_, img(a.uOut, a.u), w, u0, tangent, mask, a.duMax, nextOut, nextIn),
@@ -543,6 +544,7 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
   check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()),
                                 fiveIterationLaunches_ ? residentTiledBlocks_ : 0, lastLaunchWroteDataTerm_, endSet),
         "primalDual");
+  lastLaunchWasPrimalDual_ = true;
   // The result is in the scratch set: it becomes the buffers' memory (later launches,
   // captured or not, take the pointers from the slots), the old memory the scratch set.
   if (endSet == 1) {

@@ -145,8 +145,8 @@ class CudaBackend final : public Backend {
   const Slot& slot(const Buffer& b) const;
   float* pinnedFor(Slot& s);
   void dropGraph();
-  // Every launch goes through check(); it clears lastLaunchWroteDataTerm_, which the
-  // launches of warpDerivatives() and accumulate() set after it.
+  // Every launch goes through check(); it clears lastLaunchWroteDataTerm_ and
+  // lastLaunchWasPrimalDual_, which the launches they describe set after it.
   void check(int launchResult, const char* what);
   float* scratch(size_t floats, int key);
   float*& scratchSlot(size_t floats, int key);  // the map entry itself, to swap memory with a slot
@@ -166,6 +166,7 @@ class CudaBackend final : public Backend {
   // The last kernel wrote only a level's data term, w, u, the tangent and the median
   // (never the mask, tensor or steps that primalDual() reads).
   bool lastLaunchWroteDataTerm_ = false;
+  bool lastLaunchWasPrimalDual_ = false;  // (launchPrimalDual: writes the state only)
   bool fiveIterationLaunches_ = true;
 
   CUgraph_st* graph_ = nullptr;

@@ -142,8 +142,11 @@ cudaError_t launchAccumulate(cudaStream_t s, Img u, Img w, Img u0, Img tangent, 
 // median = median(u) (launchMedian), then accumulate from it into uOut (launchAccumulate
 // with uIn = median, written to uOut instead of u): the warp's two last stages in one pass;
 // with `next`, the next warp's derivatives too (as launchAccumulate).
+// afterPrimalDual: the kernel launched last on the stream is a launchPrimalDual one (then w,
+// u0, the tangent and the mask are loaded before waiting for it to finish).
 cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
-                                   float duMax, const DataTermOut* nextOut = nullptr, const DataTermIn* next = nullptr);
+                                   float duMax, const DataTermOut* nextOut = nullptr, const DataTermIn* next = nullptr,
+                                   bool afterPrimalDual = false);
 
 // volume, costs, aggregated: p.planes channels. best: 2 channels (q, cost). other: the
 // reverse sweep's best. launchSweepAggregate: p.planes <= kMaxSweepPlanes (else

@@ -33,8 +33,11 @@ struct MedianTile {
   bool masked[kRingH][kRingW];
 };
 
-// Loads every cell's value before storing any (one memory round trip for the block).
-__device__ __forceinline__ void loadTile(MedianTile& t, const Img& src, const Img& mask) {
+// Loads every cell's value before storing any (one memory round trip for the block). u is
+// loaded beside the mask, not after it; `beforeU` runs between the two (a kernel may wait
+// there for the kernel that wrote u, having loaded the mask while it finished).
+template <class BeforeU>
+__device__ __forceinline__ void loadTile(MedianTile& t, const Img& src, const Img& mask, BeforeU beforeU) {
   const int tid = threadIdx.y * kBlockW + threadIdx.x;
   const int x0 = int(blockIdx.x) * kBlockW - 1, y0 = int(blockIdx.y) * kBlockH - 1;
   float value[kRingRounds];
@@ -43,10 +46,14 @@ __device__ __forceinline__ void loadTile(MedianTile& t, const Img& src, const Im
   for (int r = 0; r < kRingRounds; ++r) {
     const int k = tid + r * kBlockW * kBlockH;
     const int x = x0 + k % kRingW, y = y0 + k / kRingW;
-    // u is loaded beside the mask, not after it: one round trip, not two.
-    const bool cell = k < kRingW * kRingH && inside(mask, x, y);
-    in[r] = cell && __ldg(&at(mask, x, y)) != 0.f;
-    value[r] = cell ? __ldg(&at(src, x, y)) : 0.f;
+    in[r] = k < kRingW * kRingH && inside(mask, x, y) && __ldg(&at(mask, x, y)) != 0.f;
+  }
+  beforeU();
+#pragma unroll
+  for (int r = 0; r < kRingRounds; ++r) {
+    const int k = tid + r * kBlockW * kBlockH;
+    const int x = x0 + k % kRingW, y = y0 + k / kRingW;
+    value[r] = k < kRingW * kRingH && inside(mask, x, y) ? __ldg(&at(src, x, y)) : 0.f;
   }
 #pragma unroll
   for (int r = 0; r < kRingRounds; ++r) value[r] = in[r] ? value[r] : 0.f;
@@ -95,7 +102,7 @@ __device__ __forceinline__ float maskedMedian(const MedianTile& t) {
 __global__ void __launch_bounds__(kBlockW* kBlockH) medianKernel(Img dst, Img src, Img mask) {
   beginKernel();
   __shared__ MedianTile t;
-  loadTile(t, src, mask);
+  loadTile(t, src, mask, [] {});
   __syncthreads();
   const int x = blockIdx.x * kBlockW + threadIdx.x, y = blockIdx.y * kBlockH + threadIdx.y;
   if (x >= dst.width || y >= dst.height) return;
@@ -107,14 +114,19 @@ __global__ void __launch_bounds__(kBlockW* kBlockH) medianKernel(Img dst, Img sr
 template <bool kNextWarp>
 __global__ void __launch_bounds__(kBlockW* kBlockH)
     medianAccumulateKernel(Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask, float duMax,
-                           DataTermOut nextOut, DataTermIn next) {
-  beginKernel();
+                           DataTermOut nextOut, DataTermIn next, bool afterPrimalDual) {
+  // After a primal-dual kernel, which writes none of them, w, u0, the tangent and the mask
+  // are loaded while it finishes (programmatic dependent launch); u after waiting for it.
+  if (!afterPrimalDual) awaitPreviousKernel();
   __shared__ MedianTile t;
   const int x = blockIdx.x * kBlockW + threadIdx.x, y = blockIdx.y * kBlockH + threadIdx.y;
   const bool inside = x < u.width && y < u.height;
   // Loaded with the tile rather than after the median: one round trip to memory less.
   const AccumulateInputs inputs = inside ? loadAccumulateInputs(w, u0, tangent, x, y) : AccumulateInputs{};
-  loadTile(t, u, mask);
+  loadTile(t, u, mask, [&] {
+    if (afterPrimalDual) awaitPreviousKernel();
+    releaseNextKernel();
+  });
   __syncthreads();
   if (!inside) return;
   const bool isMasked = t.masked[threadIdx.y + 1][threadIdx.x + 1];
@@ -141,15 +153,16 @@ cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask) {
 }
 
 cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, Img w, Img u0, Img tangent, Img mask,
-                                   float duMax, const DataTermOut* nextOut, const DataTermIn* next) {
+                                   float duMax, const DataTermOut* nextOut, const DataTermIn* next,
+                                   bool afterPrimalDual) {
   const dim3 block(kBlockW, kBlockH);
   const dim3 grid = grid2d(u.width, u.height, block);
   if (next)
     CS_LAUNCH(medianAccumulateKernel<true>, grid, block, 0, s, uOut, median, u, w, u0, tangent, mask, duMax, *nextOut,
-              *next);
+              *next, afterPrimalDual);
   else
     CS_LAUNCH(medianAccumulateKernel<false>, grid, block, 0, s, uOut, median, u, w, u0, tangent, mask, duMax,
-              DataTermOut{}, DataTermIn{});
+              DataTermOut{}, DataTermIn{}, afterPrimalDual);
   return cudaSuccess;
 }
 
