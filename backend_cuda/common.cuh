@@ -66,8 +66,12 @@ inline dim3 grid2d(int w, int h, dim3 block) { return dim3((w + block.x - 1) / b
 // Programmatic dependent launch (sm_90 and newer). A frame is hundreds of short dependent
 // kernels; launched with launch() below, a kernel's blocks are scheduled while the previous
 // kernel's last blocks still run, instead of after it, which hides the launch latency
-// between them. Every kernel therefore starts with awaitPreviousKernel(): nothing it reads
-// or writes is touched before the previous kernel has finished and its writes are visible.
+// between them. Every kernel therefore calls awaitPreviousKernel() before it touches what
+// the previous kernel may have written (its writes are visible after it). Kernels whose
+// launcher knows the previous kernel (primal-dual launches after one of their own call or
+// after the warp's data term; the warp end after a primal-dual launch) load the buffers it
+// cannot have written first; every other kernel waits at its start. All kernels before
+// the previous one have finished by then: each waits before it releases the next.
 // Both instructions are no-ops when the kernel was launched without the attribute.
 __device__ __forceinline__ void awaitPreviousKernel() {
 #if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
