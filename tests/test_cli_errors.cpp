@@ -309,6 +309,8 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
   cases.refused("unknown preset", good + " --preset fastest", "unknown preset 'fastest'");
   cases.refused("unknown backend", good + " --backend tpu", "tpu");
   cases.refused("one image only", "run --calib rig.yaml l.png" + solve, "exactly two images");
+  cases.refused("bench --runs 0", "bench --calib rig.yaml l.png r.png --runs 0 --backend cpu", "--runs must be >= 1");
+  cases.refused("bench --runs -3", "bench --calib rig.yaml l.png r.png --runs -3 --backend cpu", "--runs must be >= 1");
 
   // ---- the plane-sweep initialiser
   cases.refused("--min-confidence without the initialiser", good + " --min-confidence 0.5",
