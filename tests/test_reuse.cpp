@@ -18,14 +18,7 @@ using namespace cs;
 namespace {
 
 synth::SynthPair render(const std::string& motion, uint32_t seed) {
-  synth::SynthConfig cfg;
-  cfg.camera = synth::defaultFisheye(64);
-  cfg.motion = motion;
-  cfg.baseline = 0.15;
-  cfg.seed = seed;
-  cfg.nearest = 1.5;
-  cfg.samplesPerAxis = 1;
-  return synth::renderPair(cfg);
+  return test::smallSynthPair(64, motion, 0.15, seed);
 }
 
 // Two solver configurations: without and with the plane-sweep initialiser (confidence).

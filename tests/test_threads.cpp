@@ -14,14 +14,7 @@ using namespace cs;
 namespace {
 
 synth::SynthPair render(const std::string& motion, uint32_t seed) {
-  synth::SynthConfig cfg;
-  cfg.camera = synth::defaultFisheye(96);
-  cfg.motion = motion;
-  cfg.baseline = 0.2;
-  cfg.seed = seed;
-  cfg.nearest = 1.5;
-  cfg.samplesPerAxis = 1;
-  return synth::renderPair(cfg);
+  return test::smallSynthPair(96, motion, 0.2, seed);
 }
 
 template <class T>

@@ -2,8 +2,11 @@
 #pragma once
 #include <doctest/doctest.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
+
+#include "synth/scene.hpp"
 
 namespace cs::test {
 
@@ -21,6 +24,19 @@ inline std::filesystem::path tempDir(const std::string& name) {
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
   return p;
+}
+
+// A small synthetic fisheye pair (nearest surface 1.5 m, one sample per pixel): quick to
+// render and to solve on every backend.
+inline synth::SynthPair smallSynthPair(int size, const std::string& motion, double baseline, uint32_t seed) {
+  synth::SynthConfig cfg;
+  cfg.camera = synth::defaultFisheye(size);
+  cfg.motion = motion;
+  cfg.baseline = baseline;
+  cfg.seed = seed;
+  cfg.nearest = 1.5;
+  cfg.samplesPerAxis = 1;
+  return synth::renderPair(cfg);
 }
 
 }  // namespace cs::test
