@@ -264,7 +264,7 @@ __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocks)
 // tile: the halo's redundant work grows with the iterations, and memory traffic matters
 // there); levels whose five-iteration tiles (23x7) all fit on the device at once take
 // five, since there the launches' latency is what costs (H200, T265 frame, N=20: levels
-// 212x200 and 106x100, 6.39 -> 6.35 ms a frame).
+// 212x200 and 106x100, 6.39 -> 6.35 ms a frame; 53x50 since the cluster kernel went).
 constexpr int kCellsW = 32, kCellsH = 16;  // threads = cells
 constexpr int kDeepIterations = 5;
 // 3 blocks of 512 threads on sm_80 / sm_86+ (40 registers), 2 on Turing's 1024 threads.
