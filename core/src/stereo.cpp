@@ -7,7 +7,6 @@
 #include <cstring>
 #include <limits>
 #include <new>
-#include <type_traits>
 
 #include "curvestereo/backend.hpp"
 #include "pipeline.hpp"
@@ -49,49 +48,51 @@ inline float keepOrNaN(float v, uint32_t keep) {
   return v;
 }
 
-// finish()'s pass over the pixels, with the outputs present fixed at compile time. No
-// control flow in the loop: every value is loaded and every output stored, unsolved
-// pixels' values replaced by keepOrNaN. (It vectorises; with the points too only where
-// the target can shuffle 3-float groups, SSSE3 and later.)
-template <bool kDisparity, bool kWarp, bool kPoints, bool kConfidence>
-void finishPixels(DepthResult& r) {
-  const float inf = std::numeric_limits<float>::infinity();
+// finish() for the common real-time selection, depth only (the valid mask comes from it):
+// branch-free, so it vectorises.
+void finishDepthOnly(DepthResult& r) {
   const size_t n = r.depth.radial.size();
   uint8_t* __restrict valid = r.valid.data.data();
   float* __restrict radial = r.depth.radial.data.data();
-  float* __restrict disparity = r.disparity.data.data();
-  Vec2f* __restrict warp = r.warp.data.data();
-  Point3f* __restrict points = r.depth.points.data.data();
-  float* __restrict z = r.depth.z.data.data();
-  float* __restrict confidence = r.confidence.data.data();
+  float* __restrict confidence = r.confidence.empty() ? nullptr : r.confidence.data.data();
   for (size_t i = 0; i < n; ++i) {
     const float rad = radial[i];
-    const float d = kDisparity ? disparity[i] : 0.f;
-    const Vec2f wi = kWarp ? warp[i] : Vec2f{};
-    // radial is NaN wherever the mask is 0 (Backend::triangulate), so this includes the mask.
-    const bool solved = !std::isnan(rad) & std::isfinite(d) & std::isfinite(wi.x) & std::isfinite(wi.y);
+    const bool solved = !std::isnan(rad);
     const uint32_t keep = 0u - uint32_t(solved);
     valid[i] = solved;
-    const float radOut = keepOrNaN(rad, keep);
-    radial[i] = radOut;
-    if constexpr (kDisparity) disparity[i] = keepOrNaN(d, keep);
-    if constexpr (kWarp) warp[i] = {keepOrNaN(wi.x, keep), keepOrNaN(wi.y, keep)};
-    if constexpr (kConfidence) confidence[i] = keepOrNaN(confidence[i], keep);
-    if constexpr (kPoints) {
-      const Point3f p = points[i];
-      const Point3f pOut{keepOrNaN(p.x, keep), keepOrNaN(p.y, keep), keepOrNaN(p.z, keep)};
-      points[i] = pOut;
-      // A point at infinity has infinite z too (reported as +inf, also beyond 90 degrees).
-      z[i] = std::fabs(radOut) == inf ? radOut : pOut.z;
+    radial[i] = keepOrNaN(rad, keep);
+    if (confidence) confidence[i] = keepOrNaN(confidence[i], keep);
+  }
+}
+
+// finish() with any of disparity, warp and points selected.
+void finishAll(DepthResult& r) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const bool hasDisparity = !r.disparity.empty(), hasWarp = !r.warp.empty(), hasPoints = !r.depth.points.empty();
+  const bool hasConfidence = !r.confidence.empty();
+  for (size_t i = 0; i < r.depth.radial.size(); ++i) {
+    float& radial = r.depth.radial.data[i];
+    const bool solved = !std::isnan(radial) && (!hasDisparity || std::isfinite(r.disparity.data[i])) &&
+                        (!hasWarp || (std::isfinite(r.warp.data[i].x) && std::isfinite(r.warp.data[i].y)));
+    r.valid.data[i] = solved;
+    if (!solved) {
+      radial = nan;
+      if (hasDisparity) r.disparity.data[i] = nan;
+      if (hasWarp) r.warp.data[i] = {nan, nan};
+      if (hasPoints) r.depth.points.data[i] = {nan, nan, nan};
+      if (hasConfidence) r.confidence.data[i] = nan;
     }
+    // A point at infinity has infinite z too (reported as +inf, also beyond 90 degrees).
+    if (hasPoints) r.depth.z.data[i] = std::isinf(radial) ? radial : r.depth.points.data[i].z;
   }
 }
 
 // The pipeline's output as the public result, in one pass. A pixel is solved where the
-// radial depth is not NaN (which includes the mask) and the disparity and warp, where
-// selected, are finite: a solver failure, or a warp that left the camera model's valid
-// region, is reported unsolved rather than passed on as if it were depth. Unsolved pixels
-// are NaN in every output. Outputs not selected stay empty.
+// radial depth is not NaN (which includes the mask: Backend::triangulate leaves radial NaN
+// wherever it is 0) and the disparity and warp, where selected, are finite: a solver
+// failure, or a warp that left the camera model's valid region, is reported unsolved
+// rather than passed on as if it were depth. Unsolved pixels are NaN in every output.
+// Outputs not selected stay empty.
 void finish(DepthResult& r) {
   const int w = r.depth.radial.width, h = r.depth.radial.height;
   fitImage(r.valid, w, h);
@@ -99,22 +100,10 @@ void finish(DepthResult& r) {
     r.depth.z = ImageF();
   else
     fitImage(r.depth.z, w, h);
-  // The 16 combinations of outputs present, each its own loop.
-  auto with = [&](auto disparity, auto warp, auto points, auto confidence) {
-    finishPixels<decltype(disparity)::value, decltype(warp)::value, decltype(points)::value,
-                 decltype(confidence)::value>(r);
-  };
-  auto flag = [](bool on, auto next) {
-    if (on)
-      next(std::true_type{});
-    else
-      next(std::false_type{});
-  };
-  flag(!r.disparity.empty(), [&](auto d) {
-    flag(!r.warp.empty(), [&](auto wp) {
-      flag(!r.depth.points.empty(), [&](auto p) { flag(!r.confidence.empty(), [&](auto c) { with(d, wp, p, c); }); });
-    });
-  });
+  if (r.disparity.empty() && r.warp.empty() && r.depth.points.empty())
+    finishDepthOnly(r);
+  else
+    finishAll(r);
 }
 
 }  // namespace
