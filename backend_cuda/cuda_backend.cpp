@@ -164,8 +164,7 @@ CudaBackend::~CudaBackend() {
 }
 
 void CudaBackend::check(int launchResult, const char* what) {
-  lastLaunchWroteDataTerm_ = false;
-  lastLaunchWasPrimalDual_ = false;
+  lastLaunch_ = LastLaunch::Other;
   if (launchResult != cudaSuccess) fail(std::string("kernel ") + what, cudaError_t(launchResult));
 }
 
@@ -257,12 +256,13 @@ void CudaBackend::runPendingAccumulate(const NextWarp* next) {
   const cudak::DataTermIn* nextIn = next ? &next->in : nullptr;
   if (a.median.id >= 0)
     check(cudak::launchMedianAccumulate(stream_, img(a.uOut, a.u), img(slot(a.median).dev, a.median), img(a.uIn, a.u),
-                                        w, u0, tangent, mask, a.duMax, nextOut, nextIn, lastLaunchWasPrimalDual_),
+                                        w, u0, tangent, mask, a.duMax, nextOut, nextIn,
+                                        lastLaunch_ == LastLaunch::PrimalDual),
           next ? "median + accumulate + derivatives" : "median + accumulate");
   else
     check(cudak::launchAccumulate(stream_, img(a.uOut, a.u), w, u0, tangent, mask, a.duMax, nextOut, nextIn),
           next ? "accumulate + derivatives" : "accumulate");
-  lastLaunchWroteDataTerm_ = true;
+  lastLaunch_ = LastLaunch::DataTerm;
 }
 
 void CudaBackend::enqueue(const PendingOp& op) {
@@ -492,11 +492,10 @@ void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tan
     return;
   }
   flush();
-  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), next.out.iu, next.out.iz,
-                                     next.out.tangent, next.in.i0, next.in.i1, next.in.trajectory, img(slot(w).dev, w),
-                                     img(slot(u).dev, u), next.in.mask, weight, weightFloor),
+  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), next.out, next.in, img(slot(w).dev, w),
+                                     img(slot(u).dev, u)),
         "warpDerivatives");
-  lastLaunchWroteDataTerm_ = true;
+  lastLaunch_ = LastLaunch::DataTerm;
 }
 
 void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
@@ -542,9 +541,10 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
   }
   int endSet = 0;
   check(cudak::launchPrimalDual(stream_, d, schedule.data(), int(schedule.size()),
-                                fiveIterationLaunches_ ? residentTiledBlocks_ : 0, lastLaunchWroteDataTerm_, endSet),
+                                fiveIterationLaunches_ ? residentTiledBlocks_ : 0, lastLaunch_ == LastLaunch::DataTerm,
+                                endSet),
         "primalDual");
-  lastLaunchWasPrimalDual_ = true;
+  lastLaunch_ = LastLaunch::PrimalDual;
   // The result is in the scratch set: it becomes the buffers' memory (later launches,
   // captured or not, take the pointers from the slots), the old memory the scratch set.
   if (endSet == 1) {

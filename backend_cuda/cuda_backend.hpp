@@ -145,8 +145,8 @@ class CudaBackend final : public Backend {
   const Slot& slot(const Buffer& b) const;
   float* pinnedFor(Slot& s);
   void dropGraph();
-  // Every launch goes through check(); it clears lastLaunchWroteDataTerm_ and
-  // lastLaunchWasPrimalDual_, which the launches they describe set after it.
+  // Every launch goes through check(), which sets lastLaunch_ to Other; the launches that
+  // lastLaunch_ names set it after their check().
   void check(int launchResult, const char* what);
   float* scratch(size_t floats, int key);
   float*& scratchSlot(size_t floats, int key);  // the map entry itself, to swap memory with a slot
@@ -163,10 +163,12 @@ class CudaBackend final : public Backend {
   std::optional<PendingMedian> pendingMedian_;
   std::optional<PendingAccumulate> pendingAccumulate_;
   int residentTiledBlocks_ = 0;  // of the tiled primal-dual kernel, on the device at once
-  // The last kernel wrote only a level's data term, w, u, the tangent and the median
-  // (never the mask, tensor or steps that primalDual() reads).
-  bool lastLaunchWroteDataTerm_ = false;
-  bool lastLaunchWasPrimalDual_ = false;  // (launchPrimalDual: writes the state only)
+  // The kind of the last kernel launched, for kernels that load what it cannot have written
+  // before they wait for it: DataTerm (warpDerivatives, accumulate and their fused forms)
+  // writes a level's data term, w, u, the tangent and the median, never the mask, tensor or
+  // steps; PrimalDual writes the solver state only.
+  enum class LastLaunch { Other, DataTerm, PrimalDual };
+  LastLaunch lastLaunch_ = LastLaunch::Other;
   bool fiveIterationLaunches_ = true;
 
   CUgraph_st* graph_ = nullptr;

@@ -119,9 +119,8 @@ struct DataTermIn {
   Img confidence;  // data null: every pixel weighs 1
   float weightFloor;
 };
-cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory,
-                                  Img w, Img u, Img mask, Img confidence,
-                                  float weightFloor);  // confidence.data may be null
+cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, const DataTermOut& out, const DataTermIn& in, Img w,
+                                  Img u);  // confidence.data may be null
 // Blocks of the tiled primal-dual kernel the device holds at once.
 int primalDualTiledResidentBlocks(int device);
 // `count` iterations, the first reading set 0 (uBar, vBar from uBarFirst, vBarFirst), in

@@ -457,6 +457,17 @@ static dim3 tiledGrid(const PrimalDualDev& pd, int iterations) {
   return dim3((pd.width + tileW - 1) / tileW, (pd.height + tileH - 1) / tileH);
 }
 
+// One launch of primalDualTiledKernel<kIters>: steps[0 .. kIters) from set `parity`.
+template <int kIters>
+static cudaError_t launchTiled(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int parity,
+                               MaskedOutCopy outside, int settled) {
+  StepBatch<kIters> batch{};
+  for (int i = 0; i < kIters; ++i) batch.step[i] = steps[i];
+  CS_LAUNCH(primalDualTiledKernel<kIters>, tiledGrid(pd, kIters), dim3(kCellsW, kCellsH), 0, s, pd, batch, parity,
+            outside, settled);
+  return cudaSuccess;
+}
+
 cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
                              int residentTiledBlocks, bool geometrySettled, int& endSet) {
   endSet = 0;
@@ -474,25 +485,15 @@ cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const Step
   const bool deep = int(deepGrid.x * deepGrid.y) <= residentTiledBlocks;
   int k = 0;
   while (k + 1 < count) {
+    const int iterations = deep && count - k >= kDeepIterations ? kDeepIterations : 2;
     const MaskedOutCopy outside = k == 0 ? copyOutside : leaveOutside;
+    const int settled = k > 0 ? kAllSettled : geometrySettled ? kGeometrySettled : kNothingSettled;
     const PrimalDualDev& state = k == 0 ? first : pd;
-    if (deep && count - k >= kDeepIterations) {
-      StepBatch<kDeepIterations> batch{};
-      for (int i = 0; i < kDeepIterations; ++i) batch.step[i] = steps[k + i];
-      CS_LAUNCH(primalDualTiledKernel<kDeepIterations>, deepGrid, dim3(kCellsW, kCellsH), 0, s, state, batch, endSet,
-                outside,
-                k > 0             ? kAllSettled
-                : geometrySettled ? kGeometrySettled
-                                  : kNothingSettled);
-      k += kDeepIterations;
-    } else {
-      CS_LAUNCH(primalDualTiledKernel<2>, tiledGrid(pd, 2), dim3(kCellsW, kCellsH), 0, s, state,
-                StepBatch<2>{{steps[k], steps[k + 1]}}, endSet, outside,
-                k > 0             ? kAllSettled
-                : geometrySettled ? kGeometrySettled
-                                  : kNothingSettled);
-      k += 2;
-    }
+    const cudaError_t e = iterations == kDeepIterations
+                              ? launchTiled<kDeepIterations>(s, state, steps + k, endSet, outside, settled)
+                              : launchTiled<2>(s, state, steps + k, endSet, outside, settled);
+    if (e != cudaSuccess) return e;
+    k += iterations;
     endSet ^= 1;
   }
   if (k < count) {

@@ -18,11 +18,9 @@ __global__ void warpDerivativesKernel(Img u0, DataTermOut out, DataTermIn in, Im
 
 }  // namespace
 
-cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, Img iu, Img iz, Img tangent, Img i0, Img i1, Img trajectory,
-                                  Img w, Img u, Img mask, Img confidence, float weightFloor) {
+cudaError_t launchWarpDerivatives(cudaStream_t s, Img u0, const DataTermOut& out, const DataTermIn& in, Img w, Img u) {
   const dim3 block(32, 8);
-  CS_LAUNCH(warpDerivativesKernel, grid2d(mask.width, mask.height, block), block, 0, s, u0,
-            DataTermOut{iu, iz, tangent}, DataTermIn{i0, i1, trajectory, mask, confidence, weightFloor}, w, u);
+  CS_LAUNCH(warpDerivativesKernel, grid2d(in.mask.width, in.mask.height, block), block, 0, s, u0, out, in, w, u);
   return cudaGetLastError();
 }
 
