@@ -312,6 +312,26 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
   cases.refused("bench --runs 0", "bench --calib rig.yaml l.png r.png --runs 0 --backend cpu", "--runs must be >= 1");
   cases.refused("bench --runs -3", "bench --calib rig.yaml l.png r.png --runs -3 --backend cpu", "--runs must be >= 1");
 
+  // ---- the camera model of synth and demo (refused before anything is rendered)
+  const std::string synth = "synth -o synth_out --size 32 --samples 1 --quiet";
+  cases.refused("synth --camera d435", synth + " --camera d435", "unknown camera model 'd435' (known: none, t265)");
+  cases.refused("synth --shot -1", synth + " --camera t265 --shot -1", "shot noise (--shot");
+  cases.refused("synth --read -0.5", synth + " --read -0.5", "read noise (--read");
+  cases.refused("synth --bits 12", synth + " --camera t265 --bits 12", "--bits must be 8 or 16, got 12");
+  cases.refused("synth --vignette 0", synth + " --vignette 0",
+                "vignette rim (--vignette, --vignette-left) must be in (0");
+  cases.refused("synth --vignette-right 1.5", synth + " --vignette-right 1.5", "must be in (0, 1], got 1.5");
+  cases.refused("synth --exposure nan", synth + " --exposure nan", "option --exposure expects a number, got 'nan'");
+  cases.refused("synth --exposure 2", synth + " --exposure 2", "the exposure (--exposure");
+  cases.refused("synth --gain-right 0", synth + " --gain-right 0", "gain (--gain-right)");
+  cases.refused("synth --camera-gamma -1", synth + " --camera-gamma -1", "gamma (--camera-gamma)");
+  cases.refused("synth --vignette-mode cos4", synth + " --vignette-mode cos4", "unknown vignette mode 'cos4'");
+  cases.refused("synth --noise-seed -1", synth + " --camera t265 --noise-seed -1",
+                "--noise-seed expects a non-negative");
+  cases.refused("demo --camera t265 --blur -1", "demo -o demo_out --size 32 --camera t265 --blur -1",
+                "blur sigma (--blur");
+  CHECK(!fs::exists(dir / "synth_out"));  // nothing written for a refused model
+
   // ---- the plane-sweep initialiser
   cases.refused("--min-confidence without the initialiser", good + " --min-confidence 0.5",
                 "--min-confidence needs the plane-sweep initialiser");

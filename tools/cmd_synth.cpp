@@ -1,12 +1,15 @@
 // curvestereo synth: renders a synthetic stereo pair with exact ground-truth depth in
 // the layout of ../shared/data/synthetic (left.png right.png depth_left.exr
-// depth_right.exr camchain.yaml).
+// depth_right.exr camchain.yaml), optionally through a camera model (--camera t265:
+// dark, vignetted, noisy, as a real low-cost fisheye camera), which also writes
+// photometry.json. Without camera options the output is the clean renderer's.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
 
+#include "camera_options.hpp"
 #include "commands.hpp"
 #include "common.hpp"
 #include "curvestereo/image_io.hpp"
@@ -73,18 +76,19 @@ DepthRange depthRange(const ImageF& depth) {
   return r;
 }
 
-void writePair(const synth::SynthPair& pair, const std::string& outDir) {
+// The images at the camera model's bit depth (8 without a model, as always).
+void writePair(const synth::SynthPair& pair, const synth::CameraPhotometry& camera, const std::string& outDir) {
   std::filesystem::create_directories(outDir);
   auto path = [&](const char* name) { return (std::filesystem::path(outDir) / name).string(); };
-  writePngGray(path("left.png"), pair.left);
-  writePngGray(path("right.png"), pair.right);
+  writePairImage(path("left.png"), pair.left, camera);
+  writePairImage(path("right.png"), pair.right, camera);
   writeExr(path("depth_left.exr"), pair.depthLeft);
   writeExr(path("depth_right.exr"), pair.depthRight);
   saveKalibr(pair.rig, path("camchain.yaml"));
 }
 
 void printSummary(const synth::SynthConfig& cfg, const synth::SynthPair& pair, double seconds,
-                  const std::string& outDir) {
+                  const std::string& outDir, const std::string& camera) {
   const Eigen::Vector3d centre1 = -pair.rig.R.transpose() * pair.rig.t;
   const double angle = std::acos(std::clamp(0.5 * (pair.rig.R.trace() - 1.0), -1.0, 1.0)) * 180.0 / M_PI;
   const DepthRange left = depthRange(pair.depthLeft);
@@ -95,18 +99,22 @@ void printSummary(const synth::SynthConfig& cfg, const synth::SynthPair& pair, d
               centre1.y(), centre1.z(), centre1.norm(), angle);
   std::printf("depth (left): %.2f .. %.1f m, sky %.1f %% of valid pixels\n", left.nearest, left.farthest,
               100.0 * left.skyFraction);
-  std::printf("rendered in %.1f s; wrote %s/{left,right}.png depth_{left,right}.exr camchain.yaml\n", seconds,
-              outDir.c_str());
+  if (!camera.empty()) std::printf("camera model %s\n", camera.c_str());
+  std::printf("rendered in %.1f s; wrote %s/{left,right}.png depth_{left,right}.exr camchain.yaml%s\n", seconds,
+              outDir.c_str(), camera.empty() ? "" : " photometry.json");
 }
 
 }  // namespace
 
 int cmdSynth(const Args& args) {
-  args.allowOnly({"o", "output", "scene", "seed", "size", "calib", "motion", "baseline", "rotation", "nearest",
-                  "samples", "fov", "quiet"});
+  std::set<std::string> known = kCameraOptions;
+  known.insert({"o", "output", "scene", "seed", "size", "calib", "motion", "baseline", "rotation", "nearest", "samples",
+                "fov", "quiet"});
+  args.allowOnly(known);
   const std::string outDir = args.get("o", args.get("output", ""));
   if (outDir.empty()) throw Error("synth: missing output folder (-o OUTDIR)");
   const synth::SynthConfig cfg = configFromArgs(args);
+  const synth::CameraPhotometry camera = cameraModelFromArgs(args, cfg.seed);  // checked before the long render
 
   const bool quiet = args.has("quiet");
   Progress leftProgress("rendering left"), rightProgress("rendering right");
@@ -120,12 +128,14 @@ int cmdSynth(const Args& args) {
     }
   };
   const auto start = std::chrono::steady_clock::now();
-  const synth::SynthPair pair = synth::renderPair(cfg, report);
+  synth::SynthPair pair = synth::renderPair(cfg, report);
   if (!quiet) rightProgress.done();
+  const double exposureScale = synth::applyPhotometry(camera, pair);  // depth untouched
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  writePair(pair, outDir);
-  printSummary(cfg, pair, seconds, outDir);
+  writePair(pair, camera, outDir);
+  if (camera.enabled()) writePhotometryJson(camera, exposureScale, outDir);
+  printSummary(cfg, pair, seconds, outDir, camera.enabled() ? synth::describePhotometry(camera, exposureScale) : "");
   return 0;
 }
 

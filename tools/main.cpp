@@ -11,7 +11,8 @@ namespace {
 const char* kUsage = R"(usage: curvestereo <command> [options]
 
 commands:
-  demo                          render a synthetic fisheye pair, solve it, report accuracy
+  demo [-o OUTDIR] [--size 480] [--scene urban|indoor] [--seed N] [--camera none|t265]
+                                render a synthetic fisheye pair, solve it, report accuracy
   run --calib CAMCHAIN LEFT RIGHT -o OUTDIR [--scale-intrinsics]
                                 depth.exr depth.png disparity.exr flow.flo points.ply;
                                 --scale-intrinsics: images at a uniform rescale of the
@@ -22,7 +23,7 @@ commands:
                                 time per frame and per stage
   fields --calib CAMCHAIN -o OUTDIR
                                 valid mask, calibration and trajectory fields
-  synth -o OUTDIR [--scene urban|indoor] [--motion binocular|forward|sideways]
+  synth -o OUTDIR [--scene urban|indoor] [--motion binocular|forward|sideways] [--camera none|t265]
                                 render a synthetic pair with exact ground truth
 
 solver options (run, demo, eval, bench):
@@ -31,6 +32,12 @@ solver options (run, demo, eval, bench):
 plane-sweep initialiser (on in --preset quality):
   --init none|planesweep  --init-level L  --init-parallax DEG  --init-radius R  --init-p1 P1
   --init-p2 P2  --occlusion-weight W  --min-confidence C (run, demo: points.ply)
+camera model (synth, demo; off unless asked; depth untouched; writes photometry.json):
+  --camera none|t265  then overrides: --exposure MEDIAN (target median grey, 0 = as rendered)
+  --vignette RIM (both; rim/centre in (0,1])  --vignette-left RIM  --vignette-right RIM
+  --vignette-mode radius|angle  --gain-left G  --gain-right G  --offset-left O  --offset-right O
+  --camera-gamma G (I^(1/G))  --blur SIGMA_PX  --shot S  --read R (noise variance S*I+R^2,
+  8-bit grey levels)  --bits 8|16  --noise-seed N (default: the scene's --seed)
 
 'curvestereo <command> --help' repeats this text.
 )";
