@@ -448,6 +448,27 @@ void CudaBackend::upsample(const Buffer& dst, const Buffer& src, float scale, fl
         "upsample");
 }
 
+void CudaBackend::normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                            const NormaliseParams& p) {
+  flush();
+  if (dst.channels != 1 || src.channels != 1 || mask.channels != 1 || moments.channels != 3)
+    throw Error("cuda backend: normalise expects 1-channel dst, src and mask and 3-channel moments");
+  for (const Buffer* b : {&dst, &moments, &mask})
+    if (b->width != src.width || b->height != src.height)
+      throw Error("cuda backend: normalise: buffers of different sizes");
+  if (p.radius < 0 || p.radius > kMaxNormaliseRadius)
+    throw Error("cuda backend: normalise radius " + std::to_string(p.radius) + " outside [0, " +
+                std::to_string(kMaxNormaliseRadius) + "]");
+  static_assert(cudak::kMaxNormaliseTaps == 2 * kMaxNormaliseRadius + 1, "normalise taps");
+  cudak::NormaliseDev d{};
+  d.radius = p.radius;
+  std::copy(p.taps, p.taps + 2 * p.radius + 1, d.taps);
+  d.epsilon = p.epsilon;
+  check(cudak::launchNormalise(stream_, img(slot(dst).dev, dst), img(slot(moments).dev, moments),
+                               img(slot(src).dev, src), img(slot(mask).dev, mask), d),
+        "normalise");
+}
+
 void CudaBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                                   const TensorParams& p) {
   flush();

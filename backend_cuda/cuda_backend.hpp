@@ -48,6 +48,8 @@ class CudaBackend final : public Backend {
   void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
   void downsample(const Buffer& dst, const Buffer& src, float scale) override;
   void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                 const NormaliseParams& params) override;
   void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                        const TensorParams& params) override;
   void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,

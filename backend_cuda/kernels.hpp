@@ -54,6 +54,14 @@ struct TensorDev {
   float taps[kMaxTaps];
 };
 
+// Local contrast normalisation (NormaliseParams): taps[0 .. 2 radius], 0 <= radius <= 24.
+constexpr int kMaxNormaliseTaps = 49;
+struct NormaliseDev {
+  int radius;
+  float taps[kMaxNormaliseTaps];
+  float epsilon;
+};
+
 struct StepDev {
   float tauScale, sigmaScale, theta;
   // sigmaScale * 0.5 / alpha0 * alpha0, the q ascent's factor: the oracle's per-pixel
@@ -106,6 +114,8 @@ cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img
 cudaError_t launchWarp(cudaStream_t s, Img dst, Img src, Img flow);
 cudaError_t launchDownsample(cudaStream_t s, Img dst, Img src, float scale);
 cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float valueScale);
+// moments: 3 ch scratch (the horizontal pass's sums of weight, weight src, weight src^2).
+cudaError_t launchNormalise(cudaStream_t s, Img dst, Img moments, Img src, Img mask, const NormaliseDev& p);
 // tmpRows, tmpSmooth: scratch of image.width * image.height floats each.
 cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorDev& p,
                                   float* tmpRows, float* tmpSmooth);

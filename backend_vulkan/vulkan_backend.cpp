@@ -24,6 +24,7 @@
 #include "curvestereo/camera.hpp"
 #include "curvestereo/camera_models.hpp"
 #include "curvestereo/image.hpp"
+#include "normalise.hpp"
 #include "shader_table.hpp"
 
 namespace cs {
@@ -506,6 +507,8 @@ enum Shader {
   kWarp,
   kDownsample,
   kUpsample,
+  kNormaliseMoments,
+  kNormalise,
   kTensorBlur,
   kTensor,
   kTensorSteps,
@@ -531,6 +534,8 @@ enum Shader {
 const char* const kShaderNames[kShaderCount] = {"warp",
                                                 "downsample",
                                                 "upsample",
+                                                "normalise_moments",
+                                                "normalise",
                                                 "structure_tensor_blur",
                                                 "structure_tensor",
                                                 "structure_tensor_steps",
@@ -665,6 +670,8 @@ class VulkanBackend final : public Backend {
   void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
   void downsample(const Buffer& dst, const Buffer& src, float scale) override;
   void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                 const NormaliseParams& params) override;
   void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                        const TensorParams& params) override;
   void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
@@ -1345,6 +1352,19 @@ void VulkanBackend::upsample(const Buffer& dst, const Buffer& src, float scale, 
   if (dst.channels != src.channels) throw Error("vulkan backend: upsample: channel mismatch");
   PcUpsample pc{addr(dst), addr(src), dst.width, dst.height, dst.channels, src.width, src.height, scale, valueScale};
   dispatch(kUpsample, pc, dst.width, dst.height);
+}
+
+// Two passes (normalise_moments.comp, normalise.comp); the taps by device address.
+void VulkanBackend::normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                              const NormaliseParams& p) {
+  for (const Buffer* b : {&dst, &moments, &mask}) requireSameSize(*b, src, "normalise");
+  if (dst.channels != 1 || src.channels != 1 || mask.channels != 1 || moments.channels != 3)
+    throw Error("vulkan backend: normalise: channel mismatch");
+  const vk::NormaliseBlock block = vk::normaliseBlock(p);
+  const Addr prm = paramBlock(&block, sizeof(block));
+  const int w = src.width, h = src.height;
+  dispatch(kNormaliseMoments, vk::PcNormaliseMoments{addr(moments), addr(src), addr(mask), prm, w, h}, w, h);
+  dispatch(kNormalise, vk::PcNormalise{addr(dst), addr(moments), addr(src), addr(mask), prm, w, h}, w, h);
 }
 
 void VulkanBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,

@@ -123,6 +123,27 @@ std::vector<Output> upsampleCase(Backend& b) {
   return {s.get("upsample_dst", dst)};
 }
 
+// A texture under a gain and an offset that vary across the image (vignetting, exposure),
+// so the window statistics differ everywhere: the local spread goes from epsilon (left)
+// to 7 epsilon (right). Sigma 2.5 (radius 8) reaches over the disc's rim and the hole.
+std::vector<Output> normaliseCase(Backend& b) {
+  Session s{b};
+  Host src = texture(kW, kH, 50, 2), mask = discMask(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const float u = float(x) / float(kW - 1), gain = 0.05f + 1.15f * u * u;
+      const float offset = 0.1f * float(y) / float(kH - 1) - 0.05f;
+      src.at(x, y) = gain * src.at(x, y) + offset;
+    }
+  Params params;
+  params.normSigma = 2.5f;
+  NormaliseParams np = normaliseParams(params);
+  np.epsilon = 0.01f;
+  Buffer dst = s.make(kW, kH, 1), moments = s.make(kW, kH, 3);
+  b.normalise(dst, moments, s.put(src), s.put(mask), np);
+  return {s.get("normalise_dst", dst)};
+}
+
 std::vector<Output> structureTensorCase(Backend& b) {
   Session s{b};
   Host image = texture(kW, kH, 5), mask = discMask(kW, kH);
@@ -473,6 +494,7 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"warp", warpCase},
                                                 {"downsample", downsampleCase},
                                                 {"upsample", upsampleCase},
+                                                {"normalise", normaliseCase},
                                                 {"structureTensor", structureTensorCase},
                                                 {"warpDerivatives", warpDerivativesCase},
                                                 {"warpDerivatives+confidence", warpDerivativesConfidenceCase},

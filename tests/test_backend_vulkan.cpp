@@ -88,6 +88,10 @@ class GuardedBackend final : public Backend {
   void warp(const Buffer& d, const Buffer& s, const Buffer& f) override { b_.warp(d, s, f); }
   void downsample(const Buffer& d, const Buffer& s, float sc) override { b_.downsample(d, s, sc); }
   void upsample(const Buffer& d, const Buffer& s, float sc, float v) override { b_.upsample(d, s, sc, v); }
+  void normalise(const Buffer& d, const Buffer& mo, const Buffer& s, const Buffer& m,
+                 const NormaliseParams& p) override {
+    b_.normalise(d, mo, s, m, p);
+  }
   void structureTensor(const Buffer& t, const Buffer& s, const Buffer& i, const Buffer& m,
                        const TensorParams& p) override {
     b_.structureTensor(t, s, i, m, p);
