@@ -178,6 +178,11 @@ void CpuBackend::upsample(const Buffer& dst, const Buffer& src, float scale, flo
   cpu::upsample(view(dst), view(src), scale, valueScale);
 }
 
+void CpuBackend::normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                           const NormaliseParams& params) {
+  cpu::normalise(view(dst), view(moments), view(src), view(mask), params);
+}
+
 void CpuBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                                  const TensorParams& params) {
   cpu::structureTensor(view(tensor), view(steps), view(image), view(mask), params);

@@ -1,6 +1,6 @@
 // The scalar CPU backend: the readable reference implementation (the oracle) that
 // every other backend is tested against. One file per stage (fields.cpp, warp.cpp, resample.cpp,
-// structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp, accumulate.cpp,
+// normalise.cpp, structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp, accumulate.cpp,
 // plane_sweep.cpp, triangulate.cpp).
 #pragma once
 #include <vector>
@@ -17,6 +17,7 @@ void triangulate(const View& radial, const View& points, const View& w, const Vi
 void warp(const View& dst, const View& src, const View& flow);
 void downsample(const View& dst, const View& src, float scale);
 void upsample(const View& dst, const View& src, float scale, float valueScale);
+void normalise(const View& dst, const View& moments, const View& src, const View& mask, const NormaliseParams& p);
 void structureTensor(const View& tensor, const View& steps, const View& image, const View& mask,
                      const TensorParams& params);
 void warpDerivatives(const View& u0, const View& iu, const View& iz, const View& tangent, const View& i0,
@@ -55,6 +56,8 @@ class CpuBackend final : public Backend {
   void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
   void downsample(const Buffer& dst, const Buffer& src, float scale) override;
   void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                 const NormaliseParams& params) override;
   void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                        const TensorParams& params) override;
   void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,

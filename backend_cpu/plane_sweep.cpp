@@ -16,8 +16,6 @@ namespace {
 
 constexpr float kNoSample = -1.f;  // volume value where the hypothesis cannot be sampled
 constexpr float kNoCost = 2.f;     // cost where nothing scored (the worst 1 - ZNCC)
-// Regularises the ZNCC of nearly flat windows (about one grey level of noise on [0, 1]).
-constexpr float kFlatVariance = 1e-5f;
 
 double planeInverseDepth(const SweepParams& p, double k) { return p.qMax * k / double(p.planes - 1); }
 
@@ -28,7 +26,8 @@ bool projectHypothesis(const Camera& cam, const Vec3<double>& ray, const double 
 }
 
 // 1 - ZNCC over the masked window samples whose hypothesis could be sampled.
-float windowCost(const View& reference, const View& volume, const View& mask, int x, int y, int k, int radius) {
+float windowCost(const View& reference, const View& volume, const View& mask, int x, int y, int k, int radius,
+                 float flatVariance) {
   float n = 0, s0 = 0, s1 = 0, s00 = 0, s11 = 0, s01 = 0;
   for (int dy = -radius; dy <= radius; ++dy)
     for (int dx = -radius; dx <= radius; ++dx) {
@@ -44,7 +43,7 @@ float windowCost(const View& reference, const View& volume, const View& mask, in
   const float m0 = s0 / n, m1 = s1 / n;
   const float v0 = std::max(0.f, s00 / n - m0 * m0), v1 = std::max(0.f, s11 / n - m1 * m1);
   const float cov = s01 / n - m0 * m1;
-  return 1.f - cov / std::sqrt((v0 + kFlatVariance) * (v1 + kFlatVariance));
+  return 1.f - cov / std::sqrt((v0 + flatVariance) * (v1 + flatVariance));
 }
 
 // Vertex of the parabola through (-1, before), (0, best), (1, after), within half a plane.
@@ -78,7 +77,7 @@ void sweepCost(const View& costs, const View& reference, const View& volume, con
     for (int x = 0; x < costs.width; ++x) {
       const bool inside = masked(mask, x, y);
       for (int k = 0; k < p.planes; ++k)
-        costs.at(x, y, k) = inside ? windowCost(reference, volume, mask, x, y, k, p.radius) : kNoCost;
+        costs.at(x, y, k) = inside ? windowCost(reference, volume, mask, x, y, k, p.radius, p.flatVariance) : kNoCost;
     }
   });
 }

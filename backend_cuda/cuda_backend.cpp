@@ -78,6 +78,7 @@ cudak::SweepDev sweepDev(const SweepParams& p, const Buffer& volumeOrBest, int c
   d.radius = p.radius;
   d.p1 = p.p1;
   d.p2 = p.p2;
+  d.flatVariance = p.flatVariance;
   return d;
 }
 

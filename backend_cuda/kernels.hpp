@@ -40,6 +40,7 @@ struct SweepDev {
   double qMax;
   int planes, radius;
   float p1, p2;
+  float flatVariance;
 };
 constexpr int kMaxSweepPlanes = 512;  // launchSweepAggregate: one thread per plane
 // The left-right check (ConsistencyParams).

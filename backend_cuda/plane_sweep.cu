@@ -10,8 +10,6 @@ namespace cs::cudak {
 namespace {
 
 constexpr float kNoSample = -1.f;  // volume value where the hypothesis cannot be sampled
-constexpr float kNoCost = 2.f;     // cost where nothing scored (the worst 1 - ZNCC)
-constexpr float kFlatVariance = 1e-5f;
 
 // sweepWarp: pixels of one row per block. Their rays are unprojected once (the iterative
 // inverse models are the expensive part) and the block's threads then walk the
@@ -116,7 +114,7 @@ __device__ void stageVolume(const Tile& t, const Img& volume, int k0, int planes
 
 // 1 - ZNCC of the window around tile pixel (tx, ty) at chunk plane c: the oracle's
 // windowCost, same sums in the same order (dy outer, dx inner).
-__device__ float windowCost(const Tile& t, int tx, int ty, int c, int radius) {
+__device__ float windowCost(const Tile& t, int tx, int ty, int c, int radius, float flatVariance) {
   const float* volume = t.volume + c * t.size();
   float n = 0, s0 = 0, s1 = 0, s00 = 0, s11 = 0, s01 = 0;
   for (int dy = -radius; dy <= radius; ++dy)
@@ -133,7 +131,7 @@ __device__ float windowCost(const Tile& t, int tx, int ty, int c, int radius) {
   const float d0 = s00 / n - m0 * m0, d1 = s11 / n - m1 * m1;
   const float v0 = 0.f < d0 ? d0 : 0.f, v1 = 0.f < d1 ? d1 : 0.f;  // std::max(0.f, d)
   const float cov = s01 / n - m0 * m1;
-  return 1.f - cov / sqrtf((v0 + kFlatVariance) * (v1 + kFlatVariance));
+  return 1.f - cov / sqrtf((v0 + flatVariance) * (v1 + flatVariance));
 }
 
 // Vertex of the parabola through (-1, before), (0, best), (1, after), within half a plane.
@@ -180,7 +178,7 @@ __global__ void __launch_bounds__(kTilePixels)
     stageVolume(t, volume, k0, p.planes);
     __syncthreads();
     const int chunk = min(kChunk, p.planes - k0);
-    for (int c = 0; c < chunk; ++c) own[c] = active ? windowCost(t, threadIdx.x, threadIdx.y, c, r) : kNoCost;
+    for (int c = 0; c < chunk; ++c) own[c] = active ? windowCost(t, threadIdx.x, threadIdx.y, c, r, p.flatVariance) : kNoCost;
     __syncthreads();
     writeCosts(costs, staged, k0, chunk);
   }

@@ -14,12 +14,11 @@
 #include "common.glsl"
 
 const float kNoCost = 2.0;  // cost where nothing scored (the worst 1 - ZNCC)
-// Regularises the ZNCC of nearly flat windows (about one grey level of noise on [0, 1]).
-const float kFlatVariance = 1e-5;
 
 layout(push_constant) uniform PC {
   FBuf costs, reference, volume, mask;  // costs, volume: `planes` channels
   int width, height, planes, radius;
+  float flatVariance;  // SweepParams::flatVariance
 } pc;
 
 // 1 - ZNCC over the masked window samples whose hypothesis could be sampled; kNoCost when
@@ -45,7 +44,7 @@ float windowCost(int x, int y, int k) {
   precise float m0 = s0 / n, m1 = s1 / n;
   precise float v0 = max(0.0, s00 / n - m0 * m0), v1 = max(0.0, s11 / n - m1 * m1);
   precise float cov = s01 / n - m0 * m1;
-  precise float cost = 1.0 - cov / sqrt((v0 + kFlatVariance) * (v1 + kFlatVariance));
+  precise float cost = 1.0 - cov / sqrt((v0 + pc.flatVariance) * (v1 + pc.flatVariance));
   return cost;
 }
 

@@ -289,6 +289,7 @@ SweepParams sweepParams(double qMax, int planes, int radius) {
   p.radius = radius;
   p.p1 = 0.05f;
   p.p2 = 0.5f;
+  p.flatVariance = 1e-5f;
   return p;
 }
 

@@ -221,6 +221,7 @@ SweepRun runSweep(Backend& b, const synth::SynthPair& pair) {
   p.radius = 2;
   p.p1 = 0.05f;
   p.p2 = 0.5f;
+  p.flatVariance = 1e-4f;
   SweepParams reverse = p;
   for (double& c : reverse.t) c = -c;
   std::vector<float> ones(size_t(width) * height, 1.f);

@@ -57,6 +57,7 @@ SweepParams sweepParams(const Camera& cam, const double t[3], double qMax, int p
   p.radius = radius;
   p.p1 = 0.05f;
   p.p2 = 0.5f;
+  p.flatVariance = 1e-4f;
   return p;
 }
 

@@ -15,7 +15,8 @@ namespace cs::cli {
 const std::set<std::string> kSolverOptions = {
     "preset",  "warps", "iterations", "levels",        "lambda",      "du-max",  "alpha0",  "alpha1",
     "max-fov", "gamma", "median",     "backend",       "mask",        "epipole", "beta",    "eta",
-    "device",  "init",  "init-level", "init-parallax", "init-radius", "init-p1", "init-p2", "occlusion-weight"};
+    "device",  "init",  "init-level", "init-parallax", "init-radius", "init-p1", "init-p2", "occlusion-weight",
+    "data-term", "norm-sigma", "noise-level"};
 
 std::string backendFromArgs(const Args& args) {
   std::string backend = args.get("backend", "auto");
@@ -28,6 +29,9 @@ Params paramsFromArgs(const Args& args) {
   p.warps = args.getInt("warps", p.warps);
   p.iterations = args.getInt("iterations", p.iterations);
   p.levels = args.getInt("levels", p.levels);
+  if (args.has("data-term")) p = p.withDataTerm(parseDataTerm(args.get("data-term", "normalised")));
+  p.normSigma = float(args.getDouble("norm-sigma", p.normSigma));
+  p.noiseLevel = float(args.getDouble("noise-level", p.noiseLevel));
   p.lambda = float(args.getDouble("lambda", p.lambda));
   p.duMax = float(args.getDouble("du-max", p.duMax));
   p.alpha0 = float(args.getDouble("alpha0", p.alpha0));

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "curvestereo/backend.hpp"
 #include "curvestereo/image.hpp"
 
 namespace cs {
@@ -22,6 +23,9 @@ void Params::validate() const {
   require(warps >= 1 && warps <= 1000, "warps must be in [1, 1000]");
   require(iterations >= 1 && iterations <= 1000, "iterations must be in [1, 1000]");
   require(std::isfinite(duMax) && duMax > 0, "duMax must be > 0");
+  require(std::isfinite(normSigma) && normSigma >= 0.5f && 3.f * normSigma <= float(kMaxNormaliseRadius),
+          "normSigma must be in [0.5, " + std::to_string(kMaxNormaliseRadius / 3) + "]");
+  require(std::isfinite(noiseLevel) && noiseLevel > 0 && noiseLevel <= 1, "noiseLevel must be in (0, 1]");
   require(std::isfinite(lambda) && lambda > 0, "lambda must be > 0");
   require(std::isfinite(alpha0) && alpha0 > 0, "alpha0 must be > 0");
   require(std::isfinite(alpha1) && alpha1 > 0, "alpha1 must be > 0");
@@ -54,7 +58,12 @@ Params preset(const std::string& name) {
   Params p;
   if (name == "default") return p;
   if (name == "realtime") {
-    // The paper's configuration (Roxas & Oishi, Sec. IV): 5 levels x2, N=5, K=10, du_max 0.2.
+    p.warps = 5;
+    return p;
+  }
+  if (name == "paper") {
+    // Roxas & Oishi, Sec. IV: brightness constancy, 5 levels x2, N=5, K=10, du_max 0.2.
+    p = p.withDataTerm(Params::DataTerm::Brightness);
     p.warps = 5;
     return p;
   }
@@ -67,7 +76,35 @@ Params preset(const std::string& name) {
   throw Error("unknown preset '" + name + "' (known: " + known + ")");
 }
 
-std::vector<std::string> presetNames() { return {"realtime", "default", "quality"}; }
+std::vector<std::string> presetNames() { return {"realtime", "default", "quality", "paper"}; }
+
+Params Params::withDataTerm(DataTerm term) const {
+  Params p = *this;
+  p.dataTerm = term;
+  p.lambda = term == DataTerm::Normalised ? kNormalisedLambda : kBrightnessLambda;
+  return p;
+}
+
+std::string dataTermName(Params::DataTerm term) {
+  return term == Params::DataTerm::Normalised ? "normalised" : "brightness";
+}
+
+Params::DataTerm parseDataTerm(const std::string& name) {
+  if (name == "normalised") return Params::DataTerm::Normalised;
+  if (name == "brightness") return Params::DataTerm::Brightness;
+  throw Error("unknown data term '" + name + "' (known: normalised, brightness)");
+}
+
+NormaliseParams normaliseParams(const Params& p) {
+  NormaliseParams n{};
+  n.radius = std::min(kMaxNormaliseRadius, int(std::ceil(3.f * p.normSigma)));
+  float sum = 0.f;
+  for (int i = -n.radius; i <= n.radius; ++i)
+    sum += n.taps[i + n.radius] = std::exp(-float(i * i) / (2.f * p.normSigma * p.normSigma));
+  for (int i = 0; i <= 2 * n.radius; ++i) n.taps[i] /= sum;
+  n.epsilon = p.noiseLevel;
+  return n;
+}
 
 std::string initName(Params::Init init) { return init == Params::Init::PlaneSweep ? "planesweep" : "none"; }
 
@@ -92,7 +129,9 @@ std::string describe(const Params& p) {
   std::ostringstream s;
   s << "levels=" << p.levels << " scale=" << p.scale << " warps=" << p.warps << " iterations=" << p.iterations
     << " du_max=" << p.duMax << " lambda=" << p.lambda << " alpha0=" << p.alpha0 << " alpha1=" << p.alpha1
-    << " beta=" << p.beta << " eta=" << p.eta << " median=" << (p.medianFilter ? "on" : "off") << " gamma=" << p.gamma
+    << " data=" << dataTermName(p.dataTerm);
+  if (p.dataTerm == Params::DataTerm::Normalised) s << " norm_sigma=" << p.normSigma << " noise_level=" << p.noiseLevel;
+  s << " beta=" << p.beta << " eta=" << p.eta << " median=" << (p.medianFilter ? "on" : "off") << " gamma=" << p.gamma
     << " init=" << initName(p.init);
   if (p.init == Params::Init::PlaneSweep)
     s << " init_level=" << p.initLevel << " init_parallax=" << p.initMaxParallaxDeg << " init_radius=" << p.initRadius

@@ -32,7 +32,8 @@ std::vector<float> levelMask(const ImageU8& userMask, const LevelSize& size) {
 }  // namespace
 
 // Keep in step with the constructor below: 34 floats per pixel per level (userMask, i0, i1,
-// mask, scratch 1; trajectory, w, tangent 2; tensor, steps 4; pd 12; data 3) plus 7 at
+// mask, scratch 1; trajectory, w, tangent 2; tensor, steps 4; pd 12; data 3), 5 more with
+// the normalised data term (n0, n1 1; moments 3), plus 7 at
 // level 0 (rawRight 1, calibration 2, radial 1, points 3); with the initialiser, a
 // confidence (1) at the sweep level and every finer one, and the volume and the costs (planes each) and two
 // sweep results (2 + 2) at the sweep level.
@@ -40,7 +41,8 @@ unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
   const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
   auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
   unsigned long long floats = 7ull * pixels(plan[0]);
-  for (const LevelSize& size : plan) floats += 34ull * pixels(size);
+  const unsigned long long perPixel = params.dataTerm == Params::DataTerm::Normalised ? 39 : 34;
+  for (const LevelSize& size : plan) floats += perPixel * pixels(size);
   if (params.init == Params::Init::PlaneSweep) {
     const size_t level = sweepLevel(plan.size(), params);
     for (size_t l = 0; l <= level; ++l) floats += pixels(plan[l]);
@@ -89,6 +91,11 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
     L.tensor = make(4), L.steps = make(4), L.w = make(2), L.tangent = make(2), L.scratch = make(1);
     L.pd = {make(1), make(1), make(2), make(2), make(2), make(4)};
     L.data = {make(1), make(1), make(1)};
+    if (normalising()) {
+      L.n0 = make(1), L.n1 = make(1), L.moments = make(3);
+    } else {
+      L.n0 = L.i0, L.n1 = L.i1;
+    }
     levels_.push_back(L);
   }
   if (initialising()) {
@@ -101,6 +108,7 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
     sweep_.params.radius = params_.initRadius;
     sweep_.params.p1 = params_.initP1;
     sweep_.params.p2 = params_.initP2;
+    sweep_.params.flatVariance = params_.noiseLevel * params_.noiseLevel;
     sweep_.volume = backend_.create(S.size.width, S.size.height, sweep_.params.planes);
     sweep_.costs = backend_.create(S.size.width, S.size.height, sweep_.params.planes);
     sweep_.best = backend_.create(S.size.width, S.size.height, 2);
@@ -156,6 +164,16 @@ void Pipeline::buildPyramid() {
   for (size_t l = 1; l < levels_.size(); ++l) {
     backend_.downsample(levels_[l].i0, levels_[l - 1].i0, float(params_.scale));
     backend_.downsample(levels_[l].i1, levels_[l - 1].i1, float(params_.scale));
+  }
+  if (!normalising()) return;
+  // Each level normalised from its own grey levels, in a window of the same size in that
+  // level's pixels: normalising once at full resolution and then downsampling would
+  // average the zero-mean fine texture away and starve the coarse levels.
+  stage("normalise");
+  const NormaliseParams np = normaliseParams(params_);
+  for (Level& L : levels_) {
+    backend_.normalise(L.n0, L.moments, L.i0, L.mask, np);
+    backend_.normalise(L.n1, L.moments, L.i1, L.mask, np);
   }
 }
 
@@ -222,7 +240,7 @@ void Pipeline::solveLevel(Level& L, const std::function<void(int)>& warpDone) {
   const Buffer weight = params_.occlusionWeight < 1.f ? L.confidence : Buffer{};
   for (int n = 0; n < params_.warps; ++n) {
     stage("warp derivatives");
-    backend_.warpDerivatives(L.data, L.tangent, L.i0, L.i1, L.trajectory, L.w, L.pd.u, L.mask, weight,
+    backend_.warpDerivatives(L.data, L.tangent, L.n0, L.n1, L.trajectory, L.w, L.pd.u, L.mask, weight,
                              params_.occlusionWeight);
     stage("primal-dual");
     backend_.copy(L.pd.uBar, L.pd.u);

@@ -70,6 +70,9 @@ class Pipeline {
     Camera cam0, cam1;
     Buffer userMask;  // the user's mask at this level (or all ones)
     Buffer i0, i1, mask, trajectory, tensor, steps, w, tangent, scratch;
+    // What the data term compares: i0, i1 normalised (3-ch moments as scratch), or i0, i1
+    // themselves with the brightness data term (n0, n1 then alias them).
+    Buffer n0, n1, moments;
     Buffer confidence;  // data-term weight from the initialiser (id -1 without one)
     PrimalDualBuffers pd;
     DataTermBuffers data;
@@ -89,6 +92,7 @@ class Pipeline {
     return std::min(levels - 1, size_t(params.initLevel));
   }
   void runSweep();
+  bool normalising() const { return params_.dataTerm == Params::DataTerm::Normalised; }
   bool initialising() const { return params_.init == Params::Init::PlaneSweep; }
 
   void upload(const ImageF& left, const ImageF& right);

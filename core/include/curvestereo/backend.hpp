@@ -75,12 +75,26 @@ struct SweepParams {
   int planes;        // >= 2
   int radius;        // ZNCC window: (2 radius + 1)^2 level pixels
   float p1, p2;      // aggregation penalties (cost units): a step to a neighbouring hypothesis, any larger jump
+  // Added to both windows' variances in the ZNCC: the image noise's variance, so that a
+  // window whose spread is mostly noise (flat walls, sky, a dark rim) correlates weakly
+  // with everything instead of strongly with a random hypothesis.
+  float flatVariance;
 };
 
 // Left-right consistency of two sweeps, turned into the initial state and a confidence.
 struct ConsistencyParams {
   float tolerancePx;       // reprojection error (level px) at which confidence falls to 1/e
   float acceptConfidence;  // the sweep replaces the coarse-to-fine estimate from this confidence on
+};
+
+// Local contrast normalisation of an image (DESIGN.md "Photometry"): the data term compares
+// these instead of grey levels, so a per-camera gain and offset and smooth shading
+// (vignetting) cancel. Gaussian taps are computed once, in core (normaliseParams).
+constexpr int kMaxNormaliseRadius = 24;
+struct NormaliseParams {
+  int radius;                               // taps[0 .. 2 radius]
+  float taps[2 * kMaxNormaliseRadius + 1];  // normalised Gaussian, taps[radius] at offset 0
+  float epsilon;                            // contrast floor (grey levels of [0, 1]): about the sensor's noise
 };
 
 struct PrimalDualStep {
@@ -121,6 +135,12 @@ class Backend {
   virtual void downsample(const Buffer& dst, const Buffer& src, float scale) = 0;
   // dst = valueScale * src resampled bilinearly to dst's (finer) grid.
   virtual void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) = 0;
+  // dst = (src - m) / sqrt(v + epsilon^2), with m and v the mean and variance of src over
+  // the masked pixels of a Gaussian window (weights taps(dx) taps(dy), pixels outside the
+  // image skipped); 0 outside the mask. moments (3 ch) is scratch: the horizontal pass's
+  // sums of weight, weight src and weight src^2 over masked pixels.
+  virtual void normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                         const NormaliseParams& params) = 0;
   // tensor (4 ch: d11 d12 d22, unused) and preconditioned steps (4 ch: tau_u tau_v sigma_p1
   // sigma_p2) from the image and mask.
   virtual void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,

@@ -18,8 +18,27 @@ struct Params {
   float duMax = 0.2f;        // clamp of the disparity increment per warp (px of that level)
   bool medianFilter = true;  // 3x3 median of u after each warp's iterations
 
-  // Energy: lambda |rho| + alpha0 |grad v| + alpha1 |D grad u - v|
-  float lambda = 20.f;
+  // Data term (DESIGN.md "Photometry"): what the residual rho compares. Normalised: each
+  // pyramid level's images after local contrast normalisation (zero mean, unit spread in a
+  // Gaussian window of normSigma level px), so a gain and offset per camera and smooth
+  // shading (vignetting) cancel and lambda is in units of the local contrast, not of grey
+  // levels. Brightness: the grey levels themselves (the paper's term; lambda ~20).
+  enum class DataTerm { Brightness, Normalised };
+  DataTerm dataTerm = DataTerm::Normalised;
+  float normSigma = 4.f;
+  // The camera's noise (standard deviation, grey levels of [0, 1]; 0.01 = 2.5 levels of 8
+  // bits, about a T265's read plus shot noise at its usual exposure). Contrast below it is
+  // not trusted: it floors the normalisation's spread and the sweep's window variances,
+  // so noise in flat or dark regions is not stretched into texture. A property of the
+  // sensor, not of the scene, hence not tied to the image's contrast.
+  float noiseLevel = 0.01f;
+
+  // Energy: lambda |rho| + alpha0 |grad v| + alpha1 |D grad u - v|. lambda's unit is the
+  // data term's: kNormalisedLambda for the normalised term, kBrightnessLambda (the paper's)
+  // for grey levels; withDataTerm() sets the term and its lambda together.
+  static constexpr float kNormalisedLambda = 3.f;
+  static constexpr float kBrightnessLambda = 20.f;
+  float lambda = kNormalisedLambda;
   float alpha0 = 17.f;
   float alpha1 = 1.2f;
   // Structure tensor D = w n n^T + n_perp n_perp^T, w = max(exp(-beta |grad I|^eta), wMin)
@@ -75,16 +94,28 @@ struct Params {
   double maxFovDeg = 180.0;
   double epipoleDeg = 3.0;
 
+  // This data term with its default lambda.
+  Params withDataTerm(DataTerm term) const;
+
   // Throws cs::Error naming the first out-of-range value.
   void validate() const;
 };
+
+// "brightness" / "normalised"; parseDataTerm throws cs::Error listing the names.
+std::string dataTermName(Params::DataTerm term);
+Params::DataTerm parseDataTerm(const std::string& name);
+
+// The normalisation kernel's taps for p.normSigma and its floor p.noiseLevel.
+struct NormaliseParams;
+NormaliseParams normaliseParams(const Params& p);
 
 // "none" / "planesweep"; parseInit throws cs::Error listing the names.
 std::string initName(Params::Init init);
 Params::Init parseInit(const std::string& name);
 
-// Named presets: "realtime" (the paper's configuration), "default" (accuracy oriented),
-// "quality" (default + plane-sweep initialisation, for displacements beyond ~30 px).
+// Named presets: "realtime" (N = 5 warps), "default" (accuracy oriented), "quality"
+// (default + plane-sweep initialisation, for displacements beyond ~30 px), "paper" (the
+// paper's configuration: brightness data term, lambda 20, N = 5).
 // Throws cs::Error listing the known names for an unknown one.
 Params preset(const std::string& name);
 std::vector<std::string> presetNames();
