@@ -10,6 +10,7 @@ namespace cs::cudak {
 namespace {
 
 constexpr float kNoSample = -1.f;  // volume value where the hypothesis cannot be sampled
+constexpr float kNoCost = 2.f;     // cost where nothing scored (the worst 1 - ZNCC)
 
 // sweepWarp: pixels of one row per block. Their rays are unprojected once (the iterative
 // inverse models are the expensive part) and the block's threads then walk the
@@ -178,7 +179,8 @@ __global__ void __launch_bounds__(kTilePixels)
     stageVolume(t, volume, k0, p.planes);
     __syncthreads();
     const int chunk = min(kChunk, p.planes - k0);
-    for (int c = 0; c < chunk; ++c) own[c] = active ? windowCost(t, threadIdx.x, threadIdx.y, c, r, p.flatVariance) : kNoCost;
+    for (int c = 0; c < chunk; ++c)
+      own[c] = active ? windowCost(t, threadIdx.x, threadIdx.y, c, r, p.flatVariance) : kNoCost;
     __syncthreads();
     writeCosts(costs, staged, k0, chunk);
   }

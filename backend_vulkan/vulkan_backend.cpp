@@ -1489,8 +1489,8 @@ void VulkanBackend::sweepCost(const Buffer& costs, const Buffer& reference, cons
   // interleaved volume is read and the costs written in consecutive floats.
   const uint64_t rowItems = uint64_t(costs.width) * uint64_t(p.planes);
   const uint64_t groupItems = uint64_t(kGroup) * kGroup;
-  PcSweepCost pc{addr(costs), addr(reference), addr(volume), addr(mask), costs.width, costs.height, p.planes, p.radius,
-                 p.flatVariance};
+  PcSweepCost pc{addr(costs),  addr(reference), addr(volume), addr(mask),    costs.width,
+                 costs.height, p.planes,        p.radius,     p.flatVariance};
   dispatchGroups(kSweepCost, pc, uint32_t((rowItems + groupItems - 1) / groupItems), uint32_t(costs.height));
 }
 

@@ -13,9 +13,9 @@
 namespace cs::cli {
 
 const std::set<std::string> kSolverOptions = {
-    "preset",  "warps", "iterations", "levels",        "lambda",      "du-max",  "alpha0",  "alpha1",
-    "max-fov", "gamma", "median",     "backend",       "mask",        "epipole", "beta",    "eta",
-    "device",  "init",  "init-level", "init-parallax", "init-radius", "init-p1", "init-p2", "occlusion-weight",
+    "preset",    "warps",      "iterations", "levels",        "lambda",      "du-max",  "alpha0",  "alpha1",
+    "max-fov",   "gamma",      "median",     "backend",       "mask",        "epipole", "beta",    "eta",
+    "device",    "init",       "init-level", "init-parallax", "init-radius", "init-p1", "init-p2", "occlusion-weight",
     "data-term", "norm-sigma", "noise-level"};
 
 std::string backendFromArgs(const Args& args) {

@@ -1,73 +1,27 @@
-// Rig validation and Kalibr camchain.yaml I/O.
+// Rig validation and Kalibr camchain.yaml I/O (Basalt: calib_basalt.cpp, OpenCV: calib_opencv.cpp).
 #include "curvestereo/rig.hpp"
 
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Core>
-#include <Eigen/LU>  // determinant()
 #include <cmath>
-#include <filesystem>
-#include <fstream>
-#include <locale>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include "curvestereo/camera_models.hpp"
+#include "calib_common.hpp"
 #include "curvestereo/image.hpp"
 
 namespace cs {
 
-namespace {
-
-std::string formatNumber(double v, int precision = 6) {
-  std::ostringstream os;
-  os.imbue(std::locale::classic());
-  os.precision(precision);
-  os << v;
-  return os.str();
-}
-
-// Shortest decimal text that reads back as exactly v (at most 17 significant digits).
-std::string exactNumber(double v) {
-  for (int precision = 1; precision < 17; ++precision) {
-    const std::string text = formatNumber(v, precision);
-    std::istringstream is(text);
-    is.imbue(std::locale::classic());
-    double back = 0;
-    if (is >> back && back == v) return text;
-  }
-  return formatNumber(v, 17);
-}
-
-// Messages are one line; YAML text quoted into them may not be.
-std::string oneLine(std::string text) {
-  for (char& c : text)
-    if (c == '\n' || c == '\r') c = ' ';
-  return text;
-}
-
-void validateCamera(const Camera& cam, const char* name) {
-  try {
-    cam.validate();
-  } catch (const Error& e) {
-    throw Error(std::string(name) + ": " + e.what());
-  }
-}
-
-}  // namespace
+using calib::exactNumber;
+using calib::formatNumber;
+using calib::numberList;
 
 void Rig::validate() const {
-  validateCamera(cam0, "cam0");
-  validateCamera(cam1, "cam1");
-  if (!R.allFinite() || !t.allFinite()) throw Error("T_cn_cnm1 has non-finite entries");
-  const double det = R.determinant();
-  const double orthoError = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (std::abs(det - 1.0) > 1e-6 || orthoError > 1e-6)
-    throw Error("T_cn_cnm1 rotation is not a rotation (det=" + formatNumber(det, 10) +
-                ", |R^T R - I|=" + formatNumber(orthoError, 3) + ")");
-  // Depth from stereo needs a baseline; a zero t is usually a missing or mis-read pose.
-  if (t.norm() < 1e-6) throw Error("zero baseline (|t| = " + formatNumber(t.norm(), 3) + " m in T_cn_cnm1)");
+  calib::checkCamera(cam0, "cam0");
+  calib::checkCamera(cam1, "cam1");
+  calib::checkPose(R, t, "T_cn_cnm1");
 }
 
 // ------------------------------------------------------------------------------------------
@@ -75,90 +29,45 @@ void Rig::validate() const {
 
 namespace {
 
+using calib::YamlDoc;
+
 class KalibrReader {
  public:
-  explicit KalibrReader(std::string path) : path_(std::move(path)) {}
-  // Parses text instead of reading a file; name stands in for the path in messages.
-  KalibrReader(std::string name, const std::string* text) : path_(std::move(name)), text_(text) {}
+  explicit KalibrReader(std::string name) : doc_(std::move(name)) {}
 
-  Rig read() {
-    const YAML::Node root = loadRoot();
+  Rig read(const std::string& text) const {
+    const YAML::Node root = doc_.parse(text, "YAML");
+    if (!root.IsMap()) fail("not a Kalibr camchain (expected a mapping with keys cam0 and cam1)");
     Rig rig;
     rig.cam0 = readCamera(root, "cam0");
     rig.cam1 = readCamera(root, "cam1");
-    readPose(require(root, "cam1", "")["T_cn_cnm1"], rig);
-    try {
-      rig.validate();
-    } catch (const Error& e) {
-      fail(e.what());
-    }
+    readPose(YamlDoc::find(require(root, "cam1", ""), "T_cn_cnm1"), rig);
+    calib::checkRig(rig, doc_.name(), "T_cn_cnm1");
     return rig;
   }
 
  private:
-  std::string path_;
-  const std::string* text_ = nullptr;
+  calib::YamlDoc doc_;
 
-  [[noreturn]] void fail(const std::string& problem) const { throw Error(oneLine(path_ + ": " + problem)); }
-
-  static std::string lineOf(const YAML::Node& node) {
-    const YAML::Mark mark = node.Mark();
-    return mark.is_null() ? std::string() : " (line " + std::to_string(mark.line + 1) + ")";
+  [[noreturn]] void fail(const std::string& problem) const { doc_.fail(problem); }
+  YAML::Node require(const YAML::Node& parent, const std::string& key, const std::string& prefix) const {
+    return doc_.require(parent, key, prefix);
   }
-
-  YAML::Node loadRoot() const {
-    if (!text_ && !std::filesystem::exists(path_)) fail("cannot open file (it does not exist)");
-    YAML::Node root;
-    try {
-      root = text_ ? YAML::Load(*text_) : YAML::LoadFile(path_);
-    } catch (const YAML::BadFile&) {
-      fail("cannot open file");
-    } catch (const YAML::ParserException& e) {
-      fail("YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
-    } catch (const YAML::Exception& e) {
-      fail(std::string("YAML error: ") + e.what());
-    }
-    if (!root.IsMap()) fail("not a Kalibr camchain (expected a mapping with keys cam0 and cam1)");
-    return root;
-  }
-
-  // parent[key], failing with the dotted key name ("cam1.T_cn_cnm1") when it is missing.
-  const YAML::Node require(const YAML::Node& parent, const std::string& key, const std::string& prefix) const {
-    const std::string full = prefix.empty() ? key : prefix + "." + key;
-    if (!parent.IsMap() || !parent[key]) fail("missing key \"" + full + "\"");
-    return parent[key];
-  }
-
-  double number(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsScalar()) fail(key + " is not a number" + lineOf(node));
-    try {
-      return node.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(key + " is not a number ('" + node.Scalar() + "')" + lineOf(node));
-    }
-  }
-
   std::vector<double> numbers(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsSequence()) fail(key + " must be a list of numbers" + lineOf(node));
-    std::vector<double> out;
-    for (size_t i = 0; i < node.size(); ++i) out.push_back(number(node[i], key + "[" + std::to_string(i) + "]"));
-    return out;
+    return doc_.numbers(node, key);
   }
-
-  std::string text(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsScalar()) fail(key + " must be a string" + lineOf(node));
-    return node.Scalar();
-  }
+  std::string text(const YAML::Node& node, const std::string& key) const { return doc_.text(node, key); }
 
   Camera readCamera(const YAML::Node& root, const std::string& name) const {
     const YAML::Node node = require(root, name, "");
     const std::string cameraModel = text(require(node, "camera_model", name), name + ".camera_model");
     // Kalibr always writes distortion_model; other tools omit it for omni/eucm/ds.
+    const YAML::Node distortionNode = YamlDoc::find(node, "distortion_model");
+    const YAML::Node coeffsNode = YamlDoc::find(node, "distortion_coeffs");
     const std::string distortion =
-        node["distortion_model"] ? text(node["distortion_model"], name + ".distortion_model") : "none";
-    const std::vector<double> coeffs = node["distortion_coeffs"]
-                                           ? numbers(node["distortion_coeffs"], name + ".distortion_coeffs")
-                                           : std::vector<double>();
+        distortionNode.IsDefined() ? text(distortionNode, name + ".distortion_model") : "none";
+    const std::vector<double> coeffs = coeffsNode.IsDefined() ? numbers(coeffsNode, name + ".distortion_coeffs")
+                                                              : std::vector<double>();
     const std::vector<double> intrinsics = numbers(require(node, "intrinsics", name), name + ".intrinsics");
     const std::vector<double> resolution = numbers(require(node, "resolution", name), name + ".resolution");
     if (resolution.size() != 2) fail(name + ".resolution must be [width, height]");
@@ -240,12 +149,6 @@ class KalibrReader {
 // ------------------------------------------------------------------------------------------
 // Writing.
 
-std::string list(const std::vector<double>& v) {
-  std::string out = "[";
-  for (size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + exactNumber(v[i]);
-  return out + "]";
-}
-
 struct KalibrCamera {
   const char* cameraModel;
   const char* distortionModel;
@@ -280,38 +183,30 @@ KalibrCamera toKalibr(const Camera& cam) {
 void writeCamera(std::ostream& os, const Camera& cam) {
   const KalibrCamera k = toKalibr(cam);
   os << "  camera_model: " << k.cameraModel << "\n"
-     << "  distortion_coeffs: " << list(k.coeffs) << "\n"
+     << "  distortion_coeffs: " << numberList(k.coeffs) << "\n"
      << "  distortion_model: " << k.distortionModel << "\n"
-     << "  intrinsics: " << list(k.intrinsics) << "\n"
+     << "  intrinsics: " << numberList(k.intrinsics) << "\n"
      << "  resolution: [" << cam.width << ", " << cam.height << "]\n";
 }
 
 }  // namespace
 
-Rig loadKalibr(const std::string& path) { return KalibrReader(path).read(); }
+Rig loadKalibr(const std::string& path) { return KalibrReader(path).read(calib::readTextFile(path)); }
 
-Rig parseKalibr(const std::string& yaml, const std::string& name) { return KalibrReader(name, &yaml).read(); }
+Rig parseKalibr(const std::string& yaml, const std::string& name) { return KalibrReader(name).read(yaml); }
 
 void saveKalibr(const Rig& rig, const std::string& path) {
-  // Never write a file that loadKalibr would refuse.
-  try {
-    rig.validate();
-  } catch (const Error& e) {
-    throw Error(path + ": not saving an invalid rig: " + e.what());
-  }
+  calib::checkRigBeforeSaving(rig, path);  // never write a file that loadKalibr would refuse
   std::ostringstream os;
   os << "# Kalibr camchain written by curvestereo. T_cn_cnm1 maps cam0 to cam1: X1 = R*X0 + t.\n";
   os << "cam0:\n";
   writeCamera(os, rig.cam0);
   os << "cam1:\n  T_cn_cnm1:\n";
-  for (int r = 0; r < 3; ++r) os << "  - " << list({rig.R(r, 0), rig.R(r, 1), rig.R(r, 2), rig.t(r)}) << "\n";
+  for (int r = 0; r < 3; ++r) os << "  - " << numberList({rig.R(r, 0), rig.R(r, 1), rig.R(r, 2), rig.t(r)}) << "\n";
   os << "  - [0.0, 0.0, 0.0, 1.0]\n";
   writeCamera(os, rig.cam1);
 
-  std::ofstream file(path, std::ios::binary);
-  if (!file) throw Error(path + ": cannot open file for writing");
-  file << os.str();
-  if (!file.flush()) throw Error(path + ": error while writing");
+  calib::writeTextFile(path, os.str());
 }
 
 }  // namespace cs
