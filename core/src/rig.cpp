@@ -53,9 +53,7 @@ class KalibrReader {
   YAML::Node require(const YAML::Node& parent, const std::string& key, const std::string& prefix) const {
     return doc_.require(parent, key, prefix);
   }
-  std::vector<double> numbers(const YAML::Node& node, const std::string& key) const {
-    return doc_.numbers(node, key);
-  }
+  std::vector<double> numbers(const YAML::Node& node, const std::string& key) const { return doc_.numbers(node, key); }
   std::string text(const YAML::Node& node, const std::string& key) const { return doc_.text(node, key); }
 
   Camera readCamera(const YAML::Node& root, const std::string& name) const {
@@ -66,8 +64,8 @@ class KalibrReader {
     const YAML::Node coeffsNode = YamlDoc::find(node, "distortion_coeffs");
     const std::string distortion =
         distortionNode.IsDefined() ? text(distortionNode, name + ".distortion_model") : "none";
-    const std::vector<double> coeffs = coeffsNode.IsDefined() ? numbers(coeffsNode, name + ".distortion_coeffs")
-                                                              : std::vector<double>();
+    const std::vector<double> coeffs =
+        coeffsNode.IsDefined() ? numbers(coeffsNode, name + ".distortion_coeffs") : std::vector<double>();
     const std::vector<double> intrinsics = numbers(require(node, "intrinsics", name), name + ".intrinsics");
     const std::vector<double> resolution = numbers(require(node, "resolution", name), name + ".resolution");
     if (resolution.size() != 2) fail(name + ".resolution must be [width, height]");

@@ -41,8 +41,7 @@ const char* calibFormatName(CalibFormat format);
 // XML (K1 D1 K2 D2 R T). `format` (optional) receives the format read. Throws cs::Error
 // with a one-line message naming the file and the problem.
 Rig loadCalibration(const std::string& path, CalibFormat* format = nullptr);
-Rig parseCalibration(const std::string& text, const std::string& name = "<calibration>",
-                     CalibFormat* format = nullptr);
+Rig parseCalibration(const std::string& text, const std::string& name = "<calibration>", CalibFormat* format = nullptr);
 // The format of a calibration text, from its content (throws cs::Error when none fits).
 CalibFormat detectCalibFormat(const std::string& text, const std::string& name = "<calibration>");
 // Writes rig in `format`; cs::Error when the format cannot represent a camera model.
