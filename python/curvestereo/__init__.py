@@ -1,0 +1,66 @@
+"""curvestereo: dense depth from a calibrated fisheye stereo pair, over the whole field of
+view, without rectifying or undistorting the images.
+
+    import curvestereo as cs
+    rig = cs.load_calibration("camchain.yaml")
+    stereo = cs.Stereo(rig, preset="realtime")
+    r = stereo.compute(cs.read_image("left.png"), cs.read_image("right.png"))
+    r.depth   # float32 H x W, radial metres, NaN where invalid
+
+Every failure raises curvestereo.Error (a RuntimeError) with the library's one-line
+message. See help(curvestereo.Stereo) and the README's "Python" section.
+"""
+
+# NumPy first: the extension needs it at run time, and this names what is missing.
+import numpy as _numpy  # noqa: F401
+
+from ._curvestereo import (  # noqa: F401
+    Error,
+    Result,
+    Rig,
+    Stereo,
+    __version__,
+    available_backends,
+    build_info,
+    colorize,
+    depth_picture,
+    load_calibration,
+    preset_params,
+    presets,
+    read_image,
+    write_exr,
+    write_ply,
+    write_png,
+)
+
+__all__ = [
+    "Error",
+    "Result",
+    "Rig",
+    "Stereo",
+    "available_backends",
+    "build_info",
+    "colorize",
+    "depth_picture",
+    "load_calibration",
+    "preset_params",
+    "presets",
+    "read_image",
+    "write_exr",
+    "write_ply",
+    "write_png",
+]
+
+try:  # only in builds with the CUDA backend
+    from ._curvestereo import DeviceArray  # noqa: F401
+
+    __all__.append("DeviceArray")
+except ImportError:
+    pass
+
+# Report the public module in reprs and tracebacks, not the extension's private name.
+for _name in __all__:
+    _obj = globals()[_name]
+    if isinstance(_obj, type):
+        _obj.__module__ = __name__
+del _name, _obj

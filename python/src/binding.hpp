@@ -1,0 +1,101 @@
+// Pieces of the Python module shared by its source files: array conversions, the table of
+// solver parameters, and the device-array path (CUDA builds only).
+#pragma once
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "curvestereo/image.hpp"
+#include "curvestereo/params.hpp"
+#include "curvestereo/stereo.hpp"
+
+namespace cs::py {
+
+namespace pb = pybind11;
+
+// ---------------------------------------------------------------- host arrays
+
+// A 2-D uint8 / uint16 / float32 array (gray) or H x W x 1|3|4 (colour, alpha dropped), any
+// strides, as the float gray image the library takes. Integer pixels are scaled and colour
+// is converted exactly as the PNG reader does (Rec. 601 luma, so an array and the PNG it
+// came from give bit-identical input). Throws cs::Error naming `which` on a bad dtype or shape.
+ImageF imageFromArray(pb::handle obj, const char* which);
+// Non-zero pixels of a 2-D array of any numeric or bool dtype, as a mask.
+ImageU8 maskFromArray(pb::handle obj, const char* which);
+
+// The pixel conversion behind imageFromArray, shared with the CUDA kernels' host mirror:
+// one sample scaled to [0, 1] (uint8: /255, uint16: /65535, float32: as is).
+enum class PixelType { U8, U16, F32 };
+PixelType pixelTypeOf(char kind, int bits, const char* which);  // kind 'u' / 'f', else cs::Error
+
+// Arrays that own the moved storage of the library's images (no copy of the pixels).
+pb::array floatArray(ImageF&& img);
+pb::array boolArray(ImageU8&& img);
+pb::array flowArray(FlowImage&& img);
+pb::array pointArray(Image<Point3f>&& img);
+
+// The Python-side result: NumPy arrays (host) or DeviceArray objects (CUDA), None for
+// outputs not computed.
+struct Result {
+  pb::object depth, z, points, disparity, warp, valid, confidence;
+  pb::dict stages;
+  double totalMs = 0;
+};
+Result resultFromDepth(DepthResult&& r);
+
+// ---------------------------------------------------------------- device arrays
+
+// What an object's __cuda_array_interface__ or __dlpack__ describes (parsed with the GIL
+// held; no CUDA call). Strides are in bytes.
+struct DeviceView {
+  uintptr_t data = 0;
+  int ndim = 0;
+  long long shape[3] = {0, 0, 0};
+  long long strides[3] = {0, 0, 0};
+  PixelType type = PixelType::F32;
+  int device = 0;
+  // Stream the producer wrote on (__cuda_array_interface__ v3 "stream"): 0 none given,
+  // 1 legacy default, 2 per-thread default, else a cudaStream_t. DLPack producers are
+  // handed our stream instead, so they order their work before it themselves.
+  uintptr_t stream = 0;
+  bool syncWithLegacy = false;  // no stream given: assume the default stream's work must finish
+  pb::object keepAlive;         // the exporting object or the DLPack capsule
+};
+// True for objects exposing __cuda_array_interface__, or __dlpack__ on a CUDA device.
+bool isDeviceArray(pb::handle obj);
+// consumerStream: our stream's handle for __dlpack__(stream=...).
+DeviceView deviceView(pb::handle obj, const char* which, uintptr_t consumerStream);
+
+// ---------------------------------------------------------------- parameters
+
+// The preset with keyword overrides applied (snake_case Params names, CLI aliases);
+// unknown keys and bad values raise cs::Error naming the key. Validated.
+Params paramsFrom(const std::string& preset, const pb::dict& overrides);
+// Every parameter by its Python name.
+pb::dict paramsToDict(const Params& p);
+std::vector<std::string> paramNames();
+
+// ---------------------------------------------------------------- the module's parts
+
+void bindDevice(pb::module_& m);  // DeviceArray (an empty stub without CUDA)
+
+#ifdef CS_PY_CUDA
+// The CUDA device path of one Stereo (created on first use): device or host inputs,
+// device or host outputs; see device.cpp.
+class DevicePath;
+struct DevicePathDeleter {
+  void operator()(DevicePath* p) const;
+};
+using DevicePathPtr = std::unique_ptr<DevicePath, DevicePathDeleter>;
+DevicePathPtr makeDevicePath(const Rig& rig, const Params& params, const std::string& backendSpec);
+void devicePathSetPose(DevicePath& d, const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
+void devicePathSetMask(DevicePath& d, const ImageU8& mask);
+Result devicePathCompute(DevicePath& d, pb::handle left, pb::handle right, bool returnDevice,
+                         const Stereo::Outputs& outputs);
+#endif
+
+}  // namespace cs::py

@@ -1,0 +1,366 @@
+// The CUDA path of the Python module: GPU arrays (CuPy, PyTorch) in, NumPy or GPU arrays
+// out, through cs::cuda::DeviceStereo, without a round trip through the host.
+//
+// Per frame, on one private stream: inputs -> packed float gray (our kernel, any dtype
+// and strides, NaN check), DeviceStereo::compute (graph replay), the host API's finish pass
+// into fresh output buffers (our kernel), then one synchronisation. compute() returns when
+// the results are ready, so a result never depends on the caller's stream discipline, and
+// input arrays may be reused or freed as soon as it returns.
+//
+// Lifetime: output buffers are stream-ordered allocations owned by DeviceArray objects
+// (shared with every DLPack export of them); they keep the stream they are freed on alive,
+// so they may outlive the Stereo. A buffer is freed after the work already queued on the
+// legacy default stream (where CuPy and PyTorch work by default): a consumer on another
+// stream must keep the array alive until its work is done, as with any CUDA memory.
+#include <cuda_runtime_api.h>
+
+#include <chrono>
+#include <mutex>
+
+#include "binding.hpp"
+#include "curvestereo/cuda.hpp"
+#include "device_kernels.hpp"
+#include "dlpack.hpp"
+
+namespace cs::py {
+
+namespace {
+
+void check(cudaError_t e, const char* what) {
+  if (e != cudaSuccess) throw Error(std::string("CUDA: ") + what + ": " + cudaGetErrorString(e));
+}
+
+struct DeviceGuard {
+  int previous = -1;
+  explicit DeviceGuard(int device) {
+    if (cudaGetDevice(&previous) == cudaSuccess && previous != device) cudaSetDevice(device);
+  }
+  ~DeviceGuard() {
+    if (previous >= 0) cudaSetDevice(previous);
+  }
+};
+
+// The stream of one Stereo's device path, shared with the buffers it handed out.
+struct CudaContext {
+  int device = 0;
+  cudaStream_t stream = nullptr;
+  cudaEvent_t event = nullptr;
+  std::mutex eventLock;  // one event, recorded from whichever thread frees a buffer
+
+  explicit CudaContext(int dev) : device(dev) {
+    DeviceGuard guard(device);
+    check(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), "cudaStreamCreate");
+    check(cudaEventCreateWithFlags(&event, cudaEventDisableTiming), "cudaEventCreate");
+  }
+  ~CudaContext() {
+    DeviceGuard guard(device);
+    if (stream) cudaStreamSynchronize(stream), cudaStreamDestroy(stream);
+    if (event) cudaEventDestroy(event);
+  }
+  // Our stream waits for what is queued on `other` now.
+  cudaError_t waitFor(cudaStream_t other) {
+    std::lock_guard<std::mutex> lock(eventLock);
+    cudaError_t e = cudaEventRecord(event, other);
+    return e == cudaSuccess ? cudaStreamWaitEvent(stream, event, 0) : e;
+  }
+};
+
+struct DeviceBuffer {
+  std::shared_ptr<CudaContext> ctx;
+  void* ptr = nullptr;
+  size_t bytes = 0;
+
+  DeviceBuffer(std::shared_ptr<CudaContext> c, size_t n) : ctx(std::move(c)), bytes(n) {
+    DeviceGuard guard(ctx->device);
+    check(cudaMallocAsync(&ptr, bytes ? bytes : 1, ctx->stream), "cudaMallocAsync");
+  }
+  // May run on any thread, with or without the GIL (a DLPack consumer's deleter): CUDA only.
+  ~DeviceBuffer() {
+    DeviceGuard guard(ctx->device);
+    ctx->waitFor(cudaStreamLegacy);
+    cudaFreeAsync(ptr, ctx->stream);
+  }
+};
+
+// A result left on the GPU: what CuPy (cupy.asarray / from_dlpack) and PyTorch
+// (torch.from_dlpack / as_tensor) wrap without copying.
+struct DeviceArray {
+  std::shared_ptr<DeviceBuffer> buffer;
+  std::vector<long long> shape;
+  bool isBool = false;  // else float32
+
+  size_t itemsize() const { return isBool ? 1 : 4; }
+  size_t count() const {
+    size_t n = 1;
+    for (long long s : shape) n *= size_t(s);
+    return n;
+  }
+};
+
+struct Exported {
+  DLManagedTensor tensor{};
+  std::shared_ptr<DeviceBuffer> buffer;
+  int64_t shape[3] = {0, 0, 0};
+};
+
+pb::capsule exportDlpack(const DeviceArray& a) {
+  auto* e = new Exported;
+  e->buffer = a.buffer;
+  for (size_t i = 0; i < a.shape.size(); ++i) e->shape[i] = a.shape[i];
+  DLTensor& t = e->tensor.dl_tensor;
+  t.data = a.buffer->ptr;
+  t.device = {kDLCUDA, a.buffer->ctx->device};
+  t.ndim = int32_t(a.shape.size());
+  t.dtype = a.isBool ? DLDataType{kDLBool, 8, 1} : DLDataType{kDLFloat, 32, 1};
+  t.shape = e->shape;
+  t.strides = nullptr;  // packed
+  t.byte_offset = 0;
+  e->tensor.manager_ctx = e;
+  e->tensor.deleter = [](DLManagedTensor* self) { delete static_cast<Exported*>(self->manager_ctx); };
+  // A consumer renames the capsule to "used_dltensor" and calls the deleter itself; an
+  // unconsumed capsule frees the tensor here.
+  PyObject* cap = PyCapsule_New(&e->tensor, "dltensor", [](PyObject* capsule) {
+    if (!PyCapsule_IsValid(capsule, "dltensor")) return;
+    auto* t = static_cast<DLManagedTensor*>(PyCapsule_GetPointer(capsule, "dltensor"));
+    if (t && t->deleter) t->deleter(t);
+  });
+  if (!cap) {
+    delete e;
+    throw pb::error_already_set();
+  }
+  return pb::reinterpret_steal<pb::capsule>(cap);
+}
+
+pb::dict cudaArrayInterface(const DeviceArray& a) {
+  pb::dict d;
+  pb::tuple shape(a.shape.size());
+  for (size_t i = 0; i < a.shape.size(); ++i) shape[i] = pb::int_(a.shape[i]);
+  d["shape"] = shape;
+  d["typestr"] = a.isBool ? "|b1" : "<f4";
+  d["data"] = pb::make_tuple(reinterpret_cast<uintptr_t>(a.buffer->ptr), false);
+  d["version"] = 3;
+  d["strides"] = pb::none();
+  d["stream"] = pb::none();  // compute() synchronised: nothing to wait for
+  return d;
+}
+
+pb::array toHost(const DeviceArray& a) {
+  std::vector<pb::ssize_t> shape(a.shape.begin(), a.shape.end());
+  pb::array out(a.isBool ? pb::dtype::of<bool>() : pb::dtype::of<float>(), shape);
+  {
+    pb::gil_scoped_release nogil;
+    DeviceGuard guard(a.buffer->ctx->device);
+    check(cudaMemcpyAsync(out.mutable_data(), a.buffer->ptr, a.count() * a.itemsize(), cudaMemcpyDeviceToHost,
+                          a.buffer->ctx->stream),
+          "download");
+    check(cudaStreamSynchronize(a.buffer->ctx->stream), "download");
+  }
+  return out;
+}
+
+cudaStream_t streamFromInterface(uintptr_t s) {
+  if (s == 1) return cudaStreamLegacy;
+  if (s == 2) return cudaStreamPerThread;
+  return reinterpret_cast<cudaStream_t>(s);
+}
+
+int deviceIndex(const std::string& spec) {
+  const auto colon = spec.find(':');
+  if (colon == std::string::npos) return 0;
+  const std::string d = spec.substr(colon + 1);
+  if (d.empty() || d.find_first_not_of("0123456789") != std::string::npos)
+    return 0;  // a name: DeviceStereo takes indices
+  return std::stoi(d);
+}
+
+}  // namespace
+
+class DevicePath {
+ public:
+  DevicePath(const Rig& rig, const Params& params, int device)
+      : ctx_(std::make_shared<CudaContext>(device)), width_(rig.cam0.width), height_(rig.cam0.height) {
+    DeviceGuard guard(device);
+    stereo_ = std::make_unique<cuda::DeviceStereo>(rig, params, ctx_->stream, device);
+    const size_t n = size_t(width_) * size_t(height_);
+    inputs_ = std::make_shared<DeviceBuffer>(ctx_, 2 * n * sizeof(float));
+    flag_ = std::make_shared<DeviceBuffer>(ctx_, sizeof(unsigned));
+  }
+
+  void setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+    DeviceGuard guard(ctx_->device);
+    stereo_->setPose(R, t);
+  }
+  void setMask(const ImageU8& mask) {
+    DeviceGuard guard(ctx_->device);
+    stereo_->setMask(mask);
+  }
+
+  Result compute(pb::handle left, pb::handle right, bool returnDevice, const Stereo::Outputs& sel) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const uintptr_t ours = reinterpret_cast<uintptr_t>(ctx_->stream);
+    // With the GIL: the protocols and host conversions are Python calls.
+    Input in[2] = {input(left, "left image", ours), input(right, "right image", ours)};
+    const long long n = (long long)width_ * height_;
+    Result result;
+    std::vector<std::shared_ptr<DeviceBuffer>> buffers;  // every output buffer, in FinishArgs order
+    FinishArgs fa;
+    fa.n = n;
+    fa.withDisparity = sel.disparity, fa.withWarp = sel.warp, fa.withPoints = sel.points;
+    auto buffer = [&](size_t bytes) {
+      buffers.push_back(std::make_shared<DeviceBuffer>(ctx_, bytes));
+      return buffers.back()->ptr;
+    };
+    unsigned flag = 0;
+    {
+      pb::gil_scoped_release nogil;
+      DeviceGuard guard(ctx_->device);
+      cudaStream_t s = ctx_->stream;
+      float* dst[2] = {static_cast<float*>(inputs_->ptr), static_cast<float*>(inputs_->ptr) + n};
+      check(cudaMemsetAsync(flag_->ptr, 0, sizeof(unsigned), s), "cudaMemsetAsync");
+      for (int k = 0; k < 2; ++k) {
+        StridedPixels src{};
+        int type = 2;
+        if (in[k].device) {
+          const DeviceView& v = in[k].view;
+          if (v.stream) check(ctx_->waitFor(streamFromInterface(v.stream)), "waiting for the input's stream");
+          if (v.syncWithLegacy) check(ctx_->waitFor(cudaStreamLegacy), "waiting for the default stream");
+          src = {reinterpret_cast<const unsigned char*>(v.data), v.strides[0], v.strides[1],
+                 v.ndim == 3 ? v.strides[2] : 0, v.ndim == 3 ? int(v.shape[2]) : 1};
+          type = int(v.type);
+        } else {
+          // Host input, already converted: upload, then the same kernel in place for the NaN test.
+          check(cudaMemcpyAsync(dst[k], in[k].host.data.data(), size_t(n) * sizeof(float), cudaMemcpyHostToDevice, s),
+                "upload");
+          src = {reinterpret_cast<const unsigned char*>(dst[k]), (long long)width_ * 4, 4, 0, 1};
+        }
+        check(launchToGray(src, type, width_, height_, dst[k], static_cast<unsigned*>(flag_->ptr), 1u << k, s),
+              "input conversion");
+      }
+      const cuda::DeviceDepth d = stereo_->compute(dst[0], dst[1]);
+      fa.radial = d.radial, fa.disparity = d.disparity, fa.warp = d.warp, fa.points = d.points;
+      fa.confidence = d.confidence;
+      fa.valid = static_cast<unsigned char*>(buffer(size_t(n)));
+      fa.outRadial = static_cast<float*>(buffer(size_t(n) * 4));
+      if (sel.points) fa.outZ = static_cast<float*>(buffer(size_t(n) * 4));
+      if (sel.points) fa.outPoints = static_cast<float*>(buffer(size_t(n) * 12));
+      if (sel.disparity) fa.outDisparity = static_cast<float*>(buffer(size_t(n) * 4));
+      if (sel.warp) fa.outWarp = static_cast<float*>(buffer(size_t(n) * 8));
+      if (d.confidence) fa.outConfidence = static_cast<float*>(buffer(size_t(n) * 4));
+      check(launchFinish(fa, s), "finish");
+      check(cudaMemcpyAsync(&flag, flag_->ptr, sizeof flag, cudaMemcpyDeviceToHost, s), "flag download");
+      check(cudaStreamSynchronize(s), "compute");
+    }
+    // As the host API words it (stereo.cpp checkImage).
+    if (flag & 1u) throw Error("left image contains NaN or infinite pixels");
+    if (flag & 2u) throw Error("right image contains NaN or infinite pixels");
+
+    size_t next = 0;
+    auto take = [&](const void* p, std::vector<long long> shape, bool isBool) -> pb::object {
+      if (!p) return pb::none();
+      const std::shared_ptr<DeviceBuffer>& b = buffers[next++];
+      DeviceArray a{b, std::move(shape), isBool};
+      return returnDevice ? pb::cast(std::move(a)) : pb::object(toHost(a));
+    };
+    const long long h = height_, w = width_;
+    result.valid = take(fa.valid, {h, w}, true);
+    result.depth = take(fa.outRadial, {h, w}, false);
+    result.z = take(fa.outZ, {h, w}, false);
+    result.points = take(fa.outPoints, {h, w, 3}, false);
+    result.disparity = take(fa.outDisparity, {h, w}, false);
+    result.warp = take(fa.outWarp, {h, w, 2}, false);
+    result.confidence = take(fa.outConfidence, {h, w}, false);
+    result.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return result;
+  }
+
+ private:
+  struct Input {
+    bool device = false;
+    DeviceView view;
+    ImageF host;
+  };
+
+  Input input(pb::handle obj, const char* which, uintptr_t ours) {
+    Input in;
+    const auto sizeText = [](long long w, long long h) { return std::to_string(w) + "x" + std::to_string(h); };
+    if (isDeviceArray(obj)) {
+      in.device = true;
+      in.view = deviceView(obj, which, ours);
+      const DeviceView& v = in.view;
+      if (v.shape[0] != height_ || v.shape[1] != width_)
+        throw Error(std::string(which) + " is " + sizeText(v.shape[1], v.shape[0]) + " but the calibration says " +
+                    sizeText(width_, height_));
+      int device = v.device;
+      if (device < 0) {  // __cuda_array_interface__ does not say: ask the driver
+        cudaPointerAttributes attr{};
+        if (cudaPointerGetAttributes(&attr, reinterpret_cast<const void*>(v.data)) != cudaSuccess ||
+            (attr.type != cudaMemoryTypeDevice && attr.type != cudaMemoryTypeManaged)) {
+          cudaGetLastError();
+          throw Error(std::string(which) + " is not CUDA device memory");
+        }
+        device = attr.device;
+      }
+      if (device != ctx_->device)
+        throw Error(std::string(which) + " is on CUDA device " + std::to_string(device) + " but this Stereo runs on " +
+                    std::to_string(ctx_->device));
+    } else {
+      in.host = imageFromArray(obj, which);
+      if (in.host.width != width_ || in.host.height != height_)
+        throw Error(std::string(which) + " is " + sizeText(in.host.width, in.host.height) +
+                    " but the calibration says " + sizeText(width_, height_));
+    }
+    return in;
+  }
+
+  std::shared_ptr<CudaContext> ctx_;
+  int width_, height_;
+  std::unique_ptr<cuda::DeviceStereo> stereo_;  // after ctx_: destroyed before its stream
+  std::shared_ptr<DeviceBuffer> inputs_, flag_;
+};
+
+void DevicePathDeleter::operator()(DevicePath* p) const { delete p; }
+
+DevicePathPtr makeDevicePath(const Rig& rig, const Params& params, const std::string& backendSpec) {
+  return DevicePathPtr(new DevicePath(rig, params, deviceIndex(backendSpec)));
+}
+void devicePathSetPose(DevicePath& d, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) { d.setPose(R, t); }
+void devicePathSetMask(DevicePath& d, const ImageU8& mask) { d.setMask(mask); }
+Result devicePathCompute(DevicePath& d, pb::handle left, pb::handle right, bool returnDevice,
+                         const Stereo::Outputs& outputs) {
+  return d.compute(left, right, returnDevice, outputs);
+}
+
+void bindDevice(pb::module_& m) {
+  pb::class_<DeviceArray>(m, "DeviceArray",
+                          "A result on the GPU (compute(..., return_device=True)). CuPy and PyTorch wrap it without "
+                          "a copy: cupy.asarray(a), cupy.from_dlpack(a), torch.from_dlpack(a), torch.as_tensor(a, "
+                          "device='cuda'). It owns its memory; wrappers keep it alive.")
+      .def_property_readonly("__cuda_array_interface__", &cudaArrayInterface)
+      .def(
+          "__dlpack__",
+          [](const DeviceArray& a, pb::object, pb::object, pb::object, pb::object) { return exportDlpack(a); },
+          pb::kw_only(), pb::arg("stream") = pb::none(), pb::arg("max_version") = pb::none(),
+          pb::arg("dl_device") = pb::none(), pb::arg("copy") = pb::none(),
+          "DLPack export (the data is ready: compute() synchronised, so any stream may read it).")
+      .def("__dlpack_device__",
+           [](const DeviceArray& a) { return pb::make_tuple(int(kDLCUDA), a.buffer->ctx->device); })
+      .def_property_readonly("shape",
+                             [](const DeviceArray& a) {
+                               pb::tuple t(a.shape.size());
+                               for (size_t i = 0; i < a.shape.size(); ++i) t[i] = pb::int_(a.shape[i]);
+                               return t;
+                             })
+      .def_property_readonly(
+          "dtype", [](const DeviceArray& a) { return a.isBool ? pb::dtype::of<bool>() : pb::dtype::of<float>(); })
+      .def_property_readonly("ptr", [](const DeviceArray& a) { return reinterpret_cast<uintptr_t>(a.buffer->ptr); })
+      .def_property_readonly("device_id", [](const DeviceArray& a) { return a.buffer->ctx->device; })
+      .def("get", &toHost, "A NumPy copy on the host.")
+      .def("__repr__", [](const DeviceArray& a) {
+        std::string s;
+        for (size_t i = 0; i < a.shape.size(); ++i) s += (i ? ", " : "") + std::to_string(a.shape[i]);
+        return "<curvestereo.DeviceArray (" + s + ") " + (a.isBool ? "bool" : "float32") +
+               " on cuda:" + std::to_string(a.buffer->ctx->device) + ">";
+      });
+}
+
+}  // namespace cs::py

@@ -1,0 +1,18 @@
+#!/usr/bin/env python3
+"""ctest's entry to the Python tests: runs pytest on this folder with the interpreter the
+module was built for, or exits 77 (ctest: skipped) saying what is missing."""
+import importlib.util
+import sys
+
+missing = [m for m in ("pytest", "numpy") if importlib.util.find_spec(m) is None]
+if missing:
+    print(
+        f"python_tests skipped: {' and '.join(missing)} not installed for {sys.executable} "
+        "(Debian: apt-get install python3-pytest python3-numpy)"
+    )
+    sys.exit(77)
+
+import pytest  # noqa: E402
+
+# No cache folder in the source tree; -rs lists why tests were skipped (e.g. no GPU).
+sys.exit(pytest.main(["-q", "-rs", "-p", "no:cacheprovider", *sys.argv[1:]]))
