@@ -30,7 +30,7 @@ float maxMagnitude(const FlowImage& f, const ImageU8& mask) {
 int cmdFields(const Args& args) {
   args.allowOnly({"calib", "o", "output", "max-fov", "epipole"});
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
-  const Rig rig = loadKalibr(args.require("calib"));
+  const Rig rig = loadCalibration(args.require("calib"));
   FieldOptions opt;
   opt.maxFovDeg = args.getDouble("max-fov", opt.maxFovDeg);
   opt.epipoleDeg = args.getDouble("epipole", opt.epipoleDeg);

@@ -1,8 +1,14 @@
-// curvestereo run --calib CAMCHAIN LEFT RIGHT -o OUTDIR [--backend B] [--preset P] [--mask PNG]
+// curvestereo run --calib CALIB LEFT RIGHT -o OUTDIR [--backend B] [--preset P] [--mask PNG]
+//                 [--pinhole FOV[,WxH]] [--equirect W] [--sampling nearest|bilinear]
+#include <charconv>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "curvestereo/depth_views.hpp"
 #include "curvestereo/image_io.hpp"
 
 namespace cs::cli {
@@ -17,14 +23,98 @@ ImageU8 loadMask(const std::string& path) {
   return out;
 }
 
+// The extra depth forms for other tools (README "Outputs for ROS, Open3D and mapping").
+struct ViewOptions {
+  bool pinhole = false;
+  PinholeView view;
+  int equirectWidth = 0;  // 0: none
+  DepthSampling sampling = DepthSampling::Nearest;
+};
+
+// A whole number that is all of text.
+bool wholeNumber(const std::string& text, int& out) {
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), out);
+  return r.ec == std::errc() && r.ptr == text.data() + text.size();
+}
+
+// "FOV" or "FOV,WxH"; the size defaults to camera 0's.
+PinholeView parsePinhole(const std::string& text, const Camera& cam0) {
+  const std::string usage =
+      "--pinhole expects FOV[,WxH] (horizontal degrees, e.g. 90 or 90,640x480), got '" + text + "'";
+  const size_t comma = text.find(',');
+  const std::string fovText = text.substr(0, comma);
+  char* end = nullptr;
+  const double fov = std::strtod(fovText.c_str(), &end);
+  if (fovText.empty() || *end != 0 || !std::isfinite(fov)) throw Error(usage);
+  int w = cam0.width, h = cam0.height;
+  if (comma != std::string::npos) {
+    const std::string size = text.substr(comma + 1);
+    const size_t x = size.find('x');
+    if (x == std::string::npos || !wholeNumber(size.substr(0, x), w) || !wholeNumber(size.substr(x + 1), h))
+      throw Error(usage);
+  }
+  return PinholeView::fromFov(fov, w, h);
+}
+
+ViewOptions viewOptions(const Args& args, const Camera& cam0) {
+  ViewOptions v;
+  if (args.has("pinhole")) {
+    v.pinhole = true;
+    v.view = parsePinhole(args.get("pinhole", ""), cam0);
+  }
+  if (args.has("equirect")) {
+    const std::string text = args.get("equirect", "");
+    if (!wholeNumber(text, v.equirectWidth) || v.equirectWidth < 4 || v.equirectWidth % 2 || v.equirectWidth > 32768)
+      throw Error("--equirect expects an even width of 4 to 32768 px (the image is W x W/2), got '" + text + "'");
+  }
+  const std::string sampling = args.get("sampling", "nearest");
+  if (sampling != "nearest" && sampling != "bilinear")
+    throw Error("--sampling expects nearest or bilinear, got '" + sampling + "'");
+  v.sampling = sampling == "bilinear" ? DepthSampling::Bilinear : DepthSampling::Nearest;
+  return v;
+}
+
+// points.pcd (always, beside points.ply), and the pinhole / equirectangular views asked for.
+void writeViews(const std::string& dir, const ViewOptions& v, const Camera& cam0, const DepthResult& r,
+                float minConfidence) {
+  auto path = [&](const char* name) { return (std::filesystem::path(dir) / name).string(); };
+  Image<Point3f> points = r.depth.points;
+  // The organised cloud keeps its grid: points below --min-confidence become NaN.
+  if (!r.confidence.empty())
+    for (size_t i = 0; i < points.size(); ++i)
+      if (!(r.confidence.data[i] >= minConfidence)) points.data[i] = {NAN, NAN, NAN};
+  writePcd(path("points.pcd"), points);
+  if (v.pinhole) {
+    const ImageF z = pinholeDepth(cam0, r.depth.radial, v.view, v.sampling);
+    writeExr(path("depth_pinhole.exr"), z);
+    writeDepthPngMillimetres(path("depth_pinhole.png"), z);
+    writeCameraInfoYaml(path("camera_info.yaml"), v.view, "curvestereo_pinhole");
+    std::printf("pinhole: %dx%d, fx = fy = %.6g px: depth_pinhole.exr, depth_pinhole.png, camera_info.yaml\n",
+                v.view.width, v.view.height, v.view.fx);
+  }
+  if (v.equirectWidth) {
+    writeExr(path("range_equirect.exr"), equirectRange(cam0, r.depth.radial, v.equirectWidth, v.sampling));
+    std::printf("equirectangular: %dx%d: range_equirect.exr\n", v.equirectWidth, v.equirectWidth / 2);
+  }
+}
+
+// -o names a folder for the outputs: an existing file there is refused before any work
+// (writing the outputs would fail only after the solve).
+void requireOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  if (std::filesystem::exists(dir, ec) && !std::filesystem::is_directory(dir, ec))
+    throw Error("-o " + dir + ": is an existing file, not a folder for the outputs");
+}
+
 }  // namespace
 
 int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"min-confidence", "calib", "o", "output", "scale-intrinsics"});
+  known.insert({"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling"});
   args.allowOnly(known);
   if (args.positional().size() != 2) throw Error("run needs exactly two images: LEFT RIGHT");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
+  requireOutputFolder(outDir);
   const Params params = paramsFromArgs(args);
   const float minConfidence = minConfidenceFromArgs(args, params);
   const StereoInputs in =
@@ -32,6 +122,7 @@ int cmdRun(const Args& args) {
   const Rig& rig = in.rig;
   const ImageF& left = in.left;
   const ImageF& right = in.right;
+  const ViewOptions views = viewOptions(args, rig.cam0);  // checked before the solve, not after
 
   Stereo stereo(rig, params, backendFromArgs(args));
   if (args.has("mask")) stereo.setMask(loadMask(args.get("mask", "")));
@@ -44,6 +135,7 @@ int cmdRun(const Args& args) {
   DepthResult r = stereo.compute(left, right);
   progress.done();
   writeOutputs(outDir, r, left, minConfidence);
+  writeViews(outDir, views, rig.cam0, r, minConfidence);
 
   long long valid = 0;
   for (auto v : r.valid.data) valid += v;

@@ -42,7 +42,7 @@ synth::SynthConfig configFromArgs(const Args& args) {
   if (args.has("calib")) {
     for (const char* option : kRigOptions)
       if (args.has(option)) throw Error(std::string("option --") + option + " cannot be combined with --calib");
-    Rig rig = loadKalibr(args.get("calib", ""));
+    Rig rig = loadCalibration(args.get("calib", ""));
     cfg.rig = args.has("size") ? scaledRig(rig, size) : rig;
     cfg.maxFovDeg = args.getDouble("fov", 0.0);  // a calibrated lens: its own valid region
   } else {

@@ -11,5 +11,6 @@ int cmdSynth(const Args& args);
 int cmdEval(const Args& args);
 int cmdFields(const Args& args);
 int cmdBench(const Args& args);
+int cmdCalib(const Args& args);
 
 }  // namespace cs::cli

@@ -90,7 +90,7 @@ ImageF loadImageFor(const std::string& path, const Camera& cam, const char* whic
 
 StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftPath, const std::string& rightPath,
                               bool scaleIntrinsics) {
-  StereoInputs in{loadKalibr(calib), loadImage(leftPath, "left"), loadImage(rightPath, "right")};
+  StereoInputs in{loadCalibration(calib), loadImage(leftPath, "left"), loadImage(rightPath, "right")};
   const ImageF &l = in.left, &r = in.right;
   if (l.width != r.width || l.height != r.height)
     throw Error("left image '" + leftPath + "' is " + sizeText(l.width, l.height) + " but right image '" + rightPath +

@@ -13,8 +13,11 @@ const char* kUsage = R"(usage: curvestereo <command> [options]
 commands:
   demo [-o OUTDIR] [--size 480] [--scene urban|indoor] [--seed N] [--camera none|t265]
                                 render a synthetic fisheye pair, solve it, report accuracy
-  run --calib CAMCHAIN LEFT RIGHT -o OUTDIR [--scale-intrinsics]
-                                depth.exr depth.png disparity.exr flow.flo points.ply;
+  run --calib CALIB LEFT RIGHT -o OUTDIR [--scale-intrinsics] [--pinhole FOV[,WxH]] [--equirect W]
+                                depth.exr depth.png disparity.exr flow.flo points.ply points.pcd;
+                                CALIB: Kalibr camchain, Basalt calibration.json or OpenCV
+                                FileStorage; --pinhole: depth_pinhole.exr/.png + camera_info.yaml;
+                                --equirect: range_equirect.exr (--sampling nearest|bilinear);
                                 --scale-intrinsics: images at a uniform rescale of the
                                 calibrated resolution (e.g. half) scale the cameras
   eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR]
@@ -23,6 +26,8 @@ commands:
                                 time per frame and per stage
   fields --calib CAMCHAIN -o OUTDIR
                                 valid mask, calibration and trajectory fields
+  calib convert IN OUT [--format kalibr|basalt|opencv] | calib show IN
+                                calibration files between Kalibr, Basalt and OpenCV
   synth -o OUTDIR [--scene urban|indoor] [--motion binocular|forward|sideways] [--camera none|t265]
                                 render a synthetic pair with exact ground truth
 
@@ -67,6 +72,7 @@ int main(int argc, char** argv) {
     if (command == "eval") return cs::cli::cmdEval(args);
     if (command == "fields") return cs::cli::cmdFields(args);
     if (command == "bench") return cs::cli::cmdBench(args);
+    if (command == "calib") return cs::cli::cmdCalib(args);
     std::fprintf(stderr, "curvestereo: error: unknown command '%s' (try --help)\n", command.c_str());
     return 2;
   } catch (const std::exception& e) {

@@ -1,0 +1,93 @@
+// curvestereo calib convert IN OUT [--format kalibr|basalt|opencv]
+// curvestereo calib show IN
+// Calibration files between Kalibr, Basalt and OpenCV; the input's format is read from its
+// content, the output's from --format or from OUT's name.
+#include <Eigen/Geometry>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "commands.hpp"
+#include "curvestereo/rig.hpp"
+
+namespace cs::cli {
+
+namespace {
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+CalibFormat parseFormat(const std::string& name) {
+  const std::string n = lower(name);
+  if (n == "kalibr") return CalibFormat::Kalibr;
+  if (n == "basalt") return CalibFormat::Basalt;
+  if (n == "opencv") return CalibFormat::OpenCv;
+  throw Error("--format must be kalibr, basalt or opencv, got '" + name + "'");
+}
+
+// .json is Basalt's, camchain*.yaml Kalibr's, .xml OpenCV's; any other .yaml / .yml could be
+// Kalibr or OpenCV, so the user must say.
+CalibFormat formatFromName(const std::string& path) {
+  const std::filesystem::path p(path);
+  const std::string ext = lower(p.extension().string());
+  const std::string stem = lower(p.stem().string());
+  if (ext == ".json") return CalibFormat::Basalt;
+  if (ext == ".xml") return CalibFormat::OpenCv;
+  if ((ext == ".yaml" || ext == ".yml") && stem.rfind("camchain", 0) == 0) return CalibFormat::Kalibr;
+  throw Error("cannot tell the output format from the name '" + path +
+              "' (.json = basalt, camchain*.yaml = kalibr, .xml = opencv): pass --format kalibr|basalt|opencv");
+}
+
+std::string describe(const Camera& cam) {
+  std::string params;
+  for (double p : cam.params) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%s%.10g", params.empty() ? "" : " ", p);
+    params += buf;
+  }
+  return cam.modelName() + " " + std::to_string(cam.width) + "x" + std::to_string(cam.height) + " [" + params + "]";
+}
+
+int convert(const Args& args) {
+  if (args.positional().size() != 3) throw Error("calib convert needs IN and OUT: calib convert IN OUT [--format F]");
+  const std::string in = args.positional()[1], out = args.positional()[2];
+  const CalibFormat to = args.has("format") ? parseFormat(args.get("format", "")) : formatFromName(out);
+  CalibFormat from{};
+  const Rig rig = loadCalibration(in, &from);
+  if (std::filesystem::exists(out) && std::filesystem::equivalent(in, out))
+    throw Error("calib convert: IN and OUT are the same file ('" + out + "')");
+  saveCalibration(rig, out, to);
+  std::printf("%s (%s) -> %s (%s)\n", in.c_str(), calibFormatName(from), out.c_str(), calibFormatName(to));
+  return 0;
+}
+
+int show(const Args& args) {
+  if (args.positional().size() != 2) throw Error("calib show needs one file: calib show IN");
+  CalibFormat format{};
+  const Rig rig = loadCalibration(args.positional()[1], &format);
+  const Eigen::AngleAxisd turn(rig.R);
+  std::printf("format: %s\ncam0: %s\ncam1: %s\n", calibFormatName(format), describe(rig.cam0).c_str(),
+              describe(rig.cam1).c_str());
+  std::printf("X1 = R X0 + t: t = [%.9g, %.9g, %.9g] m (baseline %.6g m), R turns %.6g deg\n", rig.t.x(), rig.t.y(),
+              rig.t.z(), rig.t.norm(), turn.angle() * 180.0 / M_PI);
+  return 0;
+}
+
+}  // namespace
+
+int cmdCalib(const Args& args) {
+  args.allowOnly({"format"});
+  const std::string sub = args.positional().empty() ? "" : args.positional()[0];
+  if (sub == "convert") return convert(args);
+  if (sub == "show") {
+    if (args.has("format")) throw Error("calib show takes no --format (the file's content says it)");
+    return show(args);
+  }
+  throw Error("calib needs a sub-command: calib convert IN OUT [--format kalibr|basalt|opencv] | calib show IN");
+}
+
+}  // namespace cs::cli
