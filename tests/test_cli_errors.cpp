@@ -157,7 +157,7 @@ class Cases {
 TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exit") {
   REQUIRE_MESSAGE(fs::exists(cliPath()), "build the curvestereo binary first: " << cliPath());
   const fs::path dir = test::tempDir("cli_errors");
-  const std::string solve = " -o out --preset realtime --levels 1 --warps 1 --iterations 2";
+  const std::string solve = " -o out --preset realtime --init none --levels 1 --warps 1 --iterations 2";
 
   // Good inputs to break one at a time.
   writeText(dir / "rig.yaml", camchain());
@@ -337,7 +337,7 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
                 "--min-confidence needs the plane-sweep initialiser");
   cases.refused("--min-confidence 2", good + " --init planesweep --min-confidence 2",
                 "--min-confidence must be in [0, 1]");
-  cases.refused("--min-confidence -0.1 with --preset quality", good + " --preset quality --min-confidence -0.1",
+  cases.refused("--min-confidence -0.1 with the initialiser", good + " --init planesweep --min-confidence -0.1",
                 "--min-confidence must be in [0, 1]");
   cases.refused("--init foo", good + " --init foo", "unknown initialisation 'foo' (known: none, planesweep)");
   cases.refused("--init-radius 9", good + " --init planesweep --init-radius 9", "initRadius must be in [1, 7]");

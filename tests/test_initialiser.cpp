@@ -489,7 +489,10 @@ TEST_CASE("init parameters: validation, parseInit / initName, preset quality") {
   const Params good = preset("quality");
   CHECK(good.init == Params::Init::PlaneSweep);
   CHECK(preset("default").init == Params::Init::None);
-  CHECK(preset("realtime").init == Params::Init::None);
+  CHECK(preset("realtime").init == Params::Init::PlaneSweep);
+  CHECK(preset("realtime").initLevel == 2);
+  CHECK(preset("paper").init == Params::Init::None);
+  CHECK(preset("paper").dataTerm == Params::DataTerm::Brightness);
   const auto names = presetNames();
   CHECK(std::find(names.begin(), names.end(), "quality") != names.end());
   // quality is default plus the initialiser.

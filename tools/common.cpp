@@ -16,7 +16,7 @@ const std::set<std::string> kSolverOptions = {
     "preset",    "warps",      "iterations", "levels",        "lambda",      "du-max",  "alpha0",  "alpha1",
     "max-fov",   "gamma",      "median",     "backend",       "mask",        "epipole", "beta",    "eta",
     "device",    "init",       "init-level", "init-parallax", "init-radius", "init-p1", "init-p2", "occlusion-weight",
-    "data-term", "norm-sigma", "noise-level"};
+    "data-term", "norm-sigma", "noise-level", "init-warps"};
 
 std::string backendFromArgs(const Args& args) {
   std::string backend = args.get("backend", "auto");
@@ -48,6 +48,8 @@ Params paramsFromArgs(const Args& args) {
   p.initP1 = float(args.getDouble("init-p1", p.initP1));
   p.initP2 = float(args.getDouble("init-p2", p.initP2));
   p.occlusionWeight = float(args.getDouble("occlusion-weight", p.occlusionWeight));
+  p.initWarps = args.getInt("init-warps", p.initWarps);
+
   if (args.has("median")) {
     std::string m = args.get("median", "on");
     if (m != "on" && m != "off") throw Error("option --median expects on or off, got '" + m + "'");
@@ -90,7 +92,7 @@ ImageF loadImageFor(const std::string& path, const Camera& cam, const char* whic
 
 StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftPath, const std::string& rightPath,
                               bool scaleIntrinsics) {
-  StereoInputs in{loadCalibration(calib), loadImage(leftPath, "left"), loadImage(rightPath, "right")};
+  StereoInputs in{loadKalibr(calib), loadImage(leftPath, "left"), loadImage(rightPath, "right")};
   const ImageF &l = in.left, &r = in.right;
   if (l.width != r.width || l.height != r.height)
     throw Error("left image '" + leftPath + "' is " + sizeText(l.width, l.height) + " but right image '" + rightPath +
@@ -145,7 +147,7 @@ float minConfidenceFromArgs(const Args& args, const Params& params) {
   if (!args.has("min-confidence")) return 0.f;
   if (params.init != Params::Init::PlaneSweep)
     throw Error(
-        "--min-confidence needs the plane-sweep initialiser's confidence (--init planesweep or --preset quality)");
+        "--min-confidence needs the plane-sweep initialiser's confidence (--init planesweep; on in --preset realtime and quality)");
   const double c = args.getDouble("min-confidence", 0.0);
   if (!(c >= 0 && c <= 1)) throw Error("--min-confidence must be in [0, 1]");
   return float(c);

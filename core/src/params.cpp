@@ -44,6 +44,7 @@ void Params::validate() const {
           "initP1, initP2 must satisfy 0 <= initP1 <= initP2");
   require(std::isfinite(lrTolerancePx) && lrTolerancePx > 0, "lrTolerancePx must be > 0");
   require(std::isfinite(initAccept) && initAccept >= 0 && initAccept <= 1, "initAccept must be in [0, 1]");
+  require(initWarps >= 0 && initWarps <= 1000, "initWarps must be in [0, 1000]");
   require(std::isfinite(occlusionWeight) && occlusionWeight >= 0 && occlusionWeight <= 1,
           "occlusionWeight must be in [0, 1]");
   require(std::isfinite(maxFovDeg) && maxFovDeg >= 0 && maxFovDeg <= 360, "maxFovDeg must be in [0, 360]");
@@ -58,7 +59,14 @@ Params preset(const std::string& name) {
   Params p;
   if (name == "default") return p;
   if (name == "realtime") {
+    // N = 5 with a plane sweep at level 2 (a quarter of the resolution): measured on the 12
+    // development pairs (CUDA, H100), mean tau>1 of clean binocular / T265-like binocular /
+    // clean and T265-like forward non-occluded pairs 7.7 / 11.4 / 14.0 / 22.8 % against
+    // 24.6 / 26.1 / 49.7 / 51.8 % without the sweep, for ~1.6 ms more per 848x800 frame
+    // (3.1 -> 4.7 ms): coarse-to-fine warping alone reaches only N x 0.2 px per level.
     p.warps = 5;
+    p.init = Params::Init::PlaneSweep;
+    p.initLevel = 2;
     return p;
   }
   if (name == "paper") {
@@ -135,7 +143,8 @@ std::string describe(const Params& p) {
     << " init=" << initName(p.init);
   if (p.init == Params::Init::PlaneSweep)
     s << " init_level=" << p.initLevel << " init_parallax=" << p.initMaxParallaxDeg << " init_radius=" << p.initRadius
-      << " init_p1=" << p.initP1 << " init_p2=" << p.initP2 << " occlusion_weight=" << p.occlusionWeight;
+      << " init_p1=" << p.initP1 << " init_p2=" << p.initP2 << " occlusion_weight=" << p.occlusionWeight
+      << " init_warps=" << p.initWarps;
   return s.str();
 }
 

@@ -204,19 +204,23 @@ void Pipeline::initialiseLevel(size_t l) {
 // and orientation there, so the sweep needs one camera and the translation only): camera 0 against image 1 with t',
 // then camera 1 against image 0 with -t' for the left-right check.
 void Pipeline::runSweep() {
-  stage("plane sweep");
   Level& L = levels_[sweep_.level];
   SweepParams reverse = sweep_.params;
   for (double& c : reverse.t) c = -c;
   // The volume of warped samples becomes the aggregated costs once the costs are taken.
   auto sweep = [&](const Buffer& best, const Buffer& reference, const Buffer& image, const SweepParams& p) {
+    stage("sweep: warp");
     backend_.sweepWarp(sweep_.volume, image, L.mask, p);
+    stage("sweep: cost");
     backend_.sweepCost(sweep_.costs, reference, sweep_.volume, L.mask, p);
+    stage("sweep: aggregate");
     backend_.sweepAggregate(sweep_.volume, sweep_.costs, L.mask, p);
+    stage("sweep: select");
     backend_.sweepSelect(best, sweep_.volume, sweep_.costs, L.mask, p);
   };
   sweep(sweep_.best, L.i0, L.i1, sweep_.params);
   sweep(sweep_.other, L.i1, L.i0, reverse);
+  stage("sweep: check");
   backend_.sweepInitialise(L.pd.u, L.w, L.confidence, sweep_.best, sweep_.other, L.mask, sweep_.params,
                            {params_.lrTolerancePx, params_.initAccept});
 }
@@ -234,11 +238,17 @@ PrimalDualParams Pipeline::primalDualParams() const {
   return p;
 }
 
-void Pipeline::solveLevel(Level& L, const std::function<void(int)>& warpDone) {
+// With the initialiser, the levels from the sweep's down may warp a different number of
+// times (Params::initWarps).
+int Pipeline::warpsAt(size_t l) const {
+  return initialising() && l <= sweep_.level && params_.initWarps > 0 ? params_.initWarps : params_.warps;
+}
+
+void Pipeline::solveLevel(Level& L, int warps, const std::function<void(int)>& warpDone) {
   const PrimalDualParams pdParams = primalDualParams();
   // A floor of 1 weighs every pixel 1: then the kernel need not read the confidence.
   const Buffer weight = params_.occlusionWeight < 1.f ? L.confidence : Buffer{};
-  for (int n = 0; n < params_.warps; ++n) {
+  for (int n = 0; n < warps; ++n) {
     stage("warp derivatives");
     backend_.warpDerivatives(L.data, L.tangent, L.n0, L.n1, L.trajectory, L.w, L.pd.u, L.mask, weight,
                              params_.occlusionWeight);
@@ -266,7 +276,7 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress) {
   const double sweepWork =
       initialising() ? pixels(levels_[sweep_.level]) * sweep_.params.planes * kSweepWarpsPerPlane : 0.0;
   double total = sweepWork, done = 0;
-  for (const Level& L : levels_) total += pixels(L) * params_.warps;
+  for (size_t l = 0; l < levels_.size(); ++l) total += pixels(levels_[l]) * warpsAt(l);
   auto advance = [&](double work) {
     done += work;
     if (progress) progress(std::min(1.0, done / total));
@@ -275,7 +285,7 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress) {
   for (size_t l = levels_.size(); l-- > 0;) {
     initialiseLevel(l);
     if (initialising() && l == sweep_.level) advance(sweepWork);
-    solveLevel(levels_[l], [&](int) { advance(pixels(levels_[l])); });
+    solveLevel(levels_[l], warpsAt(l), [&](int) { advance(pixels(levels_[l])); });
   }
   stage("triangulate");
   const double tp[3] = {tPrime_.x(), tPrime_.y(), tPrime_.z()};
