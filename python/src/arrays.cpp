@@ -21,7 +21,9 @@ pb::array asArray(pb::handle obj, const char* which) {
   // Anything NumPy can view (arrays, memoryviews, CPU tensors, nested lists), without
   // copying arrays.
   pb::array a = pb::array::ensure(obj);
-  if (!a)
+  // An arbitrary object becomes a 0-d object array, a string a 0-d str array: say what it was.
+  const bool converted = !pb::isinstance<pb::array>(obj);
+  if (!a || (converted && (a.dtype().kind() == 'O' || a.dtype().kind() == 'U' || a.dtype().kind() == 'S')))
     throw Error(std::string(which) + " is a " + std::string(pb::str(obj.get_type().attr("__name__"))) +
                 ", not an array");
   return a;
@@ -37,6 +39,7 @@ PixelType pixelTypeOf(char kind, int bits, const char* which) {
                            : kind == 'u' ? "uint" + std::to_string(bits)
                            : kind == 'i' ? "int" + std::to_string(bits)
                            : kind == 'b' ? "bool"
+                           : kind == 'c' ? "complex" + std::to_string(bits)
                                          : std::string("kind '") + kind + "'";
   throw Error(std::string(which) + " has dtype " + name +
               ": expected uint8, uint16 or float32 (convert with .astype(numpy.float32))");
@@ -222,12 +225,20 @@ DeviceView fromDlpack(pb::handle obj, const char* which, uintptr_t consumerStrea
 DeviceView deviceView(pb::handle obj, const char* which, uintptr_t consumerStream) {
   DeviceView v;
   // DLPack first: its producer orders its pending work before our stream itself, which
-  // __cuda_array_interface__ (v2, PyTorch) cannot.
+  // __cuda_array_interface__ (v2, PyTorch) cannot. Producers refuse some views (negative
+  // strides, read-only): those go through __cuda_array_interface__ when there is one.
+  const bool cai = pb::hasattr(obj, "__cuda_array_interface__");
   if (pb::hasattr(obj, "__dlpack__") && pb::hasattr(obj, "__dlpack_device__") &&
-      pb::tuple(obj.attr("__dlpack_device__")())[0].cast<int>() == kDLCUDA)
-    v = fromDlpack(obj, which, consumerStream);
-  else
+      pb::tuple(obj.attr("__dlpack_device__")())[0].cast<int>() == kDLCUDA) {
+    try {
+      v = fromDlpack(obj, which, consumerStream);
+    } catch (pb::error_already_set&) {
+      if (!cai) throw;
+      v = fromCudaArrayInterface(obj, which);
+    }
+  } else {
     v = fromCudaArrayInterface(obj, which);
+  }
   const int channels = v.ndim == 3 ? int(v.shape[2]) : 1;
   if (!(v.ndim == 2 || (v.ndim == 3 && (channels == 1 || channels == 3 || channels == 4)))) {
     std::string s = "(";

@@ -2,8 +2,8 @@
 // NumPy in and out; every library failure surfaces as curvestereo.Error with the
 // library's one-line message. Docstrings here are what help() shows; the signatures with
 // types are in curvestereo/__init__.pyi.
-#include <pybind11/functional.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -25,7 +25,17 @@ namespace {
 
 // ---------------------------------------------------------------- calibration
 
-Rig loadRig(const std::string& path) { return loadKalibr(path); }
+// Paths arrive as std::filesystem::path: str and os.PathLike (pathlib) both convert.
+using Path = std::filesystem::path;
+
+// Every format the library reads (Kalibr, Basalt, OpenCV), chosen from the content.
+Rig loadRig(const Path& path) { return loadCalibration(path.string()); }
+
+void saveRig(const Rig& rig, const Path& path, const std::string& format) {
+  for (CalibFormat f : {CalibFormat::Kalibr, CalibFormat::Basalt, CalibFormat::OpenCv})
+    if (format == calibFormatName(f)) return saveCalibration(rig, path.string(), f);
+  throw Error("unknown calibration format '" + format + "' (known: kalibr, basalt, opencv)");
+}
 
 pb::dict cameraDict(const Camera& c) {
   pb::dict d;
@@ -65,7 +75,8 @@ std::string lowerExtension(const std::string& path) {
   return ext;
 }
 
-pb::array readImage(const std::string& path) {
+pb::array readImage(const Path& file) {
+  const std::string path = file.string();
   const std::string ext = lowerExtension(path);
   if (ext == ".exr") {
     ImageF img = readExr(path);
@@ -83,7 +94,8 @@ pb::array readImage(const std::string& path) {
   return floatArray(std::move(img));
 }
 
-void writePng(const std::string& path, pb::handle obj, int bits) {
+void writePng(const Path& file, pb::handle obj, int bits) {
+  const std::string path = file.string();
   const pb::array a = pb::array::ensure(obj);
   if (!a) throw Error("write_png: expected an array");
   if (bits != 8 && bits != 16) throw Error("write_png: bits must be 8 or 16");
@@ -108,7 +120,8 @@ void writePng(const std::string& path, pb::handle obj, int bits) {
     writePngGray(path, img);
 }
 
-void writeExrFile(const std::string& path, pb::handle obj) {
+void writeExrFile(const Path& file, pb::handle obj) {
+  const std::string path = file.string();
   const pb::array a = pb::array::ensure(obj);
   if (!a || a.ndim() != 2 || a.dtype().kind() != 'f' || a.itemsize() != 4)
     throw Error("write_exr: expected an H x W float32 array");
@@ -160,7 +173,8 @@ ImageF floatImage2d(pb::handle obj, const char* what) {
 // Binary PLY of the finite points (as `curvestereo run` writes them). Gray colours go
 // through the library's writer; RGB needs a vertex layout it does not have, so those are
 // written here in the same format (x y z float, red green blue uchar).
-void writePlyFile(const std::string& path, pb::handle pointsObj, pb::handle coloursObj) {
+void writePlyFile(const Path& file, pb::handle pointsObj, pb::handle coloursObj) {
+  const std::string path = file.string();
   const auto pts = pb::array_t<float, pb::array::c_style | pb::array::forcecast>::ensure(pointsObj);
   if (!pts || pts.ndim() < 1 || pts.shape(pts.ndim() - 1) != 3)
     throw Error("write_ply: points must be an array of shape (..., 3)");
@@ -439,17 +453,17 @@ PYBIND11_MODULE(_curvestereo, m) {
           },
           pb::arg("factor"),
           "The same rig for images rescaled by `factor` (e.g. 0.5 for a half-resolution T265 stream).")
-      .def(
-          "save", [](const Rig& r, const std::string& path) { saveKalibr(r, path); }, pb::arg("path"),
-          "Write the rig as a Kalibr camchain.yaml.")
+      .def("save", &saveRig, pb::arg("path"), pb::arg("format") = "kalibr",
+           "Write the rig: format 'kalibr' (camchain.yaml), 'basalt' (calibration.json) or 'opencv' (FileStorage "
+           "YAML, or XML when the path ends in .xml).")
       .def("__repr__", [](const Rig& r) {
         return "<curvestereo.Rig " + sizeText(r.cam0.width, r.cam0.height) + " " + r.cam0.modelName() + ", baseline " +
                std::to_string(r.t.norm()) + " m>";
       });
 
   m.def("load_calibration", &loadRig, pb::arg("path"),
-        "Read a stereo calibration (Kalibr camchain.yaml) as a Rig. Raises curvestereo.Error naming the file and "
-        "the problem.");
+        "Read a stereo calibration as a Rig: Kalibr camchain.yaml, Basalt calibration.json or OpenCV FileStorage "
+        "(YAML / XML), the format told from the content. Raises curvestereo.Error naming the file and the problem.");
 
   pb::class_<Result>(m, "Result",
                      "One frame's output. Arrays are NumPy (host) or curvestereo.DeviceArray "
@@ -553,8 +567,7 @@ frame). The GIL is released while the frame is solved.)doc")
   m.def("write_exr", &writeExrFile, pb::arg("path"), pb::arg("image"),
         "Write an H x W float32 array as a single-channel EXR (as `curvestereo run` writes depth.exr).");
   m.def(
-      "write_ply",
-      [](const std::string& path, pb::handle points, pb::handle colours) { writePlyFile(path, points, colours); },
+      "write_ply", [](const Path& path, pb::handle points, pb::handle colours) { writePlyFile(path, points, colours); },
       pb::arg("path"), pb::arg("points"), pb::arg("colours") = pb::none(),
       "Write the finite points of an (..., 3) array as a binary PLY. colours: None (white), gray with the "
       "points' shape without the last axis (uint8, or float in [0, 1] such as the left image), or RGB (..., 3).");

@@ -42,9 +42,9 @@ CS_HD inline float grayAt(const StridedPixels& s, int type, long long y, long lo
   if (s.channels < 3) return sampleAt(p, type);
   const double luma = 0.299 * sampleAt(p, type) + 0.587 * sampleAt(p + s.chanStride, type) +
                       0.114 * sampleAt(p + 2 * s.chanStride, type);
-  // std::min(1.0, luma) as the reader has it; a NaN (only possible from float input) stays
-  // NaN so that compute() refuses it instead of seeing white.
-  if (luma != luma) return float(luma);
+  // std::min(1.0, luma) as the reader has it; NaN or +inf (only possible from float input)
+  // stays as it is so that compute() refuses it instead of seeing white.
+  if (!(luma - luma == 0.0)) return float(luma);
   return float(luma < 1.0 ? luma : 1.0);
 }
 

@@ -1,0 +1,202 @@
+"""Type stubs for curvestereo (the extension is python/src/*.cpp)."""
+
+from os import PathLike
+from typing import Any, Callable, Literal, Protocol, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+_Path = str | PathLike[str]
+# Host images: 2-D uint8 / uint16 / float32 (gray) or H x W x 3|4 (R G B [A]), any strides.
+_HostImage = npt.NDArray[np.uint8] | npt.NDArray[np.uint16] | npt.NDArray[np.float32]
+
+class _CudaArray(Protocol):
+    """CuPy / PyTorch / Numba arrays (CUDA builds only)."""
+
+    @property
+    def __cuda_array_interface__(self) -> dict[str, Any]: ...
+
+class _DLPackArray(Protocol):
+    def __dlpack__(self, *, stream: int | None = ...) -> Any: ...
+    def __dlpack_device__(self) -> tuple[int, int]: ...
+
+_Image = _HostImage | _CudaArray | _DLPackArray
+_F32 = npt.NDArray[np.float32]
+
+class Error(RuntimeError):
+    """Every failure of the library: a one-line message naming the file or value."""
+
+class Rig:
+    """A calibrated stereo rig: two cameras and the pose of camera 1 (X1 = R X0 + t)."""
+
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def R(self) -> npt.NDArray[np.float64]:
+        """3 x 3 rotation of camera 1 relative to camera 0."""
+    @property
+    def t(self) -> npt.NDArray[np.float64]:
+        """Translation of camera 1 relative to camera 0, metres (3,)."""
+    @property
+    def baseline(self) -> float: ...
+    @property
+    def cam0(self) -> dict[str, Any]:
+        """{'model', 'width', 'height', 'params': [fx, fy, cx, cy, ...]}."""
+    @property
+    def cam1(self) -> dict[str, Any]: ...
+    def scaled(self, factor: float) -> Rig:
+        """The rig for images rescaled by `factor` (0.5: a half-resolution stream)."""
+    def save(self, path: _Path, format: Literal["kalibr", "basalt", "opencv"] = "kalibr") -> None:
+        """Write the rig in a calibration format (OpenCV: XML when path ends in .xml)."""
+
+class DeviceArray:
+    """A result on the GPU (compute(..., return_device=True)); CuPy and PyTorch wrap it
+    without copying (cupy.asarray, cupy.from_dlpack, torch.from_dlpack, torch.as_tensor).
+    It owns its memory; wrappers keep it alive. CUDA builds only."""
+
+    @property
+    def __cuda_array_interface__(self) -> dict[str, Any]: ...
+    def __dlpack__(
+        self, *, stream: int | None = None, max_version: Any = None, dl_device: Any = None, copy: Any = None
+    ) -> Any: ...
+    def __dlpack_device__(self) -> tuple[int, int]: ...
+    @property
+    def shape(self) -> tuple[int, ...]: ...
+    @property
+    def dtype(self) -> np.dtype[Any]: ...
+    @property
+    def ptr(self) -> int: ...
+    @property
+    def device_id(self) -> int: ...
+    def get(self) -> npt.NDArray[Any]:
+        """A NumPy copy on the host."""
+
+class Result:
+    """One frame's output (NumPy arrays, or DeviceArray with return_device=True).
+    Invalid pixels are NaN in every float output."""
+
+    @property
+    def depth(self) -> _F32 | DeviceArray:
+        """Radial depth (distance from camera 0's centre), metres, H x W; NaN invalid, +inf at infinity."""
+    @property
+    def z(self) -> _F32 | DeviceArray | None:
+        """Depth along camera 0's optical axis (None without the 'points' output)."""
+    @property
+    def points(self) -> _F32 | DeviceArray | None:
+        """Camera-0 points, metres, H x W x 3 (NaN where invalid or infinite)."""
+    @property
+    def disparity(self) -> _F32 | DeviceArray | None:
+        """Disparity along the epipolar curve, px, H x W."""
+    @property
+    def warp(self) -> _F32 | DeviceArray | None:
+        """2-D displacement into the calibrated right image, px, H x W x 2."""
+    @property
+    def valid(self) -> npt.NDArray[np.bool_] | DeviceArray:
+        """Pixels that were solved."""
+    @property
+    def confidence(self) -> _F32 | DeviceArray | None:
+        """Plane-sweep left-right confidence in [0, 1]; None without the initialiser."""
+    @property
+    def stages(self) -> dict[str, float]:
+        """Milliseconds per stage ({} when profiling is off)."""
+    @property
+    def total_ms(self) -> float: ...
+
+class Stereo:
+    """The solver for one rig: set up once, then compute() per frame. Not for two threads
+    at once (raises Error if used so); use one per thread."""
+
+    def __init__(
+        self,
+        rig: Rig,
+        preset: str = "realtime",
+        backend: str = "auto",
+        *,
+        outputs: Sequence[Literal["disparity", "warp", "points", "depth", "valid", "z"]] | None = None,
+        profile: bool | None = None,
+        # Solver parameters (Stereo.params lists them all; CLI spellings such as
+        # max_fov, median, init_parallax and dashes are accepted too).
+        levels: int = ...,
+        scale: float = ...,
+        min_width: int = ...,
+        warps: int = ...,
+        iterations: int = ...,
+        du_max: float = ...,
+        median_filter: bool = ...,
+        data_term: Literal["normalised", "brightness"] = ...,
+        norm_sigma: float = ...,
+        noise_level: float = ...,
+        lambda_: float = ...,
+        alpha0: float = ...,
+        alpha1: float = ...,
+        beta: float = ...,
+        eta: float = ...,
+        w_min: float = ...,
+        tensor_sigma: float = ...,
+        gamma: float = ...,
+        init: Literal["none", "planesweep"] = ...,
+        init_level: int = ...,
+        init_max_parallax_deg: float = ...,
+        init_px_per_plane: float = ...,
+        init_radius: int = ...,
+        init_p1: float = ...,
+        init_p2: float = ...,
+        lr_tolerance_px: float = ...,
+        init_accept: float = ...,
+        occlusion_weight: float = ...,
+        max_fov_deg: float = ...,
+        epipole_deg: float = ...,
+        **more: Any,
+    ) -> None: ...
+    def compute(
+        self,
+        left: _Image,
+        right: _Image,
+        *,
+        progress: Callable[[float], object] | None = None,
+        return_device: bool = False,
+    ) -> Result:
+        """Solve one pair (the GIL is released meanwhile). GPU arrays need the CUDA backend."""
+    def set_pose(self, R: npt.ArrayLike, t: npt.ArrayLike) -> None:
+        """A moving camera: the second view's pose relative to the first (X1 = R X0 + t)."""
+    def set_mask(self, mask: npt.ArrayLike) -> None:
+        """Solve only where mask != 0 (H x W)."""
+    @property
+    def backend(self) -> str: ...
+    @property
+    def device(self) -> str: ...
+    @property
+    def backend_choice(self) -> str: ...
+    @property
+    def rig(self) -> Rig: ...
+    @property
+    def params(self) -> dict[str, Any]: ...
+    @property
+    def outputs(self) -> list[str]: ...
+
+def load_calibration(path: _Path) -> Rig:
+    """Read a stereo calibration: Kalibr camchain.yaml, Basalt calibration.json or OpenCV
+    FileStorage YAML / XML (the format told from the content)."""
+
+def read_image(path: _Path) -> _F32:
+    """PNG (8/16-bit; colour -> Rec. 601 luma) scaled to [0, 1], EXR, or .flo (H x W x 2)."""
+
+def write_png(path: _Path, image: npt.ArrayLike, bits: Literal[8, 16] = 8) -> None:
+    """H x W float32 in [0, 1] / uint8 / uint16 (gray) or H x W x 3 uint8 (RGB)."""
+
+def write_exr(path: _Path, image: _F32) -> None: ...
+def write_ply(path: _Path, points: npt.ArrayLike, colours: npt.ArrayLike | None = None) -> None:
+    """The finite points of an (..., 3) array; colours gray (...) or RGB (..., 3)."""
+
+def depth_picture(depth: npt.ArrayLike) -> npt.NDArray[np.uint8]:
+    """H x W x 3 uint8, as `curvestereo run`'s depth.png."""
+
+def colorize(values: npt.ArrayLike, lo: float, hi: float) -> npt.NDArray[np.uint8]: ...
+def presets() -> list[str]: ...
+def preset_params(name: str) -> dict[str, Any]: ...
+def available_backends(usable: bool = False) -> list[str]: ...
+def build_info() -> dict[str, Any]: ...

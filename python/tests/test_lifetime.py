@@ -1,0 +1,93 @@
+"""Reference counts and memory: nothing grows over 1,000 frames; arrays outlive their
+Stereo; a result's arrays own their memory."""
+import gc
+import sys
+import tracemalloc
+
+import numpy as np
+
+import curvestereo as cs
+
+
+def rss_bytes():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * 4096
+
+
+def test_no_growth_over_1000_frames(tiny):
+    calib, left, right = tiny
+    # The realtime preset cut to one warp and one iteration: ~0.6 ms a frame at 32 x 32.
+    stereo = cs.Stereo(cs.load_calibration(calib), "realtime", "cpu", warps=1, iterations=1)
+    progress = lambda f: None  # noqa: E731
+    left_f = (left / 255.0).astype(np.float32)
+    objects = (stereo, left, right, left_f, progress)
+
+    def frames(n):
+        for i in range(n):
+            r = stereo.compute(left if i % 2 else left_f, right, progress=progress if i % 3 == 0 else None)
+            _ = (r.depth, r.points, r.valid, r.stages, r.warp, r.disparity, r.z, r.confidence)
+
+    frames(50)  # warm-up: allocator pools, first-use caches
+    gc.collect()
+    refs = [sys.getrefcount(o) for o in objects]
+    n_objects = len(gc.get_objects())
+    rss = rss_bytes()
+    tracemalloc.start()
+    before = tracemalloc.take_snapshot()
+    frames(1000)
+    gc.collect()
+    after = tracemalloc.take_snapshot()
+    tracemalloc.stop()
+    grown = sum(s.size_diff for s in after.compare_to(before, "filename"))
+    del before, after  # the snapshots are objects too
+    gc.collect()
+    assert [sys.getrefcount(o) for o in objects] == refs
+    assert len(gc.get_objects()) <= n_objects + 10
+    assert grown < 64 * 1024, f"Python allocations grew by {grown} bytes"
+    # One frame's arrays are ~40 KB: a leak of them all would be ~40 MB.
+    assert rss_bytes() - rss < 4 * 1024 * 1024
+
+
+def test_errors_do_not_leak(tiny):
+    calib, left, right = tiny
+    stereo = cs.Stereo(cs.load_calibration(calib), backend="cpu")
+    bad = np.full(left.shape, np.nan, np.float32)
+    for _ in range(20):
+        try:
+            stereo.compute(bad, right)
+        except cs.Error:
+            pass
+    gc.collect()
+    refs = sys.getrefcount(bad), sys.getrefcount(right)
+    for _ in range(500):
+        for call in (lambda: stereo.compute(bad, right), lambda: stereo.compute(left[:3], right),
+                     lambda: cs.Stereo(stereo.rig, "nonsense")):
+            try:
+                call()
+            except cs.Error:
+                pass
+    gc.collect()
+    assert (sys.getrefcount(bad), sys.getrefcount(right)) == refs
+
+
+def test_arrays_outlive_their_stereo(tiny):
+    calib, left, right = tiny
+    stereo = cs.Stereo(cs.load_calibration(calib), backend="cpu")
+    r = stereo.compute(left, right)
+    depth, points = r.depth, r.points
+    expected = depth.copy()
+    del stereo, r
+    gc.collect()
+    _ = [np.ones(depth.shape, np.float32) for _ in range(100)]  # reuse freed memory, if any was freed
+    assert depth.tobytes() == expected.tobytes()
+    assert points.shape[-1] == 3 and points.flags.owndata is False and points.base is not None
+
+
+def test_results_are_independent(tiny):
+    calib, left, right = tiny
+    stereo = cs.Stereo(cs.load_calibration(calib), backend="cpu")
+    a = stereo.compute(left, right)
+    keep = a.depth.copy()
+    a.depth[:] = 0  # results are writable and the caller's
+    b = stereo.compute(left, right)
+    assert b.depth.tobytes() == keep.tobytes()
