@@ -148,6 +148,7 @@ class Stereo:
         lr_tolerance_px: float = ...,
         init_accept: float = ...,
         occlusion_weight: float = ...,
+        init_warps: int = ...,
         max_fov_deg: float = ...,
         epipole_deg: float = ...,
         **more: Any,

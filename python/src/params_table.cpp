@@ -120,6 +120,7 @@ const std::vector<Field>& fields() {
       realField("lr_tolerance_px", &Params::lrTolerancePx),
       realField("init_accept", &Params::initAccept),
       realField("occlusion_weight", &Params::occlusionWeight),
+      intField("init_warps", &Params::initWarps),
       realField("max_fov_deg", &Params::maxFovDeg),
       realField("epipole_deg", &Params::epipoleDeg),
   };

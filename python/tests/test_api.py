@@ -183,3 +183,24 @@ def test_pictures():
     assert (pic[1, 0] == 0).all()  # invalid is black
     c = cs.colorize(np.array([[0.0, 1.0]], np.float32), 0, 1)
     assert c.shape == (1, 2, 3) and not (c[0, 0] == c[0, 1]).all()
+
+
+def test_stubs_match_the_module():
+    """curvestereo/__init__.pyi names exactly what the module has (a drift check)."""
+    import ast
+    from pathlib import Path
+
+    stub_path = Path(cs.__file__).with_name("__init__.pyi")
+    tree = ast.parse(stub_path.read_text())
+    top = {n.name: n for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    public = {n for n in cs.__all__}
+    assert public <= set(top), sorted(public - set(top))
+    assert {n for n in top if not n.startswith("_")} <= public
+    for name in ("Rig", "Stereo", "Result") + (("DeviceArray",) if hasattr(cs, "DeviceArray") else ()):
+        members = {m for m in dir(getattr(cs, name)) if not m.startswith("_")}
+        stubbed = {n.name for n in top[name].body if isinstance(n, ast.FunctionDef) and not n.name.startswith("_")}
+        assert members == stubbed, (name, sorted(members ^ stubbed))
+    # Every parameter the table knows is a keyword of Stereo.__init__ in the stub.
+    init = next(n for n in top["Stereo"].body if isinstance(n, ast.FunctionDef) and n.name == "__init__")
+    keywords = {a.arg for a in init.args.kwonlyargs}
+    assert {p if p != "lambda" else "lambda_" for p in cs.build_info()["parameters"]} <= keywords
