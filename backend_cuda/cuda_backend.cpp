@@ -404,8 +404,9 @@ void CudaBackend::sweepAggregate(const Buffer& aggregated, const Buffer& costs, 
   checkPlanes(costs, p, "sweepAggregate costs");
   if (p.planes > cudak::kMaxSweepPlanes)
     throw Error("cuda backend: sweepAggregate takes at most " + std::to_string(cudak::kMaxSweepPlanes) + " planes");
-  check(cudak::launchSweepAggregate(stream_, img(slot(aggregated).dev, aggregated), img(slot(costs).dev, costs),
-                                    img(slot(mask).dev, mask), d),
+  const cudak::Img spare{scratch(3 * aggregated.count(), 3), aggregated.width, aggregated.height, aggregated.channels};
+  check(cudak::launchSweepAggregate(stream_, img(slot(aggregated).dev, aggregated), spare,
+                                    img(slot(costs).dev, costs), img(slot(mask).dev, mask), d),
         "sweepAggregate");
 }
 

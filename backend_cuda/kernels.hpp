@@ -163,7 +163,7 @@ cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, 
 // cudaErrorInvalidValue); aggregated and costs must not alias.
 cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepDev& p);
 cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume, Img mask, const SweepDev& p);
-cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img costs, Img mask, const SweepDev& p);
+cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p);
 cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img mask, const SweepDev& p);
 cudaError_t launchSweepInitialise(cudaStream_t s, Img u, Img w, Img confidence, Img best, Img other, Img mask,
                                   const SweepDev& p, const ConsistencyDev& c);

@@ -3,6 +3,8 @@
 // semi-globally, chosen winner-take-all and checked left against right. Geometry in double
 // through the device camera models, intensities and costs in float, every sum in the
 // oracle's order (the kernels are built with --fmad=false, so floats match bit for bit).
+#include <algorithm>
+
 #include "camera_models.cuh"
 
 namespace cs::cudak {
@@ -202,13 +204,11 @@ struct AggregateShared {
 // the mask) to overlap the previous step's barrier.
 struct AggregateInput {
   bool inside;
-  float cost, sum;
+  float cost;
 };
 
-__device__ AggregateInput loadStep(const Img& aggregated, const Img& costs, const Img& mask, size_t pixel, int k,
-                                   bool readSum) {
-  const size_t i = pixel * costs.channels + k;
-  return {__ldg(&mask.data[pixel * mask.channels]) != 0.f, __ldg(&costs.data[i]), readSum ? aggregated.data[i] : 0.f};
+__device__ AggregateInput loadStep(const Img& costs, const Img& mask, size_t pixel, int k) {
+  return {__ldg(&mask.data[pixel * mask.channels]) != 0.f, __ldg(&costs.data[pixel * costs.channels + k])};
 }
 
 // The minimum of v over the block; every thread gets it. One barrier, and the per-warp
@@ -224,26 +224,25 @@ __device__ float blockMin(float v, float (&warpMin)[kMaxSweepPlanes / 32]) {
 
 // One direction along the block's line (the oracle's aggregateDirection for one line):
 // thread k keeps L_r(., k) in a register and publishes it in shared memory for planes
-// k -+ 1; the previous step's minimum m comes from blockMin. `overwrite`: the first
-// direction, which writes 0 + L (and 0 outside the mask) instead of adding, so that
-// `aggregated` needs no clearing. `buffer` alternates over the steps of both passes.
-__device__ void aggregatePass(const Img& aggregated, const Img& costs, const Img& mask, const SweepDev& p,
-                              const Line& line, bool forward, bool overwrite, AggregateShared& s, int& buffer) {
+// k -+ 1; the previous step's minimum m comes from blockMin. `out` receives 0 + L (the
+// oracle's aggregated += l from a cleared buffer) and 0 outside the mask.
+__device__ void aggregatePass(const Img& out, const Img& costs, const Img& mask, const SweepDev& p, const Line& line,
+                              bool forward, AggregateShared& s) {
+  int buffer = 0;
   const int k = threadIdx.x;
   const bool plane = k < p.planes;
   const int kLoad = plane ? k : p.planes - 1;  // spare threads load a valid address
   auto pixelAt = [&](int step) { return line.start + size_t(forward ? step : line.length - 1 - step) * line.stride; };
   bool havePrevious = false;
   float own = 0.f, previousMin = 0.f;
-  const bool readSum = !overwrite && plane;
-  AggregateInput next = loadStep(aggregated, costs, mask, pixelAt(0), kLoad, readSum);
+  AggregateInput next = loadStep(costs, mask, pixelAt(0), kLoad);
   for (int step = 0; step < line.length; ++step) {
     const size_t pixel = pixelAt(step);
     const AggregateInput in = next;
-    if (step + 1 < line.length) next = loadStep(aggregated, costs, mask, pixelAt(step + 1), kLoad, readSum);
-    float& out = aggregated.data[pixel * aggregated.channels + kLoad];
+    if (step + 1 < line.length) next = loadStep(costs, mask, pixelAt(step + 1), kLoad);
+    float& written = out.data[pixel * out.channels + kLoad];
     if (!in.inside) {  // the same for the whole block: no barrier is skipped by some threads only
-      if (overwrite && plane) out = 0.f;
+      if (plane) written = 0.f;
       havePrevious = false;
       continue;
     }
@@ -259,7 +258,7 @@ __device__ void aggregatePass(const Img& aggregated, const Img& costs, const Img
         l = c + v - previousMin;
       }
       s.previous[buffer][k] = l;
-      out = (overwrite ? 0.f : in.sum) + l;  // the oracle's aggregated += l from a cleared buffer
+      written = 0.f + l;
     }
     own = l;
     previousMin = blockMin(plane ? l : INFINITY, s.warpMin[buffer]);  // its barrier also publishes `previous`
@@ -268,17 +267,35 @@ __device__ void aggregatePass(const Img& aggregated, const Img& costs, const Img
   }
 }
 
-// Both directions of one line: rows (+x, then -x) or columns (+y, then -y). The same
-// thread writes and then adds to a pixel's plane, so the passes need no barrier between them.
+// One direction of one line per block, the four directions at once (blockIdx.y: +x, -x,
+// +y, -y), each into its own buffer: `aggregated` for +x, slices of `spare` for the rest.
+// A walk is a chain of dependent steps bound by memory latency; four side by side keep
+// the GPU four times as busy as two walks after two. sweepCombineKernel then adds them in
+// the oracle's order.
+__device__ Img directionBuffer(const Img& aggregated, const Img& spare, int direction) {
+  if (direction == 0) return aggregated;
+  const size_t size = size_t(aggregated.width) * aggregated.height * aggregated.channels;
+  return Img{spare.data + size * size_t(direction - 1), aggregated.width, aggregated.height, aggregated.channels};
+}
+
 __global__ void __launch_bounds__(kMaxSweepPlanes)
-    sweepAggregateKernel(Img aggregated, Img costs, Img mask, SweepDev p, bool rows) {
+    sweepDirectionKernel(Img aggregated, Img spare, Img costs, Img mask, SweepDev p) {
   beginKernel();
   __shared__ AggregateShared s;
-  const int width = costs.width;
+  const int direction = blockIdx.y, width = costs.width;
+  const bool rows = direction < 2;
+  if (int(blockIdx.x) >= (rows ? costs.height : width)) return;  // the whole block
   const Line line = rows ? Line{size_t(blockIdx.x) * width, 1, width} : Line{blockIdx.x, size_t(width), costs.height};
-  int buffer = 0;
-  aggregatePass(aggregated, costs, mask, p, line, true, rows, s, buffer);
-  aggregatePass(aggregated, costs, mask, p, line, false, false, s, buffer);
+  aggregatePass(directionBuffer(aggregated, spare, direction), costs, mask, p, line, direction % 2 == 0, s);
+}
+
+// aggregated = ((L+x + L-x) + L+y) + L-y, the oracle's sum (0 outside the mask, where
+// every direction wrote 0).
+__global__ void sweepCombineKernel(Img aggregated, Img spare) {
+  beginKernel();
+  const size_t n = size_t(aggregated.width) * aggregated.height * aggregated.channels;
+  for (size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x; i < n; i += size_t(gridDim.x) * blockDim.x)
+    aggregated.data[i] = ((aggregated.data[i] + spare.data[i]) + spare.data[i + n]) + spare.data[i + 2 * n];
 }
 
 // The first minimum of (value, k) over a warp; k = -1 (nothing scored) loses to everything.
@@ -450,13 +467,15 @@ cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume
   return cudaGetLastError();
 }
 
-// Two launches: the rows (+x, -x), then the columns (+y, -y), which add to the rows'
-// sums (in the oracle's order) and so wait for all of them.
-cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img costs, Img mask, const SweepDev& p) {
+// Two launches: the four directions side by side, then their sum.
+cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p) {
   if (p.planes > kMaxSweepPlanes) return cudaErrorInvalidValue;
   const int threads = (p.planes + 31) / 32 * 32;
-  CS_LAUNCH(sweepAggregateKernel, dim3(costs.height), dim3(threads), 0, s, aggregated, costs, mask, p, true);
-  CS_LAUNCH(sweepAggregateKernel, dim3(costs.width), dim3(threads), 0, s, aggregated, costs, mask, p, false);
+  const dim3 grid(unsigned(max(costs.width, costs.height)), 4);
+  CS_LAUNCH(sweepDirectionKernel, grid, dim3(threads), 0, s, aggregated, spare, costs, mask, p);
+  const size_t n = size_t(aggregated.width) * aggregated.height * aggregated.channels;
+  const unsigned blocks = unsigned(std::min<size_t>((n + 255) / 256, 4096));
+  CS_LAUNCH(sweepCombineKernel, dim3(blocks), dim3(256), 0, s, aggregated, spare);
   return cudaGetLastError();
 }
 

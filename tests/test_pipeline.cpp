@@ -136,8 +136,10 @@ TEST_CASE("setOutputs: depth-only frames give the same depth and leave the rest 
   synth::SynthPair pair = renderSmall("binocular", 0.12, 3);
   Stereo stereo(pair.rig, preset("realtime"), "cpu");
   const DepthResult all = stereo.compute(pair.left, pair.right);
-  stereo.setOutputs({false, false, false});
+  stereo.setOutputs({false, false, false, false});
   const DepthResult depthOnly = stereo.compute(pair.left, pair.right);
+  CHECK(!all.confidence.empty());  // realtime runs the initialiser
+  CHECK(depthOnly.confidence.empty());
   CHECK(depthOnly.valid.data == all.valid.data);
   for (size_t i = 0; i < all.valid.size(); ++i)
     if (all.valid.data[i]) CHECK(depthOnly.depth.radial.data[i] == all.depth.radial.data[i]);

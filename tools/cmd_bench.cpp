@@ -66,17 +66,18 @@ int cmdBench(const Args& args) {
   // seconds per frame, so it defaults to a few.
   const int runs = args.getInt("runs", stereo.backendName() == "cpu" ? 3 : 50);
   // By default a frame is what a depth application needs: images up, depth back (the valid
-  // mask is derived from it). --outputs all adds disparity, warp and points (and their transfers).
+  // mask is derived from it). --outputs all adds disparity, warp, points and the initialiser's
+  // confidence (and their transfers).
   const std::string outputs = args.get("outputs", "depth");
   if (outputs != "depth" && outputs != "all")
     throw Error("option --outputs expects depth or all, got '" + outputs + "'");
-  if (outputs == "depth") stereo.setOutputs({false, false, false});
+  if (outputs == "depth") stereo.setOutputs({false, false, false, false});
 
   std::printf("device:   %s (backend %s)\n", stereo.deviceName().c_str(), stereo.backendName().c_str());
   std::printf("input:    %s, %dx%d\n", in.what.c_str(), in.left.width, in.left.height);
   std::printf("settings: %s\n", describe(params).c_str());
   std::printf("outputs:  %s\n",
-              outputs == "depth" ? "radial depth + valid mask" : "all (depth, disparity, warp, points)");
+              outputs == "depth" ? "radial depth + valid mask" : "all (depth, disparity, warp, points, confidence)");
   std::printf("runs:     %d after 1 warm-up frame\n", runs);
   // Frames as a real-time application runs them: into the same DepthResult every frame,
   // so its images are allocated once (here, by the warm-up frame: first-touch allocation,

@@ -303,7 +303,7 @@ void Pipeline::download(DepthResult& out) {
   const int w = L0.size.width, h = L0.size.height;
   // No mask: the caller derives the valid mask from radial, NaN wherever the mask is 0.
   backend_.download(radial_, fitImage(out.depth.radial, w, h));
-  if (initialising())
+  if (initialising() && selection_.confidence)
     backend_.download(L0.confidence, fitImage(out.confidence, w, h));
   else
     out.confidence = ImageF();

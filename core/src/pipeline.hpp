@@ -38,7 +38,7 @@ class Pipeline {
   // Which of the optional outputs run() downloads; radial depth (and from it the valid
   // mask) always comes back. Skipping the rest saves most of a GPU frame's transfer time.
   struct Selection {
-    bool disparity = true, warp = true, points = true;
+    bool disparity = true, warp = true, points = true, confidence = true;
   };
   void select(const Selection& selection) { selection_ = selection; }
 

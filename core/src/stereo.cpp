@@ -139,7 +139,7 @@ void Stereo::makePipeline() {
   try {
     pipeline_.reset();
     pipeline_ = std::make_unique<Pipeline>(*backend_, rig_, params_, userMask_);
-    pipeline_->select({outputs_.disparity, outputs_.warp, outputs_.points});
+    pipeline_->select({outputs_.disparity, outputs_.warp, outputs_.points, outputs_.confidence});
     pipeline_->setPose(rig_.R, rig_.t);
   } catch (const std::bad_alloc&) {
     throw Error("out of memory setting up a " + frame + " frame on backend " + backendName_);
@@ -171,7 +171,7 @@ void Stereo::setMask(const ImageU8& mask) {
 
 void Stereo::setOutputs(const Outputs& outputs) {
   outputs_ = outputs;
-  if (pipeline_) pipeline_->select({outputs.disparity, outputs.warp, outputs.points});
+  if (pipeline_) pipeline_->select({outputs.disparity, outputs.warp, outputs.points, outputs.confidence});
 }
 
 void Stereo::setProgress(std::function<void(double)> progress) { progress_ = std::move(progress); }

@@ -64,6 +64,7 @@ class Stereo {
   // (depth.z comes with the points).
   struct Outputs {
     bool disparity = true, warp = true, points = true;
+    bool confidence = true;  // the initialiser's (empty without one)
   };
   void setOutputs(const Outputs& outputs);
   // Called during compute() with the fraction of the solve done (0..1), for progress bars.
