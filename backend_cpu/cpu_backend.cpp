@@ -115,8 +115,7 @@ std::string CpuBackend::device() const {
   return "CPU, " + std::to_string(std::max(1u, std::thread::hardware_concurrency())) + " threads (scalar reference)";
 }
 
-Buffer CpuBackend::create(int width, int height, int channels) {
-  if (width <= 0 || height <= 0 || channels <= 0) throw Error("cpu backend: invalid buffer size");
+Buffer CpuBackend::doCreate(int width, int height, int channels) {
   Buffer b{int(storage_.size()), width, height, channels};
   const unsigned long long bytes = (unsigned long long)b.count() * sizeof(float);
   // Refuse what the machine cannot hold before touching it: with overcommit, allocating
@@ -136,103 +135,97 @@ Buffer CpuBackend::create(int width, int height, int channels) {
   return b;
 }
 
-View CpuBackend::view(const Buffer& b) {
-  if (b.id < 0 || size_t(b.id) >= storage_.size()) throw Error("cpu backend: unknown buffer");
-  return View{storage_[size_t(b.id)].data(), b.width, b.height, b.channels};
-}
+void CpuBackend::doUpload(const Buffer& dst, const float* host) { std::copy(host, host + dst.count(), view(dst).data); }
 
-void CpuBackend::upload(const Buffer& dst, const float* host) { std::copy(host, host + dst.count(), view(dst).data); }
-
-void CpuBackend::download(const Buffer& src, float* host) {
+void CpuBackend::doDownload(const Buffer& src, float* host) {
   const float* d = view(src).data;
   std::copy(d, d + src.count(), host);
 }
 
-void CpuBackend::fill(const Buffer& dst, float value) { std::fill_n(view(dst).data, dst.count(), value); }
+void CpuBackend::doFill(const Buffer& dst, float value) { std::fill_n(view(dst).data, dst.count(), value); }
 
-void CpuBackend::copy(const Buffer& dst, const Buffer& src) {
-  if (dst.count() != src.count()) throw Error("cpu backend: copy between buffers of different size");
+void CpuBackend::doCopy(const Buffer& dst, const Buffer& src) {
   const float* s = view(src).data;
   std::copy(s, s + src.count(), view(dst).data);
 }
 
-void CpuBackend::fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
-                        const FieldsParams& params) {
+void CpuBackend::doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                          const FieldsParams& params) {
   cpu::fields(view(mask), view(calibration), view(trajectory), params);
 }
 
-void CpuBackend::triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
-                             const CameraParams& cam0, const double tPrime[3]) {
+void CpuBackend::doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                               const CameraParams& cam0, const double tPrime[3]) {
   cpu::triangulate(view(radial), view(points), view(w), view(mask), cam0, tPrime);
 }
 
-void CpuBackend::warp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
+void CpuBackend::doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
   cpu::warp(view(dst), view(src), view(flow));
 }
 
-void CpuBackend::downsample(const Buffer& dst, const Buffer& src, float scale) {
+void CpuBackend::doDownsample(const Buffer& dst, const Buffer& src, float scale) {
   cpu::downsample(view(dst), view(src), scale);
 }
 
-void CpuBackend::upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
+void CpuBackend::doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
   cpu::upsample(view(dst), view(src), scale, valueScale);
 }
 
-void CpuBackend::normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
-                           const NormaliseParams& params) {
+void CpuBackend::doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                             const NormaliseParams& params) {
   cpu::normalise(view(dst), view(moments), view(src), view(mask), params);
 }
 
-void CpuBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
-                                 const TensorParams& params) {
+void CpuBackend::doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                                   const TensorParams& params) {
   cpu::structureTensor(view(tensor), view(steps), view(image), view(mask), params);
 }
 
-void CpuBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                                 const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
-                                 const Buffer& confidence, float weightFloor) {
+void CpuBackend::doWarpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
+                                   const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
+                                   const Buffer& mask, const Buffer& confidence, float weightFloor) {
   const View c = confidence.id >= 0 ? view(confidence) : View{};
   cpu::warpDerivatives(view(data.u0), view(data.iu), view(data.iz), view(tangent), view(i0), view(i1), view(trajectory),
                        view(w), view(u), view(mask), confidence.id >= 0 ? &c : nullptr, weightFloor);
 }
 
-void CpuBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
-                            const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
+void CpuBackend::doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                              const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
   cpu::primalDual(view(pd.u), view(pd.uBar), view(pd.v), view(pd.vBar), view(pd.p), view(pd.q), view(data.u0),
                   view(data.iu), view(data.iz), view(tensor), view(steps), view(mask), params);
 }
 
-void CpuBackend::median(const Buffer& dst, const Buffer& src, const Buffer& mask) {
+void CpuBackend::doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) {
   cpu::median(view(dst), view(src), view(mask));
 }
 
-void CpuBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
-                            const Buffer& mask, float duMax) {
+void CpuBackend::doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
+                              const Buffer& mask, float duMax) {
   cpu::accumulate(view(u), view(w), view(u0), view(tangent), view(mask), duMax);
 }
 
-void CpuBackend::sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
+void CpuBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
   cpu::sweepWarp(view(volume), view(image), view(mask), p);
 }
 
-void CpuBackend::sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
-                           const SweepParams& p) {
+void CpuBackend::doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                             const SweepParams& p) {
   cpu::sweepCost(view(costs), view(reference), view(volume), view(mask), p);
 }
 
-void CpuBackend::sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                                const SweepParams& p) {
+void CpuBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                                  const SweepParams& p) {
   cpu::sweepAggregate(view(aggregated), view(costs), view(mask), p);
 }
 
-void CpuBackend::sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                             const SweepParams& p) {
+void CpuBackend::doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                               const SweepParams& p) {
   cpu::sweepSelect(view(best), view(aggregated), view(costs), view(mask), p);
 }
 
-void CpuBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
-                                 const Buffer& other, const Buffer& mask, const SweepParams& p,
-                                 const ConsistencyParams& c) {
+void CpuBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                                   const Buffer& other, const Buffer& mask, const SweepParams& p,
+                                   const ConsistencyParams& c) {
   cpu::sweepInitialise(view(u), view(w), view(confidence), view(best), view(other), view(mask), p, c);
 }
 

@@ -45,45 +45,47 @@ class CpuBackend final : public Backend {
   std::string device() const override;
   unsigned long long memoryBytes() const override { return usableMemoryBytes(); }
 
-  Buffer create(int width, int height, int channels) override;
-  void upload(const Buffer& dst, const float* host) override;
-  void download(const Buffer& src, float* host) override;
-  void fill(const Buffer& dst, float value) override;
-  void copy(const Buffer& dst, const Buffer& src) override;
+ protected:
+  Buffer doCreate(int width, int height, int channels) override;
+  void doUpload(const Buffer& dst, const float* host) override;
+  void doDownload(const Buffer& src, float* host) override;
+  void doFill(const Buffer& dst, float value) override;
+  void doCopy(const Buffer& dst, const Buffer& src) override;
 
-  void fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
-              const FieldsParams& params) override;
-  void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
-  void downsample(const Buffer& dst, const Buffer& src, float scale) override;
-  void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
-  void normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
-                 const NormaliseParams& params) override;
-  void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
-                       const TensorParams& params) override;
-  void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
-                       const Buffer& confidence, float weightFloor) override;
-  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
-                  const Buffer& mask, const PrimalDualParams& params) override;
-  void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
-  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
-                  float duMax) override;
-  void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
-  void sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
-                 const SweepParams& p) override;
-  void sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask, const SweepParams& p) override;
-  void sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+  void doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                const FieldsParams& params) override;
+  void doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
+  void doDownsample(const Buffer& dst, const Buffer& src, float scale) override;
+  void doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                   const NormaliseParams& params) override;
+  void doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                         const TensorParams& params) override;
+  void doWarpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                         const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                         const Buffer& confidence, float weightFloor) override;
+  void doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+                    const Buffer& mask, const PrimalDualParams& params) override;
+  void doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
+  void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                    float duMax) override;
+  void doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
+  void doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
                    const SweepParams& p) override;
-  void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
-                       const Buffer& other, const Buffer& mask, const SweepParams& p,
-                       const ConsistencyParams& c) override;
-  void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
-                   const CameraParams& cam0, const double tPrime[3]) override;
-
-  // The view of a buffer (tests use it to drive stage functions directly).
-  View view(const Buffer& b);
+  void doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                        const SweepParams& p) override;
+  void doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                     const SweepParams& p) override;
+  void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                         const Buffer& other, const Buffer& mask, const SweepParams& p,
+                         const ConsistencyParams& c) override;
+  void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                     const CameraParams& cam0, const double tPrime[3]) override;
 
  private:
+  // The view of a buffer (Backend has checked it: created here, used no larger).
+  View view(const Buffer& b) { return View{storage_[size_t(b.id)].data(), b.width, b.height, b.channels}; }
+
   std::vector<std::vector<float>> storage_;
   unsigned long long allocatedBytes_ = 0;
 };

@@ -64,12 +64,8 @@ cudak::CamDev camDev(const CameraParams& c) {
 
 cudak::Img img(float* data, const Buffer& b) { return cudak::Img{data, b.width, b.height, b.channels}; }
 
-// The sweep's parameters on the device; the shapes the kernels index by are checked here.
-cudak::SweepDev sweepDev(const SweepParams& p, const Buffer& volumeOrBest, int channels) {
-  if (p.planes < 2 || p.radius < 0) throw Error("cuda backend: sweep needs planes >= 2 and radius >= 0");
-  if (volumeOrBest.channels != channels)
-    throw Error("cuda backend: sweep buffer has " + std::to_string(volumeOrBest.channels) + " channels, expected " +
-                std::to_string(channels));
+// The sweep's parameters on the device (Backend has checked planes, radius and shapes).
+cudak::SweepDev sweepDev(const SweepParams& p) {
   cudak::SweepDev d{};
   d.cam = camDev(p.cam);
   std::copy(p.t, p.t + 3, d.t);
@@ -82,10 +78,10 @@ cudak::SweepDev sweepDev(const SweepParams& p, const Buffer& volumeOrBest, int c
   return d;
 }
 
-// The planes-channel buffers besides the one sweepDev() checks.
-void checkPlanes(const Buffer& b, const SweepParams& p, const char* what) {
-  if (b.channels != p.planes) throw Error(std::string("cuda backend: ") + what + " does not have p.planes channels");
-}
+// The contracts' limits (backend.hpp) are the kernels' limits.
+static_assert(cudak::kMaxSweepPlanes == kMaxSweepPlanes, "launchSweepAggregate runs one thread per plane");
+static_assert(cudak::kMaxTaps == 2 * kMaxTensorRadius + 1, "structure tensor taps");
+static_assert(cudak::kMaxNormaliseTaps == 2 * kMaxNormaliseRadius + 1, "normalise taps");
 
 }  // namespace
 
@@ -169,6 +165,9 @@ void CudaBackend::check(int launchResult, const char* what) {
   if (launchResult != cudaSuccess) fail(std::string("kernel ") + what, cudaError_t(launchResult));
 }
 
+// Backend has checked every kernel's buffers; this check is for the CUDA extensions
+// (devicePointer, copyFromDevice), and the memory trades (primal-dual, warp tail) need the
+// exact shape of the allocation.
 const CudaBackend::Slot& CudaBackend::slot(const Buffer& b) const {
   if (b.id < 0 || size_t(b.id) >= slots_.size()) throw Error("cuda backend: unknown buffer");
   const Slot& s = slots_[size_t(b.id)];
@@ -223,49 +222,6 @@ float*& CudaBackend::scratchSlot(size_t floats, int key) {
 
 float* CudaBackend::scratch(size_t floats, int key) { return scratchSlot(floats, key); }
 
-bool CudaBackend::takePendingCopy(const float* dst, const float* src) {
-  for (auto it = pending_.begin(); it != pending_.end(); ++it)
-    if (it->dst == dst && it->src == src) {
-      pending_.erase(it);
-      return true;
-    }
-  return false;
-}
-
-void CudaBackend::runPendingMedian() {
-  if (!pendingMedian_) return;
-  const PendingMedian m = *pendingMedian_;
-  pendingMedian_.reset();
-  check(cudak::launchMedian(stream_, img(slot(m.dst).dev, m.dst), img(slot(m.src).dev, m.src),
-                            img(slot(m.mask).dev, m.mask)),
-        "median");
-}
-
-// The derivatives' buffers, for runPendingAccumulate().
-struct CudaBackend::NextWarp {
-  cudak::DataTermOut out;
-  cudak::DataTermIn in;
-};
-
-void CudaBackend::runPendingAccumulate(const NextWarp* next) {
-  if (!pendingAccumulate_) return;
-  const PendingAccumulate a = *pendingAccumulate_;
-  pendingAccumulate_.reset();
-  const cudak::Img w = img(slot(a.w).dev, a.w), u0 = img(slot(a.u0).dev, a.u0);
-  const cudak::Img tangent = img(slot(a.tangent).dev, a.tangent), mask = img(slot(a.mask).dev, a.mask);
-  const cudak::DataTermOut* nextOut = next ? &next->out : nullptr;
-  const cudak::DataTermIn* nextIn = next ? &next->in : nullptr;
-  if (a.median.id >= 0)
-    check(cudak::launchMedianAccumulate(stream_, img(a.uOut, a.u), img(slot(a.median).dev, a.median), img(a.uIn, a.u),
-                                        w, u0, tangent, mask, a.duMax, nextOut, nextIn,
-                                        lastLaunch_ == LastLaunch::PrimalDual),
-          next ? "median + accumulate + derivatives" : "median + accumulate");
-  else
-    check(cudak::launchAccumulate(stream_, img(a.uOut, a.u), w, u0, tangent, mask, a.duMax, nextOut, nextIn),
-          next ? "accumulate + derivatives" : "accumulate");
-  lastLaunch_ = LastLaunch::DataTerm;
-}
-
 void CudaBackend::enqueue(const PendingOp& op) {
   // Ops of one launch run concurrently: queue only what touches none of the buffers the
   // queued ops write (and writes none they read).
@@ -279,8 +235,6 @@ void CudaBackend::enqueue(const PendingOp& op) {
 }
 
 void CudaBackend::flush() {
-  runPendingMedian();
-  runPendingAccumulate();
   if (pending_.empty()) return;
   cudak::MemOps ops{};
   ops.count = int(pending_.size());
@@ -297,8 +251,7 @@ void CudaBackend::dropGraph() {
   graph_ = nullptr;
 }
 
-Buffer CudaBackend::create(int width, int height, int channels) {
-  if (width <= 0 || height <= 0 || channels <= 0) throw Error("cuda backend: invalid buffer size");
+Buffer CudaBackend::doCreate(int width, int height, int channels) {
   ok(cudaSetDevice(device_), "cudaSetDevice");
   flush();
   Slot s;
@@ -312,7 +265,7 @@ Buffer CudaBackend::create(int width, int height, int channels) {
   return s.buffer;
 }
 
-void CudaBackend::upload(const Buffer& dst, const float* host) {
+void CudaBackend::doUpload(const Buffer& dst, const float* host) {
   flush();
   Slot& s = slots_[size_t(slot(dst).buffer.id)];
   float* staging = pinnedFor(s);
@@ -323,7 +276,7 @@ void CudaBackend::upload(const Buffer& dst, const float* host) {
   ok(cudaEventRecord(s.staged, stream_), "cudaEventRecord");
 }
 
-void CudaBackend::download(const Buffer& src, float* host) {
+void CudaBackend::doDownload(const Buffer& src, float* host) {
   flush();
   Slot& s = slots_[size_t(slot(src).buffer.id)];
   float* staging = pinnedFor(s);
@@ -341,17 +294,16 @@ void CudaBackend::copyFromDevice(const Buffer& dst, const float* src, size_t src
      "copy from device");
 }
 
-void CudaBackend::fill(const Buffer& dst, float value) { enqueue({slot(dst).dev, nullptr, dst.count(), value}); }
+void CudaBackend::doFill(const Buffer& dst, float value) { enqueue({slot(dst).dev, nullptr, dst.count(), value}); }
 
-void CudaBackend::copy(const Buffer& dst, const Buffer& src) {
-  if (dst.count() != src.count()) throw Error("cuda backend: copy between buffers of different size");
+void CudaBackend::doCopy(const Buffer& dst, const Buffer& src) {
   float* d = slot(dst).dev;
   const float* s = slot(src).dev;
   if (d != s) enqueue({d, s, dst.count(), 0.f});
 }
 
-void CudaBackend::fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
-                         const FieldsParams& p) {
+void CudaBackend::doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                           const FieldsParams& p) {
   flush();
   cudak::FieldsDev d{};
   d.cam0 = camDev(p.cam0);
@@ -371,61 +323,56 @@ void CudaBackend::fields(const Buffer& mask, const Buffer& calibration, const Bu
   dropGraph();  // a new pose changes the frame's parameters (t' of triangulate)
 }
 
-void CudaBackend::triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
-                              const CameraParams& cam0, const double tPrime[3]) {
+void CudaBackend::doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                                const CameraParams& cam0, const double tPrime[3]) {
   flush();
   check(cudak::launchTriangulate(stream_, img(slot(radial).dev, radial), img(slot(points).dev, points),
                                  img(slot(w).dev, w), img(slot(mask).dev, mask), camDev(cam0), tPrime),
         "triangulate");
 }
 
-void CudaBackend::sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
+void CudaBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p, volume, p.planes);
+  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepWarp(stream_, img(slot(volume).dev, volume), img(slot(image).dev, image),
                                img(slot(mask).dev, mask), d),
         "sweepWarp");
 }
 
-void CudaBackend::sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
-                            const SweepParams& p) {
+void CudaBackend::doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                              const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p, costs, p.planes);
-  checkPlanes(volume, p, "sweepCost volume");
+  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepCost(stream_, img(slot(costs).dev, costs), img(slot(reference).dev, reference),
                                img(slot(volume).dev, volume), img(slot(mask).dev, mask), d),
         "sweepCost");
 }
 
-void CudaBackend::sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                                 const SweepParams& p) {
+void CudaBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                                   const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p, aggregated, p.planes);
-  checkPlanes(costs, p, "sweepAggregate costs");
-  if (p.planes > cudak::kMaxSweepPlanes)
-    throw Error("cuda backend: sweepAggregate takes at most " + std::to_string(cudak::kMaxSweepPlanes) + " planes");
+  const cudak::SweepDev d = sweepDev(p);
+  // The three directions walked beside +x need a buffer each (scratch, kept for the next frame).
   const cudak::Img spare{scratch(3 * aggregated.count(), 3), aggregated.width, aggregated.height, aggregated.channels};
-  check(cudak::launchSweepAggregate(stream_, img(slot(aggregated).dev, aggregated), spare,
-                                    img(slot(costs).dev, costs), img(slot(mask).dev, mask), d),
+  check(cudak::launchSweepAggregate(stream_, img(slot(aggregated).dev, aggregated), spare, img(slot(costs).dev, costs),
+                                    img(slot(mask).dev, mask), d),
         "sweepAggregate");
 }
 
-void CudaBackend::sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                              const SweepParams& p) {
+void CudaBackend::doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                                const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p, best, 2);
-  checkPlanes(aggregated, p, "sweepSelect aggregated");
-  checkPlanes(costs, p, "sweepSelect costs");
+  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepSelect(stream_, img(slot(best).dev, best), img(slot(aggregated).dev, aggregated),
                                  img(slot(costs).dev, costs), img(slot(mask).dev, mask), d),
         "sweepSelect");
 }
 
-void CudaBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
-                                  const Buffer& other, const Buffer& mask, const SweepParams& p,
-                                  const ConsistencyParams& c) {
+void CudaBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                                    const Buffer& other, const Buffer& mask, const SweepParams& p,
+                                    const ConsistencyParams& c) {
   flush();
-  const cudak::SweepDev d = sweepDev(p, best, 2);
+  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepInitialise(stream_, img(slot(u).dev, u), img(slot(w).dev, w),
                                      img(slot(confidence).dev, confidence), img(slot(best).dev, best),
                                      img(slot(other).dev, other), img(slot(mask).dev, mask), d,
@@ -433,35 +380,26 @@ void CudaBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer
         "sweepInitialise");
 }
 
-void CudaBackend::warp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
+void CudaBackend::doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
   flush();
   check(cudak::launchWarp(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(flow).dev, flow)),
         "warp");
 }
 
-void CudaBackend::downsample(const Buffer& dst, const Buffer& src, float scale) {
+void CudaBackend::doDownsample(const Buffer& dst, const Buffer& src, float scale) {
   flush();
   check(cudak::launchDownsample(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), scale), "downsample");
 }
 
-void CudaBackend::upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
+void CudaBackend::doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
   flush();
   check(cudak::launchUpsample(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), scale, valueScale),
         "upsample");
 }
 
-void CudaBackend::normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
-                            const NormaliseParams& p) {
+void CudaBackend::doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                              const NormaliseParams& p) {
   flush();
-  if (dst.channels != 1 || src.channels != 1 || mask.channels != 1 || moments.channels != 3)
-    throw Error("cuda backend: normalise expects 1-channel dst, src and mask and 3-channel moments");
-  for (const Buffer* b : {&dst, &moments, &mask})
-    if (b->width != src.width || b->height != src.height)
-      throw Error("cuda backend: normalise: buffers of different sizes");
-  if (p.radius < 0 || p.radius > kMaxNormaliseRadius)
-    throw Error("cuda backend: normalise radius " + std::to_string(p.radius) + " outside [0, " +
-                std::to_string(kMaxNormaliseRadius) + "]");
-  static_assert(cudak::kMaxNormaliseTaps == 2 * kMaxNormaliseRadius + 1, "normalise taps");
   cudak::NormaliseDev d{};
   d.radius = p.radius;
   std::copy(p.taps, p.taps + 2 * p.radius + 1, d.taps);
@@ -471,19 +409,15 @@ void CudaBackend::normalise(const Buffer& dst, const Buffer& moments, const Buff
         "normalise");
 }
 
-void CudaBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
-                                  const TensorParams& p) {
+void CudaBackend::doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                                    const TensorParams& p) {
   flush();
-  if (tensor.channels != 4 || steps.channels != 4 || image.channels != 1)
-    throw Error("cuda backend: structureTensor expects 4-channel tensor and steps and a 1-channel image");
   cudak::TensorDev d{};
   d.beta = p.beta, d.eta = p.eta, d.wMin = p.wMin, d.alpha0 = p.alpha0, d.alpha1 = p.alpha1;
   d.radius = -1;
   if (p.sigma > 0.f) {
     // The oracle's taps (cpu/structure_tensor.cpp gaussianTaps), computed the same way.
-    const int radius = int(std::ceil(3.f * p.sigma));
-    if (2 * radius + 1 > cudak::kMaxTaps)
-      throw Error("cuda backend: tensor smoothing sigma " + std::to_string(p.sigma) + " exceeds the supported 42 px");
+    const int radius = int(std::ceil(3.f * p.sigma));  // <= kMaxTensorRadius (Backend checked)
     float sum = 0.f;
     for (int i = -radius; i <= radius; ++i)
       sum += d.taps[i + radius] = std::exp(-float(i * i) / (2.f * p.sigma * p.sigma));
@@ -497,32 +431,48 @@ void CudaBackend::structureTensor(const Buffer& tensor, const Buffer& steps, con
         "structureTensor");
 }
 
-// The pipeline's warps end with accumulate() and begin with warpDerivatives() of the same
-// u, w and tangent: both work on a pixel's own values, so the pending accumulate pass
-// computes the derivatives too (one launch and one round trip of u and w less per warp).
-void CudaBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
-                                  const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
-                                  const Buffer& mask, const Buffer& confidence, float weightFloor) {
-  const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
-  const NextWarp next{
-      {img(slot(data.iu).dev, data.iu), img(slot(data.iz).dev, data.iz), img(slot(tangent).dev, tangent)},
-      {img(slot(i0).dev, i0), img(slot(i1).dev, i1), img(slot(trajectory).dev, trajectory), img(slot(mask).dev, mask),
-       weight, weightFloor}};
-  const PendingAccumulate* a = pendingAccumulate_ ? &*pendingAccumulate_ : nullptr;
-  if (a && pending_.empty() && a->u.id == u.id && a->w.id == w.id && a->u0.id == data.u0.id &&
-      a->tangent.id == tangent.id && a->mask.id == mask.id) {
-    runPendingAccumulate(&next);
-    return;
-  }
+namespace {
+
+// What warpDerivatives writes besides u0 and reads besides w and u.
+cudak::DataTermOut dataTermOut(const cudak::Img& iu, const cudak::Img& iz, const cudak::Img& tangent) {
+  return {iu, iz, tangent};
+}
+
+}  // namespace
+
+void CudaBackend::doWarpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
+                                    const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
+                                    const Buffer& mask, const Buffer& confidence, float weightFloor) {
   flush();
-  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), next.out, next.in, img(slot(w).dev, w),
+  const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
+  const cudak::DataTermOut out =
+      dataTermOut(img(slot(data.iu).dev, data.iu), img(slot(data.iz).dev, data.iz), img(slot(tangent).dev, tangent));
+  const cudak::DataTermIn in{img(slot(i0).dev, i0),
+                             img(slot(i1).dev, i1),
+                             img(slot(trajectory).dev, trajectory),
+                             img(slot(mask).dev, mask),
+                             weight,
+                             weightFloor};
+  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), out, in, img(slot(w).dev, w),
                                      img(slot(u).dev, u)),
         "warpDerivatives");
   lastLaunch_ = LastLaunch::DataTerm;
 }
 
-void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
-                             const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
+void CudaBackend::doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                               const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
+  iterate(pd, data, tensor, steps, mask, params, false);
+}
+
+void CudaBackend::doWarpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                                   const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
+  iterate(pd, data, tensor, steps, mask, params, true);
+}
+
+void CudaBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                          const Buffer& steps, const Buffer& mask, const PrimalDualParams& params,
+                          bool barsFromPrimals) {
+  flush();
   const int w = mask.width, h = mask.height;
   const size_t n = size_t(w) * h;
   PrimalDualScratch& b = pdScratch_[pd.p.id];
@@ -534,12 +484,6 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
     ok(cudaMalloc(&b.u, n * sizeof(float)), "cudaMalloc (primal-dual)");
     ok(cudaMalloc(&b.v, 2 * n * sizeof(float)), "cudaMalloc (primal-dual)");
   }
-  // The pipeline's copy(uBar, u), copy(vBar, v) before the iterations: when both are the
-  // queued ops, the first iteration reads u, v in place of uBar, vBar instead.
-  float *const uDev = slot(pd.u).dev, *const vDev = slot(pd.v).dev;
-  float *const uBarDev = slot(pd.uBar).dev, *const vBarDev = slot(pd.vBar).dev;
-  const bool barsFromPrimals = takePendingCopy(uBarDev, uDev) && takePendingCopy(vBarDev, vDev);
-  flush();
   cudak::PrimalDualDev d{};
   d.u[0] = slot(pd.u).dev, d.u[1] = b.u;
   d.v[0] = slot(pd.v).dev, d.v[1] = b.v;
@@ -547,8 +491,8 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
   d.vBar[0] = slot(pd.vBar).dev, d.vBar[1] = b.vBar;
   d.p[0] = slot(pd.p).dev, d.p[1] = b.p;
   d.q[0] = slot(pd.q).dev, d.q[1] = b.q;
-  d.uBarFirst = barsFromPrimals ? uDev : uBarDev;
-  d.vBarFirst = barsFromPrimals ? vDev : vBarDev;
+  d.uBarFirst = barsFromPrimals ? d.u[0] : d.uBar[0];
+  d.vBarFirst = barsFromPrimals ? d.v[0] : d.vBar[0];
   d.u0 = slot(data.u0).dev, d.iu = slot(data.iu).dev, d.iz = slot(data.iz).dev;
   d.tensor = slot(tensor).dev, d.steps = slot(steps).dev, d.mask = slot(mask).dev;
   d.width = w, d.height = h;
@@ -558,8 +502,8 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
     const float sigmaQ = s.sigmaScale * 0.5f / params.alpha0;  // as cpu/primal_dual.cpp
     schedule.push_back({s.tauScale, s.sigmaScale, s.theta, sigmaQ * params.alpha0});
   }
-  if (schedule.empty()) {
-    if (barsFromPrimals) copy(pd.uBar, pd.u), copy(pd.vBar, pd.v);
+  if (schedule.empty()) {  // no iteration to read u, v in their place: the copies themselves
+    if (barsFromPrimals) doCopy(pd.uBar, pd.u), doCopy(pd.vBar, pd.v);
     return;
   }
   int endSet = 0;
@@ -580,33 +524,56 @@ void CudaBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers&
   }
 }
 
-// Deferred: the pipeline follows it with copy(u, dst) and accumulate(u), which then run
-// as one launch; anything else runs it first (flush).
-void CudaBackend::median(const Buffer& dst, const Buffer& src, const Buffer& mask) {
+void CudaBackend::doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) {
   flush();
-  slot(dst), slot(src), slot(mask);  // checked now, like every other call
-  pendingMedian_ = PendingMedian{dst, src, mask};
+  check(cudak::launchMedian(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(mask).dev, mask)),
+        "median");
 }
 
-void CudaBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
-                             const Buffer& mask, float duMax) {
-  slot(w), slot(u0), slot(tangent), slot(mask);  // checked now, like every other call
-  // median(scratch, u) -> copy(u, scratch) -> accumulate(u): one pass that writes the
-  // median to scratch and the accumulated u to a spare buffer, which then becomes u's
-  // memory (u is read around each pixel, so it cannot be written in place).
-  if (pendingMedian_ && pendingMedian_->src.id == u.id && pendingMedian_->mask.id == mask.id && pending_.size() == 1 &&
-      pending_[0].dst == slot(u).dev && pending_[0].src == slot(pendingMedian_->dst).dev) {
-    const Buffer median = pendingMedian_->dst;
-    pendingMedian_.reset();
-    pending_.clear();
+void CudaBackend::doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
+                               const Buffer& mask, float duMax) {
+  flush();
+  check(cudak::launchAccumulate(stream_, img(slot(u).dev, u), img(slot(w).dev, w), img(slot(u0).dev, u0),
+                                img(slot(tangent).dev, tangent), img(slot(mask).dev, mask), duMax),
+        "accumulate");
+  lastLaunch_ = LastLaunch::DataTerm;
+}
+
+// One pass: each pixel's median, accumulate and (with nextWarp) the next warp's
+// derivatives, which all work on the pixel's own u and w. With the median, the pass writes
+// the median to medianScratch and the accumulated u to a spare buffer, which then becomes
+// u's memory (u is read around each pixel, so it cannot be written in place); without it,
+// u is accumulated in place.
+void CudaBackend::doWarpTail(const WarpBuffers& warp, const Buffer& medianScratch, float duMax, bool nextWarp) {
+  flush();
+  const Buffer& u = warp.u;
+  const cudak::Img w = img(slot(warp.w).dev, warp.w), u0 = img(slot(warp.data.u0).dev, warp.data.u0);
+  const cudak::Img tangent = img(slot(warp.tangent).dev, warp.tangent), mask = img(slot(warp.mask).dev, warp.mask);
+  const cudak::Img weight =
+      warp.confidence.id >= 0 ? img(slot(warp.confidence).dev, warp.confidence) : cudak::Img{nullptr, 0, 0, 0};
+  const cudak::DataTermOut nextOut =
+      dataTermOut(img(slot(warp.data.iu).dev, warp.data.iu), img(slot(warp.data.iz).dev, warp.data.iz), tangent);
+  const cudak::DataTermIn nextIn{img(slot(warp.i0).dev, warp.i0),
+                                 img(slot(warp.i1).dev, warp.i1),
+                                 img(slot(warp.trajectory).dev, warp.trajectory),
+                                 mask,
+                                 weight,
+                                 warp.weightFloor};
+  const cudak::DataTermOut* out = nextWarp ? &nextOut : nullptr;
+  const cudak::DataTermIn* in = nextWarp ? &nextIn : nullptr;
+  if (medianScratch.id >= 0) {
     float*& spare = scratchSlot(u.count(), 2);
     float* const uIn = slot(u).dev;
     std::swap(slots_[size_t(u.id)].dev, spare);
-    pendingAccumulate_ = PendingAccumulate{u, w, u0, tangent, mask, uIn, slot(u).dev, median, duMax};
-    return;
+    check(cudak::launchMedianAccumulate(stream_, img(slot(u).dev, u), img(slot(medianScratch).dev, medianScratch),
+                                        img(uIn, u), w, u0, tangent, mask, duMax, out, in,
+                                        lastLaunch_ == LastLaunch::PrimalDual),
+          nextWarp ? "median + accumulate + derivatives" : "median + accumulate");
+  } else {
+    check(cudak::launchAccumulate(stream_, img(slot(u).dev, u), w, u0, tangent, mask, duMax, out, in),
+          nextWarp ? "accumulate + derivatives" : "accumulate");
   }
-  flush();
-  pendingAccumulate_ = PendingAccumulate{u, w, u0, tangent, mask, slot(u).dev, slot(u).dev, Buffer{}, duMax};
+  lastLaunch_ = LastLaunch::DataTerm;
 }
 
 void CudaBackend::synchronize() {

@@ -5,7 +5,6 @@
 #pragma once
 #include <map>
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,41 +36,6 @@ class CudaBackend final : public Backend {
   std::string device() const override { return description_; }
   unsigned long long memoryBytes() const override { return memoryBytes_; }
 
-  Buffer create(int width, int height, int channels) override;
-  void upload(const Buffer& dst, const float* host) override;
-  void download(const Buffer& src, float* host) override;
-  void fill(const Buffer& dst, float value) override;
-  void copy(const Buffer& dst, const Buffer& src) override;
-
-  void fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
-              const FieldsParams& params) override;
-  void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
-  void downsample(const Buffer& dst, const Buffer& src, float scale) override;
-  void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
-  void normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
-                 const NormaliseParams& params) override;
-  void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
-                       const TensorParams& params) override;
-  void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
-                       const Buffer& confidence, float weightFloor) override;
-  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
-                  const Buffer& mask, const PrimalDualParams& params) override;
-  void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
-  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
-                  float duMax) override;
-  void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
-  void sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
-                 const SweepParams& p) override;
-  void sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask, const SweepParams& p) override;
-  void sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                   const SweepParams& p) override;
-  void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
-                       const Buffer& other, const Buffer& mask, const SweepParams& p,
-                       const ConsistencyParams& c) override;
-  void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
-                   const CameraParams& cam0, const double tPrime[3]) override;
-
   void synchronize() override;
 
   // The first frame runs directly (it allocates scratch and loads the kernels); the
@@ -92,13 +56,54 @@ class CudaBackend final : public Backend {
   // ends with this buffer back at the pointer returned here.
   float* devicePointer(const Buffer& b);
   CUstream_st* stream() const { return stream_; }
-  int deviceIndex() const { return device_; }
   // dst = the packed float image at src (device memory, rows srcPitchBytes apart), async.
   void copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes);
-  // Whether primalDual() may run five iterations per launch on levels whose tiles then fit
+  // Whether primal-dual iterations may run five per launch on levels whose tiles then fit
   // on the device at once (default on). Off, every level launches once per two iterations
   // (the path of large levels, e.g. to test it on small ones).
   void setFiveIterationLaunches(bool on) { fiveIterationLaunches_ = on; }
+
+ protected:
+  Buffer doCreate(int width, int height, int channels) override;
+  void doUpload(const Buffer& dst, const float* host) override;
+  void doDownload(const Buffer& src, float* host) override;
+  void doFill(const Buffer& dst, float value) override;
+  void doCopy(const Buffer& dst, const Buffer& src) override;
+
+  void doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                const FieldsParams& params) override;
+  void doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
+  void doDownsample(const Buffer& dst, const Buffer& src, float scale) override;
+  void doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                   const NormaliseParams& params) override;
+  void doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                         const TensorParams& params) override;
+  void doWarpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                         const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                         const Buffer& confidence, float weightFloor) override;
+  void doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+                    const Buffer& mask, const PrimalDualParams& params) override;
+  void doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
+  void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                    float duMax) override;
+  // Fused: the first iteration reads u, v in place of the copies uBar = u, vBar = v.
+  void doWarpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                        const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) override;
+  // Fused: median + accumulate (+ the next warp's derivatives) in one pass.
+  void doWarpTail(const WarpBuffers& warp, const Buffer& medianScratch, float duMax, bool nextWarp) override;
+  void doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
+  void doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                   const SweepParams& p) override;
+  void doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                        const SweepParams& p) override;
+  void doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                     const SweepParams& p) override;
+  void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                         const Buffer& other, const Buffer& mask, const SweepParams& p,
+                         const ConsistencyParams& c) override;
+  void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                     const CameraParams& cam0, const double tPrime[3]) override;
 
  private:
   struct Slot {
@@ -119,31 +124,14 @@ class CudaBackend final : public Backend {
     size_t count;
     float value;
   };
-  // median() is deferred until the next call (see accumulate()).
-  struct PendingMedian {
-    Buffer dst, src, mask;
-  };
-  // So is accumulate() (see warpDerivatives()). u's memory is that of the call (the
-  // fused pass reads one block and writes another, which becomes u's); the other buffers'
-  // memory does not move before the pending pass runs.
-  struct PendingAccumulate {
-    Buffer u, w, u0, tangent, mask;
-    float* uIn;     // u's memory before the call
-    float* uOut;    // and after it
-    Buffer median;  // id -1: no median pass (launchAccumulate, u in place)
-    float duMax;
-  };
   void enqueue(const PendingOp& op);
-  void flush();  // runs the deferred median or accumulate, then the queued ops
-  void runPendingMedian();
-  // With nextWarp: the next warp's derivatives in the same pass (warpDerivatives()).
-  struct NextWarp;
-  void runPendingAccumulate(const NextWarp* nextWarp = nullptr);
+  void flush();  // runs the queued ops
+  // primal-dual iterations; barsFromPrimals: the first reads u, v in place of uBar, vBar.
+  void iterate(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+               const Buffer& mask, const PrimalDualParams& params, bool barsFromPrimals);
   // Moves the buffers handed out by devicePointer() back to that memory (endFrame()).
   void returnHandedOutBuffers();
   float** scratchHolding(const float* memory);
-  // Removes the queued copy dst <- src; false if there is none.
-  bool takePendingCopy(const float* dst, const float* src);
   const Slot& slot(const Buffer& b) const;
   float* pinnedFor(Slot& s);
   void dropGraph();
@@ -162,8 +150,6 @@ class CudaBackend final : public Backend {
   std::map<std::pair<int, size_t>, float*> scratch_;  // (role, floats) -> device memory
   std::map<int, PrimalDualScratch> pdScratch_;        // by the id of pd.p
   std::vector<PendingOp> pending_;
-  std::optional<PendingMedian> pendingMedian_;
-  std::optional<PendingAccumulate> pendingAccumulate_;
   int residentTiledBlocks_ = 0;  // of the tiled primal-dual kernel, on the device at once
   // The kind of the last kernel launched, for kernels that load what it cannot have written
   // before they wait for it: DataTerm (warpDerivatives, accumulate and their fused forms)

@@ -28,12 +28,9 @@ struct PcNormalise {
   int32_t w, h;
 };
 
-// The block for p (taps past 2 radius zero, so equal parameters give equal blocks);
-// throws cs::Error for a radius the shaders cannot take.
+// The block for p (taps past 2 radius zero, so equal parameters give equal blocks); p.radius
+// is in [0, kMaxNormaliseRadius] (Backend::normalise checked it).
 inline NormaliseBlock normaliseBlock(const NormaliseParams& p) {
-  if (p.radius < 0 || p.radius > kMaxNormaliseRadius)
-    throw Error("vulkan backend: normalise radius " + std::to_string(p.radius) + " outside [0, " +
-                std::to_string(kMaxNormaliseRadius) + "]");
   NormaliseBlock b{};
   b.radius = p.radius;
   b.epsilon = p.epsilon;

@@ -660,41 +660,6 @@ class VulkanBackend final : public Backend {
   std::string device() const override { return description_; }
   unsigned long long memoryBytes() const override;
 
-  Buffer create(int width, int height, int channels) override;
-  void upload(const Buffer& dst, const float* host) override;
-  void download(const Buffer& src, float* host) override;
-  void fill(const Buffer& dst, float value) override;
-  void copy(const Buffer& dst, const Buffer& src) override;
-
-  void fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
-              const FieldsParams& params) override;
-  void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
-  void downsample(const Buffer& dst, const Buffer& src, float scale) override;
-  void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
-  void normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
-                 const NormaliseParams& params) override;
-  void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
-                       const TensorParams& params) override;
-  void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
-                       const Buffer& confidence, float weightFloor) override;
-  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
-                  const Buffer& mask, const PrimalDualParams& params) override;
-  void median(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
-  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
-                  float duMax) override;
-  void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
-  void sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
-                 const SweepParams& p) override;
-  void sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask, const SweepParams& p) override;
-  void sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                   const SweepParams& p) override;
-  void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
-                       const Buffer& other, const Buffer& mask, const SweepParams& p,
-                       const ConsistencyParams& c) override;
-  void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
-                   const CameraParams& cam0, const double tPrime[3]) override;
-
   void synchronize() override;
   void beginFrame() override;
   void endFrame() override;
@@ -702,6 +667,43 @@ class VulkanBackend final : public Backend {
   void replayFrame() override;
   void beginStage(const std::string& name) override;
   std::vector<StageTime> takeStageTimes() override;
+
+ protected:
+  Buffer doCreate(int width, int height, int channels) override;
+  void doUpload(const Buffer& dst, const float* host) override;
+  void doDownload(const Buffer& src, float* host) override;
+  void doFill(const Buffer& dst, float value) override;
+  void doCopy(const Buffer& dst, const Buffer& src) override;
+
+  void doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                const FieldsParams& params) override;
+  void doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
+  void doDownsample(const Buffer& dst, const Buffer& src, float scale) override;
+  void doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                   const NormaliseParams& params) override;
+  void doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                         const TensorParams& params) override;
+  void doWarpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                         const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                         const Buffer& confidence, float weightFloor) override;
+  void doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+                    const Buffer& mask, const PrimalDualParams& params) override;
+  void doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
+  void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                    float duMax) override;
+  void doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
+  void doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                   const SweepParams& p) override;
+  void doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                        const SweepParams& p) override;
+  void doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                     const SweepParams& p) override;
+  void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                         const Buffer& other, const Buffer& mask, const SweepParams& p,
+                         const ConsistencyParams& c) override;
+  void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                     const CameraParams& cam0, const double tPrime[3]) override;
 
  private:
   struct Arena {
@@ -952,9 +954,8 @@ void VulkanBackend::destroyBuffer(Arena& a) {
   a = Arena{};
 }
 
-Buffer VulkanBackend::create(int width, int height, int channels) {
+Buffer VulkanBackend::doCreate(int width, int height, int channels) {
   ensureUsable();
-  if (width <= 0 || height <= 0 || channels <= 0) throw Error("vulkan backend: invalid buffer size");
   Buffer b{int(allocs_.size()), width, height, channels};
   // Buffers sit back to back (16-byte aligned) in large arenas, so a kernel writing past
   // its output lands in a neighbour: the guard tests see it.
@@ -975,14 +976,8 @@ Buffer VulkanBackend::create(int width, int height, int channels) {
   return b;
 }
 
-const VulkanBackend::Alloc& VulkanBackend::alloc(const Buffer& b) const {
-  if (b.id < 0 || size_t(b.id) >= allocs_.size()) throw Error("vulkan backend: unknown buffer");
-  const Alloc& a = allocs_[size_t(b.id)];
-  if (b.width <= 0 || b.height <= 0 || b.channels <= 0 || b.count() * sizeof(float) > a.bytes)
-    throw Error("vulkan backend: buffer " + std::to_string(b.id) +
-                " used with a shape larger than it was created with");
-  return a;
-}
+// Backend has checked the buffer: created here, used no larger than created.
+const VulkanBackend::Alloc& VulkanBackend::alloc(const Buffer& b) const { return allocs_[size_t(b.id)]; }
 
 Addr VulkanBackend::addr(const Buffer& b) const {
   const Alloc& a = alloc(b);
@@ -1199,7 +1194,7 @@ std::vector<StageTime> VulkanBackend::takeStageTimes() {
 
 // ---- transfers ----
 
-void VulkanBackend::upload(const Buffer& dst, const float* host) {
+void VulkanBackend::doUpload(const Buffer& dst, const float* host) {
   const Alloc& a = alloc(dst);
   const VkDeviceSize bytes = dst.count() * sizeof(float);
   flush();  // the staging buffer is free and earlier work has finished
@@ -1215,7 +1210,7 @@ void VulkanBackend::upload(const Buffer& dst, const float* host) {
   flush();
 }
 
-void VulkanBackend::download(const Buffer& src, float* host) {
+void VulkanBackend::doDownload(const Buffer& src, float* host) {
   const Alloc& a = alloc(src);
   const VkDeviceSize bytes = src.count() * sizeof(float);
   flush();
@@ -1236,7 +1231,7 @@ void VulkanBackend::download(const Buffer& src, float* host) {
   std::memcpy(host, staging_.mapped, bytes);
 }
 
-void VulkanBackend::fill(const Buffer& dst, float value) {
+void VulkanBackend::doFill(const Buffer& dst, float value) {
   const Alloc& a = alloc(dst);
   uint32_t bits;
   std::memcpy(&bits, &value, 4);
@@ -1245,8 +1240,7 @@ void VulkanBackend::fill(const Buffer& dst, float value) {
   inst_.fn.vkCmdFillBuffer(cb, arenas_[size_t(a.arena)].buffer, a.offset, dst.count() * sizeof(float), bits);
 }
 
-void VulkanBackend::copy(const Buffer& dst, const Buffer& src) {
-  if (dst.count() != src.count()) throw Error("vulkan backend: copy between buffers of different size");
+void VulkanBackend::doCopy(const Buffer& dst, const Buffer& src) {
   const Alloc& d = alloc(dst);
   const Alloc& s = alloc(src);
   VkCommandBuffer cb = recorder();
@@ -1270,15 +1264,10 @@ Buffer VulkanBackend::scratch(int slot, int w, int h) {
 
 // ---- kernels ----
 
-void requireSameSize(const Buffer& a, const Buffer& b, const char* kernel) {
-  if (a.width != b.width || a.height != b.height)
-    throw Error(std::string("vulkan backend: ") + kernel + ": buffers of different sizes");
-}
+// Backend has checked every kernel's arguments against its contract (backend.hpp).
 
-void VulkanBackend::fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
-                           const FieldsParams& p) {
-  requireSameSize(mask, calibration, "fields");
-  requireSameSize(mask, trajectory, "fields");
+void VulkanBackend::doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                             const FieldsParams& p) {
   // The same quantities core/src/fields.cpp derives per pixel, derived once here.
   double tPrime[3];
   for (int i = 0; i < 3; ++i) tPrime[i] = p.R[0 * 3 + i] * p.t[0] + p.R[1 * 3 + i] * p.t[1] + p.R[2 * 3 + i] * p.t[2];
@@ -1312,11 +1301,8 @@ void VulkanBackend::fields(const Buffer& mask, const Buffer& calibration, const 
   dispatch(float64_ ? kFields64 : kFields32, pc, mask.width, mask.height);
 }
 
-void VulkanBackend::triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
-                                const CameraParams& cam0, const double tPrime[3]) {
-  requireSameSize(radial, points, "triangulate");
-  requireSameSize(radial, w, "triangulate");
-  requireSameSize(radial, mask, "triangulate");
+void VulkanBackend::doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                                  const CameraParams& cam0, const double tPrime[3]) {
   Addr block;
   if (float64_) {
     VkTriangulateParams<double> prm{};
@@ -1333,15 +1319,12 @@ void VulkanBackend::triangulate(const Buffer& radial, const Buffer& points, cons
   dispatch(float64_ ? kTriangulate64 : kTriangulate32, pc, radial.width, radial.height);
 }
 
-void VulkanBackend::warp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
-  requireSameSize(dst, flow, "warp");
-  if (dst.channels != src.channels || flow.channels != 2) throw Error("vulkan backend: warp: channel mismatch");
+void VulkanBackend::doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
   PcWarp pc{addr(dst), addr(src), addr(flow), dst.width, dst.height, dst.channels, src.width, src.height};
   dispatch(kWarp, pc, dst.width, dst.height);
 }
 
-void VulkanBackend::downsample(const Buffer& dst, const Buffer& src, float scale) {
-  if (dst.channels != src.channels) throw Error("vulkan backend: downsample: channel mismatch");
+void VulkanBackend::doDownsample(const Buffer& dst, const Buffer& src, float scale) {
   const float sigma = 0.5f * scale;  // resample.cpp decimationSigma
   const int radius = int(std::ceil(2.f * sigma));
   PcDownsample pc{addr(dst), addr(src),  dst.width, dst.height, dst.channels,
@@ -1349,18 +1332,14 @@ void VulkanBackend::downsample(const Buffer& dst, const Buffer& src, float scale
   dispatch(kDownsample, pc, dst.width, dst.height);
 }
 
-void VulkanBackend::upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
-  if (dst.channels != src.channels) throw Error("vulkan backend: upsample: channel mismatch");
+void VulkanBackend::doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
   PcUpsample pc{addr(dst), addr(src), dst.width, dst.height, dst.channels, src.width, src.height, scale, valueScale};
   dispatch(kUpsample, pc, dst.width, dst.height);
 }
 
 // Two passes (normalise_moments.comp, normalise.comp); the taps by device address.
-void VulkanBackend::normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
-                              const NormaliseParams& p) {
-  for (const Buffer* b : {&dst, &moments, &mask}) requireSameSize(*b, src, "normalise");
-  if (dst.channels != 1 || src.channels != 1 || mask.channels != 1 || moments.channels != 3)
-    throw Error("vulkan backend: normalise: channel mismatch");
+void VulkanBackend::doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                                const NormaliseParams& p) {
   const vk::NormaliseBlock block = vk::normaliseBlock(p);
   const Addr prm = paramBlock(&block, sizeof(block));
   const int w = src.width, h = src.height;
@@ -1368,11 +1347,8 @@ void VulkanBackend::normalise(const Buffer& dst, const Buffer& moments, const Bu
   dispatch(kNormalise, vk::PcNormalise{addr(dst), addr(moments), addr(src), addr(mask), prm, w, h}, w, h);
 }
 
-void VulkanBackend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
-                                    const TensorParams& p) {
-  requireSameSize(tensor, image, "structureTensor");
-  requireSameSize(steps, image, "structureTensor");
-  requireSameSize(mask, image, "structureTensor");
+void VulkanBackend::doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image,
+                                      const Buffer& mask, const TensorParams& p) {
   const int w = image.width, h = image.height;
   Addr smooth = addr(image);
   if (p.sigma > 0.f) {
@@ -1386,13 +1362,10 @@ void VulkanBackend::structureTensor(const Buffer& tensor, const Buffer& steps, c
   dispatch(kTensorSteps, PcSteps{addr(steps), addr(tensor), addr(mask), w, h, p.alpha0, p.alpha1}, w, h);
 }
 
-void VulkanBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
-                                    const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
-                                    const Buffer& mask, const Buffer& confidence, float weightFloor) {
-  for (const Buffer* b : {&data.u0, &data.iu, &data.iz, &tangent, &i0, &i1, &trajectory, &w, &u})
-    requireSameSize(*b, mask, "warpDerivatives");
+void VulkanBackend::doWarpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
+                                      const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
+                                      const Buffer& mask, const Buffer& confidence, float weightFloor) {
   const bool weighted = confidence.id >= 0;
-  if (weighted) requireSameSize(confidence, mask, "warpDerivatives");
   PcWarpDerivatives pc{addr(data.u0),
                        addr(data.iu),
                        addr(data.iz),
@@ -1411,11 +1384,8 @@ void VulkanBackend::warpDerivatives(const DataTermBuffers& data, const Buffer& t
   dispatch(kWarpDerivatives, pc, mask.width, mask.height);
 }
 
-void VulkanBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
-                               const Buffer& steps, const Buffer& mask, const PrimalDualParams& prm) {
-  for (const Buffer* b :
-       {&pd.u, &pd.uBar, &pd.v, &pd.vBar, &pd.p, &pd.q, &data.u0, &data.iu, &data.iz, &tensor, &steps})
-    requireSameSize(*b, mask, "primalDual");
+void VulkanBackend::doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                                 const Buffer& steps, const Buffer& mask, const PrimalDualParams& prm) {
   const int w = mask.width, h = mask.height;
   for (const PrimalDualStep& step : prm.schedule) {
     PcDual dual{addr(pd.uBar),   addr(pd.vBar), addr(pd.p), addr(pd.q), addr(tensor), addr(steps), addr(mask), w, h,
@@ -1428,31 +1398,20 @@ void VulkanBackend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffer
   }
 }
 
-void VulkanBackend::median(const Buffer& dst, const Buffer& src, const Buffer& mask) {
-  requireSameSize(dst, mask, "median");
-  requireSameSize(src, mask, "median");
+void VulkanBackend::doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) {
   dispatch(kMedian, PcMedian{addr(dst), addr(src), addr(mask), mask.width, mask.height}, mask.width, mask.height);
 }
 
-void VulkanBackend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
-                               const Buffer& mask, float duMax) {
-  for (const Buffer* b : {&u, &w, &u0, &tangent}) requireSameSize(*b, mask, "accumulate");
+void VulkanBackend::doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
+                                 const Buffer& mask, float duMax) {
   PcAccumulate pc{addr(u), addr(w), addr(u0), addr(tangent), addr(mask), mask.width, mask.height, duMax};
   dispatch(kAccumulate, pc, mask.width, mask.height);
 }
 
 // ---- plane sweep ----
 
-void requireChannels(const Buffer& b, int channels, const char* kernel, const char* what) {
-  if (b.channels != channels)
-    throw Error(std::string("vulkan backend: ") + kernel + ": " + what + " has " + std::to_string(b.channels) +
-                " channels, expected " + std::to_string(channels));
-}
-
-void requireSweepShape(const SweepParams& p, const char* kernel) {
-  if (p.planes < 2 || p.radius < 0)
-    throw Error(std::string("vulkan backend: ") + kernel + ": needs planes >= 2 and radius >= 0");
-}
+// Mirrors kMaxPlanes in sweep_aggregate.comp (the path costs of two steps in shared memory).
+static_assert(kMaxSweepPlanes <= 1024, "sweep_aggregate.comp holds at most 1024 planes");
 
 // The camera, translation and nearest sphere, in the precision of the geometry shaders.
 Addr VulkanBackend::sweepParamBlock(const SweepParams& p) {
@@ -1466,25 +1425,13 @@ Addr VulkanBackend::sweepParamBlock(const SweepParams& p) {
   return float64_ ? store(VkSweepParams<double>{}) : store(VkSweepParams<float>{});
 }
 
-void VulkanBackend::sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
-  requireSweepShape(p, "sweepWarp");
-  requireSameSize(volume, image, "sweepWarp");
-  requireSameSize(volume, mask, "sweepWarp");
-  requireChannels(volume, p.planes, "sweepWarp", "the volume");
-  requireChannels(image, 1, "sweepWarp", "the image");
-  requireChannels(mask, 1, "sweepWarp", "the mask");
+void VulkanBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
   PcSweepWarp pc{addr(volume), addr(image), addr(mask), sweepParamBlock(p), volume.width, volume.height, p.planes};
   dispatch(float64_ ? kSweepWarp64 : kSweepWarp32, pc, volume.width, volume.height);
 }
 
-void VulkanBackend::sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
-                              const SweepParams& p) {
-  requireSweepShape(p, "sweepCost");
-  for (const Buffer* b : {&reference, &volume, &mask}) requireSameSize(*b, costs, "sweepCost");
-  requireChannels(costs, p.planes, "sweepCost", "the costs");
-  requireChannels(reference, 1, "sweepCost", "the reference image");
-  requireChannels(volume, p.planes, "sweepCost", "the volume");
-  requireChannels(mask, 1, "sweepCost", "the mask");
+void VulkanBackend::doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                                const SweepParams& p) {
   // One invocation per (pixel, plane), a row's (x * planes + k) in runs of kGroup^2: the
   // interleaved volume is read and the costs written in consecutive floats.
   const uint64_t rowItems = uint64_t(costs.width) * uint64_t(p.planes);
@@ -1494,17 +1441,8 @@ void VulkanBackend::sweepCost(const Buffer& costs, const Buffer& reference, cons
   dispatchGroups(kSweepCost, pc, uint32_t((rowItems + groupItems - 1) / groupItems), uint32_t(costs.height));
 }
 
-void VulkanBackend::sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                                   const SweepParams& p) {
-  // Mirrors kMaxPlanes in sweep_aggregate.comp (the path costs of two steps in shared memory).
-  constexpr int kMaxAggregatePlanes = 1024;
-  requireSweepShape(p, "sweepAggregate");
-  if (p.planes > kMaxAggregatePlanes)
-    throw Error("vulkan backend: sweepAggregate: at most " + std::to_string(kMaxAggregatePlanes) + " planes");
-  for (const Buffer* b : {&costs, &mask}) requireSameSize(*b, aggregated, "sweepAggregate");
-  requireChannels(aggregated, p.planes, "sweepAggregate", "the aggregated costs");
-  requireChannels(costs, p.planes, "sweepAggregate", "the costs");
-  requireChannels(mask, 1, "sweepAggregate", "the mask");
+void VulkanBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                                     const SweepParams& p) {
   // +x, -x, +y, -y in the oracle's order, one work group per scanline (rows for x, columns
   // for y). The first direction writes every pixel, the others add: no fill needed.
   // dispatchGroups puts a full barrier before each dispatch.
@@ -1515,14 +1453,8 @@ void VulkanBackend::sweepAggregate(const Buffer& aggregated, const Buffer& costs
   }
 }
 
-void VulkanBackend::sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                                const SweepParams& p) {
-  requireSweepShape(p, "sweepSelect");
-  for (const Buffer* b : {&aggregated, &costs, &mask}) requireSameSize(*b, best, "sweepSelect");
-  requireChannels(best, 2, "sweepSelect", "best");
-  requireChannels(aggregated, p.planes, "sweepSelect", "the aggregated costs");
-  requireChannels(costs, p.planes, "sweepSelect", "the costs");
-  requireChannels(mask, 1, "sweepSelect", "the mask");
+void VulkanBackend::doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                                  const SweepParams& p) {
   // The plane index becomes an inverse depth in the geometry shaders' precision (double as
   // the oracle where the device has shaderFloat64).
   PcSweepSelect pc{addr(best),         addr(aggregated), addr(costs), addr(mask),
@@ -1530,17 +1462,9 @@ void VulkanBackend::sweepSelect(const Buffer& best, const Buffer& aggregated, co
   dispatch(float64_ ? kSweepSelect64 : kSweepSelect32, pc, best.width, best.height);
 }
 
-void VulkanBackend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
-                                    const Buffer& other, const Buffer& mask, const SweepParams& p,
-                                    const ConsistencyParams& c) {
-  requireSweepShape(p, "sweepInitialise");
-  for (const Buffer* b : {&w, &confidence, &best, &other, &mask}) requireSameSize(*b, u, "sweepInitialise");
-  requireChannels(u, 1, "sweepInitialise", "u");
-  requireChannels(w, 2, "sweepInitialise", "w");
-  requireChannels(confidence, 1, "sweepInitialise", "the confidence");
-  requireChannels(best, 2, "sweepInitialise", "best");
-  requireChannels(other, 2, "sweepInitialise", "other");
-  requireChannels(mask, 1, "sweepInitialise", "the mask");
+void VulkanBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                                      const Buffer& other, const Buffer& mask, const SweepParams& p,
+                                      const ConsistencyParams& c) {
   // Two dispatches of one shader (dispatch puts a full barrier before each): pass 0 writes
   // the confidence and the consistent pixels' warp, pass 1 reads that confidence to fill
   // occluded pixels from the surface ahead of them.

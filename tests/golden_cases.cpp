@@ -219,6 +219,75 @@ std::vector<Output> accumulateCase(Backend& b) {
   return {s.get("accumulate_u", ub), s.get("accumulate_w", wb)};
 }
 
+// --- coarse kernels (fusion points): the same results as their fine sequences ---
+
+// primalDualCase's inputs with uBar, vBar of their own, which warpIterations replaces by u, v.
+std::vector<Output> warpIterationsCase(Backend& b) {
+  Session s{b};
+  Host image = texture(kW, kH, 10), mask = discMask(kW, kH), tensor(kW, kH, 4), steps(kW, kH, 4);
+  cpu::structureTensor(tensor.view(), steps.view(), image.view(), mask.view(), kTensor);
+  Host u = noise(kW, kH, 1, 11, 1.f), v = noise(kW, kH, 2, 12, 0.1f), p = noise(kW, kH, 2, 13, 0.5f),
+       q = noise(kW, kH, 4, 14, 0.2f), u0 = noise(kW, kH, 1, 15, 1.f), iu = noise(kW, kH, 1, 16, 0.1f),
+       iz = noise(kW, kH, 1, 17, 0.05f), uBar = noise(kW, kH, 1, 60, 1.f), vBar = noise(kW, kH, 2, 61, 0.1f);
+  PrimalDualBuffers pd{s.put(u), s.put(uBar), s.put(v), s.put(vBar), s.put(p), s.put(q)};
+  DataTermBuffers data{s.put(u0), s.put(iu), s.put(iz)};
+  PrimalDualParams prm{20.f, 17.f, 1.2f, {}};
+  float scale = 1.f;
+  for (int k = 0; k < 7; ++k) {
+    float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
+    prm.schedule.push_back({scale, 1.f / scale, theta});
+    scale *= theta;
+  }
+  b.warpIterations(pd, data, s.put(tensor), s.put(steps), s.put(mask), prm);
+  return {s.get("warpiterations_u", pd.u), s.get("warpiterations_ubar", pd.uBar),
+          s.get("warpiterations_v", pd.v), s.get("warpiterations_vbar", pd.vBar),
+          s.get("warpiterations_p", pd.p), s.get("warpiterations_q", pd.q)};
+}
+
+// A warp's end (median, accumulate) and, with nextWarp, the next warp's data term, on the
+// inputs of the accumulate and warpDerivatives cases; the confidence (below, at and above
+// the floor) only with `weighted`.
+std::vector<Output> warpTailOutputs(Backend& b, const std::string& prefix, bool median, bool nextWarp, bool weighted) {
+  Session s{b};
+  Host u = noise(kW, kH, 1, 19, 1.5f), w = noise(kW, kH, 2, 20, 3.f), u0 = noise(kW, kH, 1, 21, 1.3f),
+       g = tangentField(kW, kH), mask = discMask(kW, kH), i0 = texture(kW, kH, 6), i1 = texture(kW, kH, 7),
+       traj = tangentField(kW, kH), confidence(kW, kH, 1), iu = noise(kW, kH, 1, 62, 1.f),
+       iz = noise(kW, kH, 1, 63, 1.f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      confidence.at(x, y) = (x + 2 * y) % 7 == 0 ? 0.f : hashNoise(uint32_t(y * kW + x) * 2654435761U + 40);
+      const float a = 0.2f - 0.01f * x + 0.025f * y;  // a tangent field unlike the trajectory
+      g.at(x, y, 0) = std::cos(a), g.at(x, y, 1) = std::sin(a);
+    }
+  const WarpBuffers warp{s.put(u),
+                         s.put(w),
+                         s.put(g),
+                         s.put(mask),
+                         {s.put(u0), s.put(iu), s.put(iz)},
+                         s.put(i0),
+                         s.put(i1),
+                         s.put(traj),
+                         weighted ? s.put(confidence) : Buffer{},
+                         0.3f};
+  const Buffer scratch = median ? s.make(kW, kH, 1) : Buffer{};
+  b.warpTail(warp, scratch, 0.2f, nextWarp);
+  std::vector<Output> out = {s.get(prefix + "_u", warp.u), s.get(prefix + "_w", warp.w)};
+  if (median) out.push_back(s.get(prefix + "_median", scratch));
+  if (nextWarp)
+    for (const auto& [name, buffer] : {std::pair<const char*, Buffer>{"_u0", warp.data.u0},
+                                       {"_iu", warp.data.iu},
+                                       {"_iz", warp.data.iz},
+                                       {"_tangent", warp.tangent}})
+      out.push_back(s.get(prefix + name, buffer));
+  return out;
+}
+
+std::vector<Output> warpTailCase(Backend& b) { return warpTailOutputs(b, "warptail", true, true, true); }
+std::vector<Output> warpTailLastCase(Backend& b) { return warpTailOutputs(b, "warptaillast", true, false, false); }
+std::vector<Output> warpTailNoMedianCase(Backend& b) {
+  return warpTailOutputs(b, "warptailnomedian", false, true, false);
+}
+
 // A T265-like Kannala-Brandt lens at the odd golden size, and a pose with rotation.
 FieldsParams fieldsParams() {
   FieldsParams p{};
@@ -502,6 +571,10 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"primalDual", primalDualCase},
                                                 {"median", medianCase},
                                                 {"accumulate", accumulateCase},
+                                                {"warpIterations", warpIterationsCase},
+                                                {"warpTail", warpTailCase},
+                                                {"warpTail, last warp", warpTailLastCase},
+                                                {"warpTail, no median", warpTailNoMedianCase},
                                                 {"sweepWarp", sweepWarpCase},
                                                 {"sweepCost", sweepCostCase},
                                                 {"sweepAggregate", sweepAggregateCase},

@@ -1,11 +1,15 @@
 // Every kernel on every backend present at run time, against the CPU oracle, with an
 // explicit error metric per kernel (in the manner of ggml's test-backend-ops); then whole
-// solves end to end. A backend that is absent or unusable is reported as skipped.
+// solves end to end; the coarse kernels against their fine sequences on the same backend;
+// progress on replayed frames. A backend that is absent or unusable is reported as
+// skipped, and the suite to ctest as skipped when no backend besides the CPU ran
+// (gpu_suite.hpp).
 #include <cmath>
 
 #include "curvestereo/metrics.hpp"
 #include "curvestereo/stereo.hpp"
 #include "golden_cases.hpp"
+#include "gpu_suite.hpp"
 #include "synth/scene.hpp"
 #include "test_util.hpp"
 
@@ -56,11 +60,86 @@ std::vector<std::string> otherBackends() {
 // The backend, or null (with the reason reported) when it cannot run here.
 std::unique_ptr<Backend> tryBackend(const std::string& name) {
   try {
-    return createBackend(name);
+    auto backend = createBackend(name);
+    test::gpuUsed();
+    return backend;
   } catch (const Error& e) {
     MESSAGE("SKIPPED backend " << name << ": " << std::string(e.what()));
     return nullptr;
   }
+}
+
+// Forwards every fine kernel to a backend but keeps Backend's default coarse kernels: the
+// coarse kernels' documented sequences of fine kernels, run on that backend.
+class FineKernelsOf final : public Backend {
+ public:
+  explicit FineKernelsOf(Backend& inner) : b_(inner) {}
+  std::string name() const override { return b_.name(); }
+  std::string device() const override { return b_.device(); }
+  void synchronize() override { b_.synchronize(); }
+
+ protected:
+  Buffer doCreate(int w, int h, int c) override { return b_.create(w, h, c); }
+  void doUpload(const Buffer& d, const float* h) override { b_.upload(d, h); }
+  void doDownload(const Buffer& s, float* h) override { b_.download(s, h); }
+  void doFill(const Buffer& d, float v) override { b_.fill(d, v); }
+  void doCopy(const Buffer& d, const Buffer& s) override { b_.copy(d, s); }
+  void doFields(const Buffer& m, const Buffer& c, const Buffer& t, const FieldsParams& p) override {
+    b_.fields(m, c, t, p);
+  }
+  void doWarp(const Buffer& d, const Buffer& s, const Buffer& f) override { b_.warp(d, s, f); }
+  void doDownsample(const Buffer& d, const Buffer& s, float sc) override { b_.downsample(d, s, sc); }
+  void doUpsample(const Buffer& d, const Buffer& s, float sc, float v) override { b_.upsample(d, s, sc, v); }
+  void doNormalise(const Buffer& d, const Buffer& mo, const Buffer& s, const Buffer& m,
+                   const NormaliseParams& p) override {
+    b_.normalise(d, mo, s, m, p);
+  }
+  void doStructureTensor(const Buffer& t, const Buffer& s, const Buffer& i, const Buffer& m,
+                         const TensorParams& p) override {
+    b_.structureTensor(t, s, i, m, p);
+  }
+  void doWarpDerivatives(const DataTermBuffers& d, const Buffer& t, const Buffer& i0, const Buffer& i1,
+                         const Buffer& tr, const Buffer& w, const Buffer& u, const Buffer& m, const Buffer& c,
+                         float floor) override {
+    b_.warpDerivatives(d, t, i0, i1, tr, w, u, m, c, floor);
+  }
+  void doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& d, const Buffer& t, const Buffer& s,
+                    const Buffer& m, const PrimalDualParams& p) override {
+    b_.primalDual(pd, d, t, s, m, p);
+  }
+  void doMedian(const Buffer& d, const Buffer& s, const Buffer& m) override { b_.median(d, s, m); }
+  void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& t, const Buffer& m,
+                    float d) override {
+    b_.accumulate(u, w, u0, t, m, d);
+  }
+  void doSweepWarp(const Buffer& v, const Buffer& i, const Buffer& m, const SweepParams& p) override {
+    b_.sweepWarp(v, i, m, p);
+  }
+  void doSweepCost(const Buffer& c, const Buffer& r, const Buffer& v, const Buffer& m, const SweepParams& p) override {
+    b_.sweepCost(c, r, v, m, p);
+  }
+  void doSweepAggregate(const Buffer& a, const Buffer& c, const Buffer& m, const SweepParams& p) override {
+    b_.sweepAggregate(a, c, m, p);
+  }
+  void doSweepSelect(const Buffer& b, const Buffer& a, const Buffer& c, const Buffer& m,
+                     const SweepParams& p) override {
+    b_.sweepSelect(b, a, c, m, p);
+  }
+  void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& c, const Buffer& b, const Buffer& o,
+                         const Buffer& m, const SweepParams& p, const ConsistencyParams& cp) override {
+    b_.sweepInitialise(u, w, c, b, o, m, p, cp);
+  }
+  void doTriangulate(const Buffer& r, const Buffer& p, const Buffer& w, const Buffer& m, const CameraParams& c,
+                     const double t[3]) override {
+    b_.triangulate(r, p, w, m, c, t);
+  }
+
+ private:
+  Backend& b_;
+};
+
+bool coarseKernel(const std::string& kernel) {
+  return kernel.rfind("warpIterations", 0) == 0 || kernel.rfind("warpTail", 0) == 0;
 }
 
 }  // namespace
@@ -133,6 +212,61 @@ TEST_CASE("whole solves on every backend agree with the CPU oracle") {
         if (!ref.confidence.empty()) CHECK(double(closeConfidence) >= 0.99 * double(valid));
         CHECK(std::abs(m.tau1 - refMetrics.tau1) <= 0.2);
         CHECK(std::abs(m.tau3 - refMetrics.tau3) <= 0.2);
+      }
+    }
+  }
+}
+
+// A backend may fuse a coarse kernel's sequence (CUDA does), but must give its results: bit
+// for bit the fine kernels' on the same backend.
+TEST_CASE("every coarse kernel on every backend gives its fine kernels' results on that backend") {
+  std::vector<std::string> names = otherBackends();
+  names.insert(names.begin(), "cpu");
+  for (const std::string& name : names) {
+    auto backend = name == "cpu" ? createBackend("cpu") : tryBackend(name);
+    if (!backend) continue;
+    FineKernelsOf fine(*backend);
+    for (const auto& c : golden::kernelCases()) {
+      if (!coarseKernel(c.kernel)) continue;
+      const auto coarse = c.run(*backend), sequence = c.run(fine);
+      REQUIRE(coarse.size() == sequence.size());
+      for (size_t i = 0; i < coarse.size(); ++i) {
+        INFO("backend " << name << ", kernel " << c.kernel << ", output " << coarse[i].name);
+        long long differ = 0;
+        for (size_t k = 0; k < coarse[i].planes.data.size(); ++k) {
+          const float a = coarse[i].planes.data[k], b = sequence[i].planes.data[k];
+          differ += !(a == b || (std::isnan(a) && std::isnan(b)));
+        }
+        CHECK(differ == 0);
+      }
+    }
+  }
+}
+
+// stereo.hpp: progress from 0 to 1 on every frame, recorded or replayed (a replayed frame
+// reports its start and its end).
+TEST_CASE("progress reaches 1 on every frame, replayed or not") {
+  const synth::SynthPair pair = test::smallSynthPair(61, "binocular", 0.12, 4);
+  Params params = preset("default");
+  params.minWidth = 20;
+  params.warps = 3;
+  std::vector<std::string> names = otherBackends();
+  names.insert(names.begin(), "cpu");
+  for (const std::string& name : names) {
+    if (name != "cpu" && !tryBackend(name)) continue;
+    Stereo stereo(pair.rig, params, name);
+    std::vector<double> calls;
+    stereo.setProgress([&](double f) { calls.push_back(f); });
+    for (int frame = 0; frame < 4; ++frame) {  // CUDA replays from the third, Vulkan from the second
+      INFO("backend " << name << ", frame " << frame);
+      calls.clear();
+      stereo.compute(pair.left, pair.right);
+      REQUIRE(calls.size() >= 2);
+      CHECK(calls.back() == 1.0);
+      for (size_t i = 0; i < calls.size(); ++i) {
+        CHECK(calls[i] >= 0.0);
+        CHECK(calls[i] <= 1.0);
+        if (i > 0) CHECK(calls[i] >= calls[i - 1]);
       }
     }
   }

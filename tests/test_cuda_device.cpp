@@ -1,12 +1,14 @@
 // The CUDA device-pointer API (cs::cuda::DeviceStereo): inputs already on the GPU, results
 // left there, work on the caller's stream. Checked against the host API on the same
 // backend (same kernels: identical results) and against the CPU oracle. Skipped, with
-// the reason, when the build has no CUDA or no device is present.
+// the reason, when the build has no CUDA or no device is present (reported to ctest as
+// skipped: gpu_suite.hpp).
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "curvestereo/stereo.hpp"
+#include "gpu_suite.hpp"
 #include "synth/scene.hpp"
 #include "test_util.hpp"
 
@@ -39,6 +41,7 @@ std::vector<float> fetch(const float* dev, size_t count, cudaStream_t stream) {
 bool noDevice(const char* what) {
   const std::string why = cuda::probe();
   if (!why.empty()) MESSAGE("SKIPPED " << what << ": " << why);
+  if (why.empty()) test::gpuUsed();
   return !why.empty();
 }
 
@@ -83,8 +86,9 @@ void checkPrimalDualPaths(int w, int h) {
   const std::vector<float> u = noise(1, 11, 1.f), v = noise(2, 12, 0.1f), p = noise(2, 13, 0.5f),
                            q = noise(4, 14, 0.2f), u0 = noise(1, 15, 1.f), iu = noise(1, 16, 0.1f),
                            iz = noise(1, 17, 0.05f), uBar = noise(1, 18, 1.f), vBar = noise(2, 19, 0.1f);
-  // u, uBar, v, vBar, p, q after the solve. copyBars: uBar = u, vBar = v first, as the
-  // pipeline does at every warp (the CUDA backend folds those copies into the first launch).
+  // u, uBar, v, vBar, p, q after the solve. copyBars: warpIterations (uBar = u, vBar = v
+  // first, as the pipeline does at every warp; the CUDA backend folds those copies into the
+  // first launch) in place of primalDual.
   auto solve = [&](Backend& b, int iterations, bool copyBars) {
     auto put = [&](const std::vector<float>& host, int channels) {
       const Buffer buf = b.create(w, h, channels);
@@ -101,8 +105,10 @@ void checkPrimalDualPaths(int w, int h) {
       scale *= theta;
     }
     const Buffer tensorBuf = put(tensor, 4), stepsBuf = put(steps, 4), maskBuf = put(mask, 1);
-    if (copyBars) b.copy(pd.uBar, pd.u), b.copy(pd.vBar, pd.v);
-    b.primalDual(pd, data, tensorBuf, stepsBuf, maskBuf, prm);
+    if (copyBars)
+      b.warpIterations(pd, data, tensorBuf, stepsBuf, maskBuf, prm);
+    else
+      b.primalDual(pd, data, tensorBuf, stepsBuf, maskBuf, prm);
     std::vector<std::vector<float> > out;
     for (const Buffer& buf : {pd.u, pd.uBar, pd.v, pd.vBar, pd.p, pd.q}) {
       out.emplace_back(buf.count());
@@ -282,6 +288,7 @@ TEST_CASE("CUDA device-pointer API refuses what it cannot run") {
     return;
   }
   const synth::SynthPair pair = smallPair(3);
+  test::gpuUsed();
   CHECK_THROWS_AS(cuda::DeviceStereo(pair.rig, preset("default"), cudaStreamLegacy), Error);
   cuda::DeviceStereo dev(pair.rig, preset("default"));
   CHECK_THROWS_AS(dev.compute(nullptr, nullptr), Error);

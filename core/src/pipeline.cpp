@@ -74,7 +74,7 @@ int Pipeline::sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, cons
       fastest = std::max(fastest, (J * tPrime).norm());
     }
   const double planes = std::ceil(qMax * fastest / params.initPxPerPlane) + 1;
-  return int(std::min(512.0, std::max(2.0, planes)));
+  return int(std::min(double(kMaxSweepPlanes), std::max(2.0, planes)));
 }
 
 Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask)
@@ -244,25 +244,39 @@ int Pipeline::warpsAt(size_t l) const {
   return initialising() && l <= sweep_.level && params_.initWarps > 0 ? params_.initWarps : params_.warps;
 }
 
+// `warps` (at least one: Params::validate) in the coarse kernels backends may fuse
+// (backend.hpp): a warp's iterations, then its tail, which also makes the next warp's data
+// term. Timing stages separately, the tail is issued as its fine kernels with a stage
+// boundary between them.
 void Pipeline::solveLevel(Level& L, int warps, const std::function<void(int)>& warpDone) {
   const PrimalDualParams pdParams = primalDualParams();
   // A floor of 1 weighs every pixel 1: then the kernel need not read the confidence.
   const Buffer weight = params_.occlusionWeight < 1.f ? L.confidence : Buffer{};
-  for (int n = 0; n < warps; ++n) {
+  const WarpBuffers warp{L.pd.u, L.w,  L.tangent,    L.mask, L.data,
+                         L.n0,   L.n1, L.trajectory, weight, params_.occlusionWeight};
+  const Buffer medianScratch = params_.medianFilter ? L.scratch : Buffer{};
+  auto derivatives = [&] {
     stage("warp derivatives");
-    backend_.warpDerivatives(L.data, L.tangent, L.n0, L.n1, L.trajectory, L.w, L.pd.u, L.mask, weight,
-                             params_.occlusionWeight);
+    backend_.warpDerivatives(warp.data, warp.tangent, warp.i0, warp.i1, warp.trajectory, warp.w, warp.u, warp.mask,
+                             warp.confidence, warp.weightFloor);
+  };
+  derivatives();
+  for (int n = 0; n < warps; ++n) {
+    const bool nextWarp = n + 1 < warps;
     stage("primal-dual");
-    backend_.copy(L.pd.uBar, L.pd.u);
-    backend_.copy(L.pd.vBar, L.pd.v);
-    backend_.primalDual(L.pd, L.data, L.tensor, L.steps, L.mask, pdParams);
-    if (params_.medianFilter) {
-      stage("median");
-      backend_.median(L.scratch, L.pd.u, L.mask);
-      backend_.copy(L.pd.u, L.scratch);
+    backend_.warpIterations(L.pd, L.data, L.tensor, L.steps, L.mask, pdParams);
+    if (!profiling_) {
+      backend_.warpTail(warp, medianScratch, params_.duMax, nextWarp);
+    } else {
+      if (params_.medianFilter) {
+        stage("median");
+        backend_.median(L.scratch, L.pd.u, L.mask);
+        backend_.copy(L.pd.u, L.scratch);
+      }
+      stage("accumulate");
+      backend_.accumulate(L.pd.u, L.w, L.data.u0, L.tangent, L.mask, params_.duMax);
+      if (nextWarp) derivatives();
     }
-    stage("accumulate");
-    backend_.accumulate(L.pd.u, L.w, L.data.u0, L.tangent, L.mask, params_.duMax);
     warpDone(n);
   }
 }
@@ -325,7 +339,11 @@ void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const 
                    DepthResult& out) {
   profiling_ = profile;
   upload(left, right);
-  if (!profiling_ && backend_.canReplayFrame()) {
+  const bool replay = !profiling_ && backend_.canReplayFrame();
+  if (replay) {
+    // A replayed frame issues nothing the warps could report: its start and, once its
+    // results are here, its end.
+    if (progress) progress(0.0);
     backend_.replayFrame();
   } else {
     backend_.beginFrame();
@@ -333,6 +351,7 @@ void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const 
     backend_.endFrame();
   }
   download(out);
+  if (replay && progress) progress(1.0);
   if (profiling_)
     out.stages = backend_.takeStageTimes();
   else

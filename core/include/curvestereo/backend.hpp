@@ -1,5 +1,6 @@
 // The kernels every backend implements. The pipeline (core/src/pipeline.cpp) is the
-// only caller; it is written once against this interface.
+// only caller; it is written once against this interface. The contracts are checked here,
+// above the backends (Backend's public methods), once for all of them.
 //
 // Buffers are 2-D arrays of `channels` interleaved floats owned by the backend.
 // Backends may enqueue work (GPU) or run it at once (CPU); download() and
@@ -108,6 +109,29 @@ struct PrimalDualParams {
   std::vector<PrimalDualStep> schedule;  // one entry per iteration
 };
 
+// The most hypotheses a plane sweep may have (SweepParams::planes): the pipeline never asks
+// for more, and every backend's sweep kernels take this many (CUDA's aggregation runs one
+// thread per plane; Vulkan's sweep_aggregate.comp holds 1024 in shared memory).
+constexpr int kMaxSweepPlanes = 512;
+// The structure tensor's Gaussian pre-smoothing: radius ceil(3 sigma) at most this (sigma up
+// to 42 px).
+constexpr int kMaxTensorRadius = 127;
+
+// One warp's buffers at a level (DESIGN.md "Per frame" 2.3), as warpTail() takes them: the
+// estimate, the tangent, the data term and what warpDerivatives() reads to make it.
+struct WarpBuffers {
+  Buffer u, w, tangent, mask;  // 1, 2, 2, 1 ch
+  DataTermBuffers data;
+  Buffer i0, i1, trajectory;  // 1, 1, 2 ch
+  Buffer confidence;          // 1 ch; id -1 = none
+  float weightFloor;
+};
+
+// The kernels. Each public method checks its arguments against the contract written
+// beside it (every buffer created by this backend and used no larger than created, the
+// channels and sizes named, parameters in range) and throws cs::Error with one line
+// naming the kernel and the problem; then it calls the protected virtual of the same
+// name with a "do" prefix, which a backend implements knowing its arguments are valid.
 class Backend {
  public:
   virtual ~Backend() = default;
@@ -118,71 +142,98 @@ class Backend {
   virtual unsigned long long memoryBytes() const { return 0; }
 
   // --- memory ---
-  virtual Buffer create(int width, int height, int channels) = 0;
-  virtual void upload(const Buffer& dst, const float* host) = 0;
-  virtual void download(const Buffer& src, float* host) = 0;
-  virtual void fill(const Buffer& dst, float value) = 0;
-  virtual void copy(const Buffer& dst, const Buffer& src) = 0;
+  // width, height, channels > 0. A buffer is used with the shape it was created with; the
+  // contract refuses a larger one, and a backend may take a smaller one (fewer floats) as a
+  // view of its start (CPU, Vulkan: the tests' guard buffers) or refuse it (CUDA, which
+  // trades buffers' memory within a frame).
+  Buffer create(int width, int height, int channels);
+  void upload(const Buffer& dst, const float* host);
+  void download(const Buffer& src, float* host);
+  void fill(const Buffer& dst, float value);
+  void copy(const Buffer& dst, const Buffer& src);  // the same number of floats
 
   // --- kernels (one file / shader per stage in each backend) ---
+  // Unless said otherwise, the buffers of one call have the same width and height.
   // Per rig (or per pose): mask (1 ch; in: non-zero where allowed, out: 1 where allowed
-  // and valid, else 0), calibration field (2 ch) and trajectory field (2 ch).
-  virtual void fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
-                      const FieldsParams& params) = 0;
-  // dst(x) = src(x + flow(x)), bilinear, clamped to the image edge.
-  virtual void warp(const Buffer& dst, const Buffer& src, const Buffer& flow) = 0;
-  // dst = src smoothed and decimated by `scale` (pixel-centre aware).
-  virtual void downsample(const Buffer& dst, const Buffer& src, float scale) = 0;
-  // dst = valueScale * src resampled bilinearly to dst's (finer) grid.
-  virtual void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) = 0;
+  // and valid, else 0), calibration field (2 ch) and trajectory field (2 ch), on the grid
+  // of params.cam0 (its width and height are the buffers').
+  void fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory, const FieldsParams& params);
+  // dst(x) = src(x + flow(x)), bilinear, clamped to the image edge. flow (2 ch) has dst's
+  // size, src dst's channels and any size.
+  void warp(const Buffer& dst, const Buffer& src, const Buffer& flow);
+  // dst = src smoothed and decimated by `scale` (> 0; pixel-centre aware); same channels.
+  void downsample(const Buffer& dst, const Buffer& src, float scale);
+  // dst = valueScale * src resampled bilinearly to dst's (finer) grid; same channels.
+  void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale);
   // dst = (src - m) / sqrt(v + epsilon^2), with m and v the mean and variance of src over
   // the masked pixels of a Gaussian window (weights taps(dx) taps(dy), pixels outside the
   // image skipped); 0 outside the mask. moments (3 ch) is scratch: the horizontal pass's
-  // sums of weight, weight src and weight src^2 over masked pixels.
-  virtual void normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
-                         const NormaliseParams& params) = 0;
+  // sums of weight, weight src and weight src^2 over masked pixels. dst, src, mask 1 ch;
+  // 0 <= params.radius <= kMaxNormaliseRadius.
+  void normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                 const NormaliseParams& params);
   // tensor (4 ch: d11 d12 d22, unused) and preconditioned steps (4 ch: tau_u tau_v sigma_p1
-  // sigma_p2) from the image and mask.
-  virtual void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
-                               const TensorParams& params) = 0;
+  // sigma_p2) from the image and mask (1 ch each). params.sigma >= 0, ceil(3 sigma) <=
+  // kMaxTensorRadius.
+  void structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                       const TensorParams& params);
   // tangent g = normalize(T(x + w)) (2 ch) and the data term at x + w. With a confidence
   // buffer (1 ch; id -1 = none), iz and iu are scaled by max(confidence, weightFloor):
   // lambda c |rho| = lambda |c rho|, so unreliable pixels pull less on the solution and
-  // the primal-dual kernel stays unchanged.
-  virtual void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
-                               const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
-                               const Buffer& confidence, float weightFloor) = 0;
-  // schedule.size() primal-dual iterations (Jacobi-parallel over pixels).
-  virtual void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
-                          const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) = 0;
-  // dst = 3x3 median of src over masked neighbours (dst != src).
-  virtual void median(const Buffer& dst, const Buffer& src, const Buffer& mask) = 0;
+  // the primal-dual kernel stays unchanged. data 1 ch each, i0, i1, u, mask 1 ch,
+  // trajectory and w 2 ch.
+  void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                       const Buffer& confidence, float weightFloor);
+  // schedule.size() primal-dual iterations (Jacobi-parallel over pixels). The channels of
+  // PrimalDualBuffers and DataTermBuffers; tensor, steps 4 ch, mask 1 ch.
+  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+                  const Buffer& mask, const PrimalDualParams& params);
+  // dst = 3x3 median of src over masked neighbours (1 ch each, dst != src).
+  void median(const Buffer& dst, const Buffer& src, const Buffer& mask);
   // du = clamp(u - u0, +-duMax); u = u0 + du; w += du * tangent (masked pixels only).
-  virtual void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
-                          float duMax) = 0;
+  // u, u0, mask 1 ch, w, tangent 2 ch; duMax >= 0.
+  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                  float duMax);
+
+  // --- coarse kernels: fixed sequences of the kernels above, which a backend may fuse ---
+  // The pipeline calls these where it needs the sequence; the default implementations
+  // call the kernels above in the order written, and an override must give the same
+  // results as that order. Each checks the contracts of the whole sequence first.
+  // A warp's iterations, starting from the over-relaxed primals equal to the primals:
+  //   copy(pd.uBar, pd.u); copy(pd.vBar, pd.v); primalDual(pd, data, tensor, steps, mask, params).
+  void warpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                      const Buffer& steps, const Buffer& mask, const PrimalDualParams& params);
+  // The end of a warp and, with nextWarp, the start of the next (medianScratch id -1: no median):
+  //   median(medianScratch, warp.u, warp.mask); copy(warp.u, medianScratch);   [with a median]
+  //   accumulate(warp.u, warp.w, warp.data.u0, warp.tangent, warp.mask, duMax);
+  //   warpDerivatives(warp.data, warp.tangent, warp.i0, warp.i1, warp.trajectory, warp.w, warp.u,
+  //                   warp.mask, warp.confidence, warp.weightFloor);          [with nextWarp]
+  void warpTail(const WarpBuffers& warp, const Buffer& medianScratch, float duMax, bool nextWarp);
 
   // --- plane-sweep initialisation (one file / shader per kernel family: plane_sweep) ---
-  // volume (planes ch): `image` bilinearly sampled at x_k for every hypothesis k where the
+  // Every sweep kernel: 2 <= p.planes <= kMaxSweepPlanes, p.radius >= 0; volume, costs and
+  // aggregated have p.planes channels, best and other 2, images and mask 1.
+  // volume: `image` bilinearly sampled at x_k for every hypothesis k where the
   // reference pixel is in `mask` and x_k is a valid projection inside the image; -1 elsewhere.
-  virtual void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) = 0;
-  // costs (planes ch): for each masked pixel and hypothesis, 1 - ZNCC between the
+  void sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p);
+  // costs: for each masked pixel and hypothesis, 1 - ZNCC between the
   // reference window and the volume window (masked, non-negative samples only; at least
   // half the window); 2 where fewer scored and outside the mask.
-  virtual void sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
-                         const SweepParams& p) = 0;
-  // aggregated (planes ch): semi-global aggregation (Hirschmueller 2008) of the costs along
+  void sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                 const SweepParams& p);
+  // aggregated: semi-global aggregation (Hirschmueller 2008) of the costs along
   // the scanline directions r = +x, -x, +y, -y, in that order, summed: at a masked pixel
   // x, with C = min(cost, 1), L_r(x, k) = C(x, k) where x - r is not masked (or outside),
   // else C(x, k) + min(L_r(x - r, k), L_r(x - r, k -+ 1) + p1, m + p2) - m with m the
   // minimum of L_r(x - r, .); aggregated = ((L_+x + L_-x) + L_+y) + L_-y. 0 outside the mask.
-  virtual void sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                              const SweepParams& p) = 0;
-  // best (2 ch): for each masked pixel, the hypothesis minimising `aggregated` among those
+  void sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask, const SweepParams& p);
+  // best: for each masked pixel, the hypothesis minimising `aggregated` among those
   // whose cost scored (< 2), the first on ties, refined by a parabola through
   // aggregated / 4 at its neighbours (offset clamped to +-0.5 planes; none where a
   // neighbour did not score): (q, its cost). (-1, 2) where nothing scored.
-  virtual void sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
-                           const SweepParams& p) = 0;
+  void sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                   const SweepParams& p);
   // From the reference sweep `best` (made with p.t) and the other view's `other` (made
   // with -p.t): confidence = exp(-(e / tol)^2), e the distance from x to its round trip
   // through `other` (nearest pixel at x_q), 0 where the reference has no hypothesis, the
@@ -193,17 +244,16 @@ class Backend {
   // ray), positions rounded to the nearest pixel, up to p.planes steps each way and
   // stopping at the mask, find the first pixel with confidence >= acceptConfidence
   // behind (-d) and ahead (+d); if both exist and q(behind) > q(ahead), the pixel takes
-  // q(ahead): w = x_q(ahead) - x. Every other pixel keeps u and w.
-  virtual void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
-                               const Buffer& other, const Buffer& mask, const SweepParams& p,
-                               const ConsistencyParams& c) = 0;
+  // q(ahead): w = x_q(ahead) - x. Every other pixel keeps u and w. u, confidence 1 ch, w 2 ch.
+  void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                       const Buffer& other, const Buffer& mask, const SweepParams& p, const ConsistencyParams& c);
 
-  // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w where mask
-  // is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.
+  // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w (2 ch) where
+  // mask is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.
   // radial is NaN outside the mask: Stereo derives the valid mask from radial instead of
-  // downloading the mask.
-  virtual void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
-                           const CameraParams& cam0, const double tPrime[3]) = 0;
+  // downloading the mask. cam0's width and height are the buffers'.
+  void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                   const CameraParams& cam0, const double tPrime[3]);
 
   // Waits until all enqueued work is done.
   virtual void synchronize() {}
@@ -227,7 +277,50 @@ class Backend {
   virtual void beginStage(const std::string& name);
   virtual std::vector<StageTime> takeStageTimes();
 
+ protected:
+  // What each backend implements: the public method of the same name without "do", its
+  // arguments already checked.
+  virtual Buffer doCreate(int width, int height, int channels) = 0;
+  virtual void doUpload(const Buffer& dst, const float* host) = 0;
+  virtual void doDownload(const Buffer& src, float* host) = 0;
+  virtual void doFill(const Buffer& dst, float value) = 0;
+  virtual void doCopy(const Buffer& dst, const Buffer& src) = 0;
+  virtual void doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                        const FieldsParams& params) = 0;
+  virtual void doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) = 0;
+  virtual void doDownsample(const Buffer& dst, const Buffer& src, float scale) = 0;
+  virtual void doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) = 0;
+  virtual void doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                           const NormaliseParams& params) = 0;
+  virtual void doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                                 const TensorParams& params) = 0;
+  virtual void doWarpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                                 const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                                 const Buffer& confidence, float weightFloor) = 0;
+  virtual void doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                            const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) = 0;
+  virtual void doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) = 0;
+  virtual void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
+                            const Buffer& mask, float duMax) = 0;
+  virtual void doWarpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                                const Buffer& steps, const Buffer& mask, const PrimalDualParams& params);
+  virtual void doWarpTail(const WarpBuffers& warp, const Buffer& medianScratch, float duMax, bool nextWarp);
+  virtual void doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) = 0;
+  virtual void doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                           const SweepParams& p) = 0;
+  virtual void doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                                const SweepParams& p) = 0;
+  virtual void doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                             const SweepParams& p) = 0;
+  virtual void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                                 const Buffer& other, const Buffer& mask, const SweepParams& p,
+                                 const ConsistencyParams& c) = 0;
+  virtual void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                             const CameraParams& cam0, const double tPrime[3]) = 0;
+
  private:
+  friend class BackendContract;  // core/src/backend_contract.cpp: the checks
+  std::vector<Buffer> created_;  // by id: the shape each buffer was created with (id -1: none)
   std::vector<StageTime> stages_;
   std::string currentStage_;
   double stageStartMs_ = 0;

@@ -67,7 +67,10 @@ class Stereo {
     bool confidence = true;  // the initialiser's (empty without one)
   };
   void setOutputs(const Outputs& outputs);
-  // Called during compute() with the fraction of the solve done (0..1), for progress bars.
+  // Called during compute() with the fraction of the solve done (0..1), for progress bars:
+  // after every warp of every level as the frame is issued, and with 0 at the start and 1
+  // at the end of a frame that a GPU backend replays (recorded earlier: nothing to report
+  // in between).
   void setProgress(std::function<void(double)> progress);
   // Images: float gray in [0,1], both of the rig's resolution. Throws cs::Error on
   // mismatched sizes or non-finite pixels.
@@ -94,7 +97,7 @@ class Stereo {
   ImageU8 userMask_;
   std::string backendName_, backendWhy_;
   std::unique_ptr<Backend> backend_;
-  std::unique_ptr<Pipeline> pipeline_;
+  std::unique_ptr<Pipeline> pipeline_;  // set by the constructor, which throws when it cannot
   std::function<void(double)> progress_;
   bool profiling_ = false;
   Outputs outputs_;

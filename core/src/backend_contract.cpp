@@ -1,0 +1,338 @@
+// The Backend interface's contracts (backend.hpp), checked once above every backend: each
+// public kernel checks its arguments and calls the backend's protected "do" virtual. The
+// coarse kernels' default implementations (the fine kernels in their documented order)
+// are here too.
+#include <cmath>
+#include <string>
+
+#include "curvestereo/backend.hpp"
+#include "curvestereo/camera.hpp"
+#include "curvestereo/camera_models.hpp"
+#include "curvestereo/image.hpp"
+
+namespace cs {
+
+namespace {
+
+std::string shapeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+std::string shapeText(const Buffer& b) { return shapeText(b.width, b.height) + "x" + std::to_string(b.channels); }
+
+bool knownModel(int model) {
+  switch (CameraModel(model)) {
+    case CameraModel::KannalaBrandt4:
+    case CameraModel::Unified:
+    case CameraModel::ExtendedUnified:
+    case CameraModel::DoubleSphere:
+    case CameraModel::PinholeRadtan:
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+// The checks of one call: fail() throws "<backend> backend: <kernel>: <problem>".
+class BackendContract {
+ public:
+  BackendContract(const Backend& backend, const char* kernel) : backend_(backend), kernel_(kernel) {}
+
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw Error(backend_.name() + " backend: " + kernel_ + ": " + problem);
+  }
+
+  // `b` was created by this backend, is used no larger than created, and has `channels`
+  // (0: any).
+  const BackendContract& buffer(const Buffer& b, const char* what, int channels = 0) const {
+    const std::vector<Buffer>& created = backend_.created_;
+    if (b.id < 0 || size_t(b.id) >= created.size() || created[size_t(b.id)].id != b.id)
+      fail(std::string(what) + " is not a buffer of this backend (id " + std::to_string(b.id) + ")");
+    const Buffer& c = created[size_t(b.id)];
+    if (b.width <= 0 || b.height <= 0 || b.channels <= 0 || b.count() > c.count())
+      fail(std::string(what) + " (buffer " + std::to_string(b.id) + ") is used as " + shapeText(b) +
+           ", larger than it was created (" + shapeText(c) + ")");
+    if (channels > 0 && b.channels != channels)
+      fail(std::string(what) + " has " + std::to_string(b.channels) + " channel" + (b.channels == 1 ? "" : "s") +
+           ", expected " + std::to_string(channels));
+    return *this;
+  }
+
+  // `b` (checked as by buffer()) has the width and height of `grid`.
+  const BackendContract& sameGrid(const Buffer& b, const char* what, int channels, const Buffer& grid,
+                                  const char* gridName) const {
+    buffer(b, what, channels);
+    if (b.width != grid.width || b.height != grid.height)
+      fail(std::string(what) + " is " + shapeText(b.width, b.height) + " but " + gridName + " is " +
+           shapeText(grid.width, grid.height));
+    return *this;
+  }
+
+  const BackendContract& require(bool ok, const std::string& problem) const {
+    if (!ok) fail(problem);
+    return *this;
+  }
+
+  // A camera the kernels can evaluate; with `grid`, one of that grid's size.
+  const BackendContract& camera(const CameraParams& cam, const char* what, const Buffer* grid = nullptr,
+                                const char* gridName = nullptr) const {
+    require(knownModel(cam.model), std::string(what) + " has an unknown camera model " + std::to_string(cam.model));
+    if (grid && (cam.width != grid->width || cam.height != grid->height))
+      fail(std::string(what) + " is " + shapeText(cam.width, cam.height) + " but " + gridName + " is " +
+           shapeText(grid->width, grid->height));
+    return *this;
+  }
+
+  const BackendContract& sweep(const SweepParams& p) const {
+    require(p.planes >= 2 && p.planes <= kMaxSweepPlanes,
+            "needs 2 to " + std::to_string(kMaxSweepPlanes) + " planes, got " + std::to_string(p.planes));
+    require(p.radius >= 0, "needs a window radius >= 0, got " + std::to_string(p.radius));
+    return camera(p.cam, "the camera");
+  }
+
+  void median(const Buffer& dst, const Buffer& src, const Buffer& mask) const {
+    buffer(mask, "mask", 1);
+    sameGrid(dst, "dst", 1, mask, "mask").sameGrid(src, "src", 1, mask, "mask");
+    require(dst.id != src.id, "dst and src are the same buffer");
+  }
+
+  void accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                  float duMax) const {
+    buffer(mask, "mask", 1);
+    sameGrid(u, "u", 1, mask, "mask").sameGrid(w, "w", 2, mask, "mask").sameGrid(u0, "u0", 1, mask, "mask");
+    sameGrid(tangent, "tangent", 2, mask, "mask");
+    require(duMax >= 0.f, "duMax must be >= 0, got " + std::to_string(duMax));
+  }
+
+  void warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                       const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                       const Buffer& confidence) const {
+    buffer(mask, "mask", 1);
+    sameGrid(data.u0, "u0", 1, mask, "mask").sameGrid(data.iu, "iu", 1, mask, "mask");
+    sameGrid(data.iz, "iz", 1, mask, "mask").sameGrid(tangent, "tangent", 2, mask, "mask");
+    sameGrid(i0, "i0", 1, mask, "mask").sameGrid(i1, "i1", 1, mask, "mask");
+    sameGrid(trajectory, "trajectory", 2, mask, "mask").sameGrid(w, "w", 2, mask, "mask");
+    sameGrid(u, "u", 1, mask, "mask");
+    if (confidence.id >= 0) sameGrid(confidence, "confidence", 1, mask, "mask");
+  }
+
+  void primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+                  const Buffer& mask) const {
+    buffer(mask, "mask", 1);
+    sameGrid(pd.u, "u", 1, mask, "mask").sameGrid(pd.uBar, "uBar", 1, mask, "mask");
+    sameGrid(pd.v, "v", 2, mask, "mask").sameGrid(pd.vBar, "vBar", 2, mask, "mask");
+    sameGrid(pd.p, "p", 2, mask, "mask").sameGrid(pd.q, "q", 4, mask, "mask");
+    sameGrid(data.u0, "u0", 1, mask, "mask").sameGrid(data.iu, "iu", 1, mask, "mask");
+    sameGrid(data.iz, "iz", 1, mask, "mask");
+    sameGrid(tensor, "tensor", 4, mask, "mask").sameGrid(steps, "steps", 4, mask, "mask");
+  }
+
+ private:
+  const Backend& backend_;
+  const char* kernel_;
+};
+
+// --- memory ---
+
+Buffer Backend::create(int width, int height, int channels) {
+  if (width <= 0 || height <= 0 || channels <= 0)
+    BackendContract(*this, "create")
+        .fail("invalid buffer size " + shapeText(width, height) + "x" + std::to_string(channels));
+  const Buffer b = doCreate(width, height, channels);
+  if (b.id >= 0) {
+    if (size_t(b.id) >= created_.size()) created_.resize(size_t(b.id) + 1);
+    created_[size_t(b.id)] = b;
+  }
+  return b;
+}
+
+void Backend::upload(const Buffer& dst, const float* host) {
+  BackendContract(*this, "upload").buffer(dst, "dst");
+  doUpload(dst, host);
+}
+
+void Backend::download(const Buffer& src, float* host) {
+  BackendContract(*this, "download").buffer(src, "src");
+  doDownload(src, host);
+}
+
+void Backend::fill(const Buffer& dst, float value) {
+  BackendContract(*this, "fill").buffer(dst, "dst");
+  doFill(dst, value);
+}
+
+void Backend::copy(const Buffer& dst, const Buffer& src) {
+  const BackendContract c(*this, "copy");
+  c.buffer(dst, "dst").buffer(src, "src");
+  c.require(dst.count() == src.count(), "dst (" + shapeText(dst) + ") and src (" + shapeText(src) + ") differ in size");
+  doCopy(dst, src);
+}
+
+// --- kernels ---
+
+void Backend::fields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                     const FieldsParams& params) {
+  const BackendContract c(*this, "fields");
+  c.buffer(mask, "mask", 1);
+  c.sameGrid(calibration, "calibration", 2, mask, "mask").sameGrid(trajectory, "trajectory", 2, mask, "mask");
+  c.camera(params.cam0, "cam0", &mask, "mask").camera(params.cam1, "cam1");
+  doFields(mask, calibration, trajectory, params);
+}
+
+void Backend::warp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
+  const BackendContract c(*this, "warp");
+  c.buffer(dst, "dst").buffer(src, "src", dst.channels).sameGrid(flow, "flow", 2, dst, "dst");
+  doWarp(dst, src, flow);
+}
+
+void Backend::downsample(const Buffer& dst, const Buffer& src, float scale) {
+  const BackendContract c(*this, "downsample");
+  c.buffer(dst, "dst").buffer(src, "src", dst.channels);
+  c.require(std::isfinite(scale) && scale > 0.f, "scale must be positive, got " + std::to_string(scale));
+  doDownsample(dst, src, scale);
+}
+
+void Backend::upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
+  const BackendContract c(*this, "upsample");
+  c.buffer(dst, "dst").buffer(src, "src", dst.channels);
+  c.require(std::isfinite(scale) && scale > 0.f, "scale must be positive, got " + std::to_string(scale));
+  doUpsample(dst, src, scale, valueScale);
+}
+
+void Backend::normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                        const NormaliseParams& params) {
+  const BackendContract c(*this, "normalise");
+  c.buffer(src, "src", 1).sameGrid(dst, "dst", 1, src, "src");
+  c.sameGrid(moments, "moments", 3, src, "src").sameGrid(mask, "mask", 1, src, "src");
+  c.require(params.radius >= 0 && params.radius <= kMaxNormaliseRadius,
+            "radius " + std::to_string(params.radius) + " outside [0, " + std::to_string(kMaxNormaliseRadius) + "]");
+  doNormalise(dst, moments, src, mask, params);
+}
+
+void Backend::structureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                              const TensorParams& params) {
+  const BackendContract c(*this, "structureTensor");
+  c.buffer(image, "image", 1).sameGrid(mask, "mask", 1, image, "image");
+  c.sameGrid(tensor, "tensor", 4, image, "image").sameGrid(steps, "steps", 4, image, "image");
+  c.require(params.sigma >= 0.f && std::ceil(3.f * params.sigma) <= float(kMaxTensorRadius),
+            "smoothing sigma " + std::to_string(params.sigma) + " outside [0, " + std::to_string(kMaxTensorRadius / 3) +
+                "] px");
+  doStructureTensor(tensor, steps, image, mask, params);
+}
+
+void Backend::warpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                              const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                              const Buffer& confidence, float weightFloor) {
+  BackendContract(*this, "warpDerivatives").warpDerivatives(data, tangent, i0, i1, trajectory, w, u, mask, confidence);
+  doWarpDerivatives(data, tangent, i0, i1, trajectory, w, u, mask, confidence, weightFloor);
+}
+
+void Backend::primalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                         const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
+  BackendContract(*this, "primalDual").primalDual(pd, data, tensor, steps, mask);
+  doPrimalDual(pd, data, tensor, steps, mask, params);
+}
+
+void Backend::median(const Buffer& dst, const Buffer& src, const Buffer& mask) {
+  BackendContract(*this, "median").median(dst, src, mask);
+  doMedian(dst, src, mask);
+}
+
+void Backend::accumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                         float duMax) {
+  BackendContract(*this, "accumulate").accumulate(u, w, u0, tangent, mask, duMax);
+  doAccumulate(u, w, u0, tangent, mask, duMax);
+}
+
+// --- coarse kernels ---
+
+void Backend::warpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                             const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
+  BackendContract(*this, "warpIterations").primalDual(pd, data, tensor, steps, mask);
+  doWarpIterations(pd, data, tensor, steps, mask, params);
+}
+
+void Backend::doWarpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                               const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) {
+  copy(pd.uBar, pd.u);
+  copy(pd.vBar, pd.v);
+  primalDual(pd, data, tensor, steps, mask, params);
+}
+
+void Backend::warpTail(const WarpBuffers& warp, const Buffer& medianScratch, float duMax, bool nextWarp) {
+  const BackendContract c(*this, "warpTail");
+  if (medianScratch.id >= 0) c.median(medianScratch, warp.u, warp.mask);
+  c.accumulate(warp.u, warp.w, warp.data.u0, warp.tangent, warp.mask, duMax);
+  if (nextWarp)
+    c.warpDerivatives(warp.data, warp.tangent, warp.i0, warp.i1, warp.trajectory, warp.w, warp.u, warp.mask,
+                      warp.confidence);
+  doWarpTail(warp, medianScratch, duMax, nextWarp);
+}
+
+void Backend::doWarpTail(const WarpBuffers& warp, const Buffer& medianScratch, float duMax, bool nextWarp) {
+  if (medianScratch.id >= 0) {
+    median(medianScratch, warp.u, warp.mask);
+    copy(warp.u, medianScratch);
+  }
+  accumulate(warp.u, warp.w, warp.data.u0, warp.tangent, warp.mask, duMax);
+  if (nextWarp)
+    warpDerivatives(warp.data, warp.tangent, warp.i0, warp.i1, warp.trajectory, warp.w, warp.u, warp.mask,
+                    warp.confidence, warp.weightFloor);
+}
+
+// --- plane sweep ---
+
+void Backend::sweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
+  const BackendContract c(*this, "sweepWarp");
+  c.sweep(p);
+  c.buffer(mask, "mask", 1).sameGrid(volume, "volume", p.planes, mask, "mask");
+  c.sameGrid(image, "image", 1, mask, "mask");
+  doSweepWarp(volume, image, mask, p);
+}
+
+void Backend::sweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                        const SweepParams& p) {
+  const BackendContract c(*this, "sweepCost");
+  c.sweep(p);
+  c.buffer(mask, "mask", 1).sameGrid(costs, "costs", p.planes, mask, "mask");
+  c.sameGrid(reference, "reference", 1, mask, "mask").sameGrid(volume, "volume", p.planes, mask, "mask");
+  doSweepCost(costs, reference, volume, mask, p);
+}
+
+void Backend::sweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask, const SweepParams& p) {
+  const BackendContract c(*this, "sweepAggregate");
+  c.sweep(p);
+  c.buffer(mask, "mask", 1).sameGrid(aggregated, "aggregated", p.planes, mask, "mask");
+  c.sameGrid(costs, "costs", p.planes, mask, "mask");
+  c.require(aggregated.id != costs.id, "aggregated and costs are the same buffer");
+  doSweepAggregate(aggregated, costs, mask, p);
+}
+
+void Backend::sweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                          const SweepParams& p) {
+  const BackendContract c(*this, "sweepSelect");
+  c.sweep(p);
+  c.buffer(mask, "mask", 1).sameGrid(best, "best", 2, mask, "mask");
+  c.sameGrid(aggregated, "aggregated", p.planes, mask, "mask").sameGrid(costs, "costs", p.planes, mask, "mask");
+  doSweepSelect(best, aggregated, costs, mask, p);
+}
+
+void Backend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                              const Buffer& other, const Buffer& mask, const SweepParams& p,
+                              const ConsistencyParams& consistency) {
+  const BackendContract c(*this, "sweepInitialise");
+  c.sweep(p);
+  c.buffer(mask, "mask", 1).sameGrid(u, "u", 1, mask, "mask").sameGrid(w, "w", 2, mask, "mask");
+  c.sameGrid(confidence, "confidence", 1, mask, "mask").sameGrid(best, "best", 2, mask, "mask");
+  c.sameGrid(other, "other", 2, mask, "mask");
+  doSweepInitialise(u, w, confidence, best, other, mask, p, consistency);
+}
+
+void Backend::triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                          const CameraParams& cam0, const double tPrime[3]) {
+  const BackendContract c(*this, "triangulate");
+  c.buffer(mask, "mask", 1).sameGrid(radial, "radial", 1, mask, "mask");
+  c.sameGrid(points, "points", 3, mask, "mask").sameGrid(w, "w", 2, mask, "mask");
+  c.camera(cam0, "cam0", &mask, "mask");
+  doTriangulate(radial, points, w, mask, cam0, tPrime);
+}
+
+}  // namespace cs
