@@ -42,7 +42,7 @@ struct SweepDev {
   float p1, p2;
   float flatVariance;
 };
-constexpr int kMaxSweepPlanes = 512;  // launchSweepAggregate: one thread per plane
+constexpr int kMaxSweepPlanes = 512;  // launchSweepAggregate: one thread per plane (= cs::kMaxSweepPlanes)
 // The left-right check (ConsistencyParams).
 struct ConsistencyDev {
   float tolerancePx, acceptConfidence;
@@ -107,7 +107,6 @@ struct MemOps {
   MemOp op[kMaxMemOps];
 };
 
-cudaError_t launchFill(cudaStream_t s, float* data, size_t count, float value);
 cudaError_t launchMemOps(cudaStream_t s, const MemOps& ops);
 cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsDev& p);
 cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img mask, const CamDev& cam0,

@@ -10,11 +10,6 @@
 namespace cs::cudak {
 
 namespace {
-__global__ void fillKernel(float* data, size_t count, float value) {
-  beginKernel();
-  for (size_t i = blockIdx.x * size_t(blockDim.x) + threadIdx.x; i < count; i += size_t(gridDim.x) * blockDim.x)
-    data[i] = value;
-}
 __global__ void memOpsKernel(MemOps ops) {
   beginKernel();
   const MemOp o = ops.op[blockIdx.y];
@@ -59,12 +54,6 @@ cudaError_t launchMemOps(cudaStream_t s, const MemOps& ops) {
   for (int i = 0; i < ops.count; ++i) largest = std::max(largest, ops.op[i].count);
   const unsigned blocks = unsigned(std::max<size_t>(1, std::min<size_t>((largest / 4 + 255) / 256, 2048)));
   CS_LAUNCH(memOpsKernel, dim3(blocks, unsigned(ops.count)), 256, 0, s, ops);
-  return cudaGetLastError();
-}
-
-cudaError_t launchFill(cudaStream_t s, float* data, size_t count, float value) {
-  const unsigned blocks = unsigned(std::min<size_t>((count + 255) / 256, 4096));
-  CS_LAUNCH(fillKernel, blocks, 256, 0, s, data, count, value);
   return cudaGetLastError();
 }
 

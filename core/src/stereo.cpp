@@ -137,7 +137,6 @@ void Stereo::makePipeline() {
     throw Error("out of memory: a " + frame + " frame needs " + std::to_string(need) + " bytes of buffers on backend " +
                 backendName_ + ", which has " + std::to_string(have) + " bytes");
   try {
-    pipeline_.reset();
     pipeline_ = std::make_unique<Pipeline>(*backend_, rig_, params_, userMask_);
     pipeline_->select({outputs_.disparity, outputs_.warp, outputs_.points, outputs_.confidence});
     pipeline_->setPose(rig_.R, rig_.t);
@@ -153,7 +152,6 @@ void Stereo::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   moved.R = R;
   moved.t = t;
   moved.validate();
-  if (!pipeline_) throw Error("this Stereo object failed to set up (see the earlier error)");
   rig_ = moved;
   pipeline_->setPose(R, t);
 }
@@ -162,7 +160,6 @@ void Stereo::setMask(const ImageU8& mask) {
   if (mask.width != rig_.cam0.width || mask.height != rig_.cam0.height)
     throw Error("mask is " + sizeText(mask.width, mask.height) + " but the images are " +
                 sizeText(rig_.cam0.width, rig_.cam0.height));
-  if (!pipeline_) throw Error("this Stereo object failed to set up (see the earlier error)");
   // The buffers stay: only the masks of the levels and the fields are redone.
   userMask_ = mask;
   pipeline_->setUserMask(userMask_);
@@ -171,7 +168,7 @@ void Stereo::setMask(const ImageU8& mask) {
 
 void Stereo::setOutputs(const Outputs& outputs) {
   outputs_ = outputs;
-  if (pipeline_) pipeline_->select({outputs.disparity, outputs.warp, outputs.points, outputs.confidence});
+  pipeline_->select({outputs.disparity, outputs.warp, outputs.points, outputs.confidence});
 }
 
 void Stereo::setProgress(std::function<void(double)> progress) { progress_ = std::move(progress); }
@@ -183,7 +180,6 @@ void Stereo::compute(const ImageF& left, const ImageF& right, DepthResult& resul
   checkImage(left, rig_.cam0, "left");
   checkImage(right, rig_.cam1, "right");
   const auto t0 = std::chrono::steady_clock::now();
-  if (!pipeline_) throw Error("this Stereo object failed to set up (see the earlier error)");
   try {
     pipeline_->run(left, right, profiling_, progress_, result);
     finish(result);
