@@ -309,6 +309,10 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
   cases.refused("unknown preset", good + " --preset fastest", "unknown preset 'fastest'");
   cases.refused("unknown backend", good + " --backend tpu", "tpu");
   cases.refused("one image only", "run --calib rig.yaml l.png" + solve, "exactly two images");
+  writeText(dir / "not_a_folder", "a file where the outputs would go\n");
+  cases.refused("-o names an existing file", "run --calib rig.yaml l.png r.png -o not_a_folder --levels 1",
+                "-o not_a_folder: is an existing file, not a folder");
+  CHECK(readAll(dir / "not_a_folder") == "a file where the outputs would go\n");  // untouched
   cases.refused("bench --runs 0", "bench --calib rig.yaml l.png r.png --runs 0 --backend cpu", "--runs must be >= 1");
   cases.refused("bench --runs -3", "bench --calib rig.yaml l.png r.png --runs -3 --backend cpu", "--runs must be >= 1");
 
