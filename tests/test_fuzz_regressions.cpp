@@ -30,6 +30,15 @@ std::string load(const std::string& target, const fs::path& file) {
     if (target == "camchain") {
       cs::parseKalibr(readAll(file), file.filename().string());
       cs::loadKalibr(file.string());
+    } else if (target == "calib") {
+      cs::parseCalibration(readAll(file), file.filename().string());
+      cs::loadCalibration(file.string());
+    } else if (target == "basalt") {
+      cs::parseBasalt(readAll(file), file.filename().string());
+      cs::loadBasalt(file.string());
+    } else if (target == "opencv") {
+      cs::parseOpenCv(readAll(file), file.filename().string());
+      cs::loadOpenCv(file.string());
     } else if (target == "png") {
       cs::readPngGray(file.string());
     } else if (target == "exr") {
@@ -76,7 +85,23 @@ TEST_CASE("fuzz regressions: every crash input found so far loads or is a cs::Er
 
 TEST_CASE("fuzz seed corpus: every seed loads or is a cs::Error") {
   const int files = replay("corpus", true);
-  CHECK(files > 20);
+  CHECK(files > 40);
+}
+
+TEST_CASE("every calibration seed is read the same by parseCalibration (format detected) and its own reader") {
+  for (const char* target : {"camchain", "basalt", "opencv"})
+    for (const auto& entry : fs::directory_iterator(fuzzDir() / "corpus" / target)) {
+      CAPTURE(entry.path().string());
+      const std::string text = readAll(entry.path());
+      const cs::Rig own = std::string(target) == "camchain" ? cs::parseKalibr(text)
+                          : std::string(target) == "basalt" ? cs::parseBasalt(text)
+                                                            : cs::parseOpenCv(text);
+      const cs::Rig detected = cs::parseCalibration(text);
+      CHECK(detected.cam0.params == own.cam0.params);
+      CHECK(detected.cam1.params == own.cam1.params);
+      CHECK(detected.R == own.R);
+      CHECK(detected.t == own.t);
+    }
 }
 
 TEST_CASE("parseKalibr (the fuzzed entry) reads text exactly as loadKalibr reads the file") {

@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Core>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,10 @@ class YamlDoc {
  private:
   std::string name_;
 };
+
+// v is a whole number in [lo, hi] (checked before any cast to int, which would be
+// undefined for values out of range).
+inline bool wholeInRange(double v, double lo, double hi) { return v >= lo && v <= hi && v == std::floor(v); }
 
 // "prefix.key" or "key" when prefix is empty.
 inline std::string dotted(const std::string& prefix, const std::string& key) {

@@ -118,7 +118,7 @@ class OpenCvRigReader {
   int integer(const CvValue& v, const std::string& key) const {
     std::vector<double> n;
     if (v.kind != CvValue::Kind::Scalar || !calib::parseNumberList(v.text, n) || n.size() != 1 ||
-        n[0] != double(int(n[0])) || n[0] < 1 || n[0] > 1e6)
+        !calib::wholeInRange(n[0], 1, 1e6))
       fail(key + " must be a positive whole number" + v.where);
     return int(n[0]);
   }
@@ -132,8 +132,7 @@ class OpenCvRigReader {
       if (!v) continue;
       std::vector<double> wh = v->data;
       if (v->kind == CvValue::Kind::Scalar) calib::parseNumberList(v->text, wh);
-      if (wh.size() != 2 || wh[0] != double(int(wh[0])) || wh[1] != double(int(wh[1])) || wh[0] < 1 || wh[1] < 1 ||
-          wh[0] > 1e6 || wh[1] > 1e6)
+      if (wh.size() != 2 || !calib::wholeInRange(wh[0], 1, 1e6) || !calib::wholeInRange(wh[1], 1, 1e6))
         fail(std::string(key) + " must be [width, height] in pixels" + v->where);
       return {int(wh[0]), int(wh[1])};
     }

@@ -221,8 +221,7 @@ CvValue matrixValue(const XmlElement& e, const std::string& name) {
   std::vector<double> shape;
   for (const char* dim : {"rows", "cols"}) {
     std::vector<double> n;
-    if (!parseNumberList(child(e, dim)->text, n) || n.size() != 1 || n[0] != double(int(n[0])) || n[0] < 0 ||
-        n[0] > 1e6)
+    if (!parseNumberList(child(e, dim)->text, n) || n.size() != 1 || !wholeInRange(n[0], 0, 1e6))
       throw Error(oneLine(name + ": " + e.name + "." + dim + " must be a whole number" + v.where));
     shape.push_back(n[0]);
   }

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Writes the hand-made part of the seed corpus (tests/fuzz/corpus/): small PNGs of every
-colour type / bit depth / interlace, .flo files, and camchains of every camera model.
+colour type / bit depth / interlace, .flo files, camchains of every camera model, Basalt
+calibration.json files of every camera_type and OpenCV stereo FileStorage files (YAML, XML).
 The real camchains and three EXR seeds are copies of ../shared/data and tests/golden files;
 the other EXR seeds come from make_exr_seeds.cpp."""
 import os, struct, zlib
@@ -67,3 +68,58 @@ models = {
 }
 for key, m in models.items():
     out("camchain", f"{key}.yaml", (cam("cam0", *m) + cam("cam1", *m, pose=True)).encode())
+
+# Basalt calibration.json and OpenCV FileStorage seeds (the basalt, opencv and calib targets):
+# every Basalt camera_type, both OpenCV models in YAML and XML. Camera 1 sits 6.4 cm to
+# the right, turned 0.02 rad about y (the camchain seeds' pose, as a pose in camera 0's frame).
+half = 0.01  # half the turn: quaternion (0, sin, 0, cos) of 0.02 rad
+QY, QW = math.sin(half), math.cos(half)
+basalt_types = {
+    "kb4": "\"fx\": 280.0, \"fy\": 281.0, \"cx\": 320.5, \"cy\": 239.5, \"k1\": 0.01, \"k2\": -0.002, \"k3\": 0.0003, \"k4\": -0.0001",
+    "ds": "\"fx\": 300.0, \"fy\": 300.0, \"cx\": 320.0, \"cy\": 240.0, \"xi\": -0.2, \"alpha\": 0.59",
+    "eucm": "\"fx\": 380.0, \"fy\": 380.0, \"cx\": 320.0, \"cy\": 240.0, \"alpha\": 0.62, \"beta\": 1.1",
+    "ucm": "\"fx\": 370.0, \"fy\": 370.0, \"cx\": 320.0, \"cy\": 240.0, \"alpha\": 0.47",
+    "pinhole": "\"fx\": 458.6, \"fy\": 457.3, \"cx\": 319.5, \"cy\": 239.5",
+    "pinhole-radtan8": "\"fx\": 458.6, \"fy\": 457.3, \"cx\": 319.5, \"cy\": 239.5, \"k1\": -0.28, \"k2\": 0.07, "
+                       "\"p1\": 0.0002, \"p2\": -0.0001, \"k3\": 0.0, \"k4\": 0.0, \"k5\": 0.0, \"k6\": 0.0, \"rpmax\": 1.5",
+}
+def basalt(params):
+    pose0 = '{"px": 0.0, "py": 0.0, "pz": 0.0, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": 1.0}'
+    pose1 = f'{{"px": 0.064, "py": 0.0, "pz": 0.0, "qx": 0.0, "qy": {QY!r}, "qz": 0.0, "qw": {QW!r}}}'
+    cam = f'{{"camera_type": "{params[0]}", "intrinsics": {{{params[1]}}}}}'
+    return (f'{{\n    "value0": {{\n        "T_imu_cam": [{pose0}, {pose1}],\n'
+            f'        "intrinsics": [{cam}, {cam}],\n        "resolution": [[640, 480], [640, 480]],\n'
+            f'        "cam_time_offset_ns": 0\n    }}\n}}\n')
+for key, params in basalt_types.items():
+    out("basalt", f"{key}.json", basalt((key, params)).encode())
+
+opencv_models = {
+    "fisheye": ("fisheye", 4, 1, "[ 0.01, -0.002, 0.0003, -0.0001 ]"),
+    "plumb_bob": ("plumb_bob", 1, 5, "[ -0.28, 0.07, 0.0002, -0.0001, 0. ]"),
+}
+R = [c, 0.0, s_, 0.0, 1.0, 0.0, -s_, 0.0, c]
+def cv_yaml(model, rows, cols, d):
+    m = lambda name, r, k, data: (f"{name}: !!opencv-matrix\n   rows: {r}\n   cols: {k}\n   dt: d\n"
+                                  f"   data: {data}\n")
+    K = "[ 458.6, 0., 319.5, 0., 457.3, 239.5, 0., 0., 1. ]"
+    return ("%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n" + f"distortion_model: {model}\n" +
+            m("K1", 3, 3, K) + m("D1", rows, cols, d) + m("K2", 3, 3, K) + m("D2", rows, cols, d) +
+            m("R", 3, 3, "[ " + ", ".join(repr(v) for v in R) + " ]") + m("T", 3, 1, "[ -0.064, 0.0001, 0.0002 ]"))
+def cv_xml(model, rows, cols, d):
+    m = lambda name, r, k, data: (f'<{name} type_id="opencv-matrix">\n  <rows>{r}</rows>\n  <cols>{k}</cols>\n'
+                                  f'  <dt>d</dt>\n  <data>\n    {data}</data></{name}>\n')
+    K = "458.6 0. 319.5 0. 457.3 239.5 0. 0. 1."
+    d = d.strip("[] ").replace(",", "")
+    return ('<?xml version="1.0"?>\n<opencv_storage>\n<image_width>640</image_width>\n'
+            f'<image_height>480</image_height>\n<distortion_model>{model}</distortion_model>\n' +
+            m("M1", 3, 3, K) + m("D1", rows, cols, d) + m("M2", 3, 3, K) + m("D2", rows, cols, d) +
+            m("R", 3, 3, " ".join(repr(v) for v in R)) + m("T", 3, 1, "-0.064 0.0001 0.0002") + "</opencv_storage>\n")
+for key, (model, rows, cols, d) in opencv_models.items():
+    out("opencv", f"{key}.yaml", cv_yaml(model, rows, cols, d).encode())
+    out("opencv", f"{key}.xml", cv_xml(model, rows, cols, d).encode())
+
+# The calib target (format detection in front): one file of each format.
+out("calib", "kalibr_kb4.yaml", (cam("cam0", *models["kb4"]) + cam("cam1", *models["kb4"], pose=True)).encode())
+out("calib", "basalt_ds.json", basalt(("ds", basalt_types["ds"])).encode())
+out("calib", "opencv_fisheye.yaml", cv_yaml(*opencv_models["fisheye"]).encode())
+out("calib", "opencv_plumb_bob.xml", cv_xml(*opencv_models["plumb_bob"]).encode())
