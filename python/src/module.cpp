@@ -523,8 +523,10 @@ left, right: H x W uint8 / uint16 / float32 arrays (gray, any strides) or H x W 
 uint16 are scaled to [0, 1]. With the CUDA backend they may also be GPU arrays (CuPy,
 PyTorch: __dlpack__ or __cuda_array_interface__), read in place. return_device=True leaves
 the results on the GPU as DeviceArray objects. progress: called with the fraction done
-(0..1); an exception it raises is re-raised here (on the CPU backend it also stops the
-frame). The GIL is released while the frame is solved.)doc")
+(0..1) on this thread; an exception it raises is re-raised here (on the CPU backend it
+also stops the frame). GPU frames replay a recorded graph and report little in between;
+the GPU-array path (device inputs or return_device) reports nothing and leaves stages
+empty. The GIL is released while the frame is solved.)doc")
       .def("set_pose", &PyStereo::setPose, pb::arg("R"), pb::arg("t"),
            "For a moving camera: the pose of the second view relative to the first (X1 = R X0 + t).")
       .def("set_mask", &PyStereo::setMask, pb::arg("mask"),
