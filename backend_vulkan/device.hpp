@@ -1,0 +1,152 @@
+// The Vulkan backend's device layer: the loader (opened at run time with dlopen, so a build
+// with Vulkan runs on machines without it: the backend then reports "no Vulkan loader" and
+// auto falls back), the function tables, the instance (with the validation layer on
+// request) and the choice of device.
+#pragma once
+#define VK_NO_PROTOTYPES
+#include <vulkan/vulkan.h>
+
+#include <string>
+#include <vector>
+
+namespace cs::vk {
+
+// ---------------------------------------------------------------------------------------
+// Loader and function table.
+
+#define CS_VK_GLOBAL_FNS(X)                 \
+  X(vkCreateInstance)                       \
+  X(vkEnumerateInstanceLayerProperties)     \
+  X(vkEnumerateInstanceExtensionProperties) \
+  X(vkEnumerateInstanceVersion)
+
+#define CS_VK_INSTANCE_FNS(X)                 \
+  X(vkDestroyInstance)                        \
+  X(vkEnumeratePhysicalDevices)               \
+  X(vkGetPhysicalDeviceProperties)            \
+  X(vkGetPhysicalDeviceProperties2)           \
+  X(vkGetPhysicalDeviceFeatures2)             \
+  X(vkGetPhysicalDeviceQueueFamilyProperties) \
+  X(vkGetPhysicalDeviceMemoryProperties)      \
+  X(vkCreateDevice)                           \
+  X(vkDestroyDevice)                          \
+  X(vkGetDeviceQueue)                         \
+  X(vkCreateBuffer)                           \
+  X(vkDestroyBuffer)                          \
+  X(vkGetBufferMemoryRequirements)            \
+  X(vkAllocateMemory)                         \
+  X(vkFreeMemory)                             \
+  X(vkBindBufferMemory)                       \
+  X(vkMapMemory)                              \
+  X(vkUnmapMemory)                            \
+  X(vkGetBufferDeviceAddress)                 \
+  X(vkCreateShaderModule)                     \
+  X(vkDestroyShaderModule)                    \
+  X(vkCreatePipelineLayout)                   \
+  X(vkDestroyPipelineLayout)                  \
+  X(vkCreateComputePipelines)                 \
+  X(vkDestroyPipeline)                        \
+  X(vkCreateCommandPool)                      \
+  X(vkDestroyCommandPool)                     \
+  X(vkAllocateCommandBuffers)                 \
+  X(vkBeginCommandBuffer)                     \
+  X(vkEndCommandBuffer)                       \
+  X(vkResetCommandBuffer)                     \
+  X(vkCmdBindPipeline)                        \
+  X(vkCmdPushConstants)                       \
+  X(vkCmdDispatch)                            \
+  X(vkCmdPipelineBarrier)                     \
+  X(vkCmdCopyBuffer)                          \
+  X(vkCmdFillBuffer)                          \
+  X(vkCmdWriteTimestamp)                      \
+  X(vkCmdResetQueryPool)                      \
+  X(vkCreateQueryPool)                        \
+  X(vkDestroyQueryPool)                       \
+  X(vkGetQueryPoolResults)                    \
+  X(vkCreateFence)                            \
+  X(vkDestroyFence)                           \
+  X(vkWaitForFences)                          \
+  X(vkResetFences)                            \
+  X(vkQueueSubmit)                            \
+  X(vkDeviceWaitIdle)
+
+#define CS_VK_DECLARE(name) PFN_##name name = nullptr;
+
+struct Loader {
+  void* lib = nullptr;
+  PFN_vkGetInstanceProcAddr getInstanceProcAddr = nullptr;
+  CS_VK_GLOBAL_FNS(CS_VK_DECLARE)
+  std::string error;
+};
+
+// The process-wide loader, opened once.
+const Loader& loader();
+
+struct InstanceFns {
+  CS_VK_INSTANCE_FNS(CS_VK_DECLARE)
+  PFN_vkCreateDebugUtilsMessengerEXT vkCreateDebugUtilsMessengerEXT = nullptr;
+  PFN_vkDestroyDebugUtilsMessengerEXT vkDestroyDebugUtilsMessengerEXT = nullptr;
+
+  void load(VkInstance instance) {
+    auto get = loader().getInstanceProcAddr;
+#define CS_VK_LOAD(name) name = reinterpret_cast<PFN_##name>(get(instance, #name));
+    CS_VK_INSTANCE_FNS(CS_VK_LOAD)
+    CS_VK_LOAD(vkCreateDebugUtilsMessengerEXT)
+    CS_VK_LOAD(vkDestroyDebugUtilsMessengerEXT)
+#undef CS_VK_LOAD
+  }
+};
+
+// A Vulkan struct zeroed, with its sType set.
+template <class T>
+T vkStruct(VkStructureType type) {
+  T t{};
+  t.sType = type;
+  return t;
+}
+
+std::string resultText(VkResult r);
+
+// CURVESTEREO_VULKAN_VALIDATION is set (and not "0").
+bool validationRequested();
+
+// ---------------------------------------------------------------------------------------
+// Instance and device selection.
+
+struct Instance {
+  VkInstance instance = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+  InstanceFns fn;
+
+  Instance() = default;
+  Instance(const Instance&) = delete;
+  Instance& operator=(const Instance&) = delete;
+  ~Instance() {
+    if (!instance) return;
+    if (messenger && fn.vkDestroyDebugUtilsMessengerEXT)
+      fn.vkDestroyDebugUtilsMessengerEXT(instance, messenger, nullptr);
+    fn.vkDestroyInstance(instance, nullptr);
+  }
+
+  // "" on success, else why not.
+  std::string create(bool validation);
+};
+
+const char* typeName(VkPhysicalDeviceType t);
+
+struct Candidate {
+  VkPhysicalDevice device = VK_NULL_HANDLE;
+  VkPhysicalDeviceProperties props{};
+  uint32_t queueFamily = 0;
+  bool float64 = false, int64 = false;
+  std::string unusable;  // why this device cannot run the backend ("" if it can)
+};
+
+std::vector<Candidate> candidates(const Instance& inst);
+// The device `spec` selects, or an error. autoMode: refuse devices that are not GPUs.
+const Candidate* selectDevice(const std::vector<Candidate>& all, const std::string& spec, bool autoMode,
+                              std::string& why);
+// "" when a device matching `device` can be used, else why not (cached per process).
+std::string probe(const std::string& device, bool autoMode);
+
+}  // namespace cs::vk

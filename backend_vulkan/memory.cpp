@@ -1,0 +1,200 @@
+// The Vulkan backend's memory: device-local arenas that buffers sit in back to back,
+// host-visible parameter blocks, the staging buffer of transfers, and the transfers.
+#include <algorithm>
+#include <cstring>
+
+#include "curvestereo/image.hpp"
+#include "vulkan_impl.hpp"
+
+namespace cs::vk {
+
+// ---- memory ----
+
+// The largest device-local heap (a GPU's memory; lavapipe reports system memory).
+unsigned long long VulkanBackend::memoryBytes() const {
+  unsigned long long best = 0;
+  for (uint32_t i = 0; i < memProps_.memoryHeapCount; ++i)
+    if (memProps_.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
+      best = std::max<unsigned long long>(best, memProps_.memoryHeaps[i].size);
+  return best;
+}
+
+uint32_t VulkanBackend::memoryType(uint32_t bits, VkMemoryPropertyFlags required,
+                                   VkMemoryPropertyFlags preferred) const {
+  int best = -1;
+  for (uint32_t i = 0; i < memProps_.memoryTypeCount; ++i) {
+    const VkMemoryPropertyFlags f = memProps_.memoryTypes[i].propertyFlags;
+    if (!(bits & (1u << i)) || (f & required) != required) continue;
+    if ((f & preferred) == preferred) return i;
+    if (best < 0) best = int(i);
+  }
+  if (best < 0) throw Error("vulkan backend: no suitable memory type");
+  return uint32_t(best);
+}
+
+VulkanBackend::Arena VulkanBackend::makeBuffer(VkDeviceSize bytes, bool hostVisible) {
+  Arena a;
+  a.size = bytes;
+  auto bci = vkStruct<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
+  bci.size = bytes;
+  bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+              VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
+  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  check(inst_.fn.vkCreateBuffer(dev_, &bci, nullptr, &a.buffer), "vkCreateBuffer");
+  VkMemoryRequirements req;
+  inst_.fn.vkGetBufferMemoryRequirements(dev_, a.buffer, &req);
+  auto flags = vkStruct<VkMemoryAllocateFlagsInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO);
+  flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+  auto mai = vkStruct<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
+  mai.pNext = &flags;
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex =
+      hostVisible
+          ? memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                       VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
+          : memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+  VkResult r = inst_.fn.vkAllocateMemory(dev_, &mai, nullptr, &a.memory);
+  if (r != VK_SUCCESS) {
+    inst_.fn.vkDestroyBuffer(dev_, a.buffer, nullptr);
+    if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
+      throw Error("vulkan backend: out of " + std::string(hostVisible ? "host" : "device") + " memory allocating " +
+                  std::to_string(bytes >> 20) + " MiB on " + props_.deviceName);
+    check(r, "vkAllocateMemory");
+  }
+  check(inst_.fn.vkBindBufferMemory(dev_, a.buffer, a.memory, 0), "vkBindBufferMemory");
+  auto ai = vkStruct<VkBufferDeviceAddressInfo>(VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO);
+  ai.buffer = a.buffer;
+  a.address = inst_.fn.vkGetBufferDeviceAddress(dev_, &ai);
+  if (hostVisible) check(inst_.fn.vkMapMemory(dev_, a.memory, 0, VK_WHOLE_SIZE, 0, &a.mapped), "vkMapMemory");
+  return a;
+}
+
+void VulkanBackend::destroyBuffer(Arena& a) {
+  if (a.mapped) inst_.fn.vkUnmapMemory(dev_, a.memory);
+  if (a.buffer) inst_.fn.vkDestroyBuffer(dev_, a.buffer, nullptr);
+  if (a.memory) inst_.fn.vkFreeMemory(dev_, a.memory, nullptr);
+  a = Arena{};
+}
+
+Buffer VulkanBackend::doCreate(int width, int height, int channels) {
+  ensureUsable();
+  Buffer b{int(allocs_.size()), width, height, channels};
+  // Buffers sit back to back (16-byte aligned) in large arenas, so a kernel writing past
+  // its output lands in a neighbour: the guard tests see it.
+  const VkDeviceSize bytes = std::max<VkDeviceSize>(4, b.count() * sizeof(float));
+  const VkDeviceSize aligned = (bytes + 15) & ~VkDeviceSize(15);
+  const unsigned long long heap = memoryBytes();
+  if (heap && allocatedBytes_ + aligned > heap)
+    throw Error("vulkan backend: out of device memory: a " + std::to_string(width) + "x" + std::to_string(height) +
+                "x" + std::to_string(channels) + " buffer (" + std::to_string(bytes >> 20) +
+                " MiB) does not fit in the " + std::to_string(heap >> 20) + " MiB of " + props_.deviceName);
+  allocatedBytes_ += aligned;
+  if (arenas_.empty() || arenas_.back().used + aligned > arenas_.back().size)
+    arenas_.push_back(makeBuffer(std::max<VkDeviceSize>(VkDeviceSize(64) << 20, aligned), false));
+  Arena& a = arenas_.back();
+  allocs_.push_back({int(arenas_.size() - 1), a.used, bytes});
+  a.used += aligned;
+  frameValid_ = false;  // a new pipeline (new buffers) must not replay an old frame
+  return b;
+}
+
+// Backend has checked the buffer: created here, used no larger than created.
+const VulkanBackend::Alloc& VulkanBackend::alloc(const Buffer& b) const { return allocs_[size_t(b.id)]; }
+
+Addr VulkanBackend::addr(const Buffer& b) const {
+  const Alloc& a = alloc(b);
+  return arenas_[size_t(a.arena)].address + a.offset;
+}
+
+// A block of kernel parameters in host-visible memory, reused for identical contents (the
+// recorded frame's triangulation finds its block again every frame).
+Addr VulkanBackend::paramBlock(const void* data, size_t bytes) {
+  const std::string key(static_cast<const char*>(data), bytes);
+  auto it = paramCache_.find(key);
+  if (it != paramCache_.end()) return params_.address + it->second;
+  const VkDeviceSize aligned = (bytes + 255) & ~VkDeviceSize(255);
+  if (paramsUsed_ + aligned > params_.size) {
+    // Full (thousands of poses): wait until no submitted work reads a block, then start over.
+    flush();
+    paramCache_.clear();
+    paramsUsed_ = 0;
+    frameValid_ = false;
+  }
+  std::memcpy(static_cast<char*>(params_.mapped) + paramsUsed_, data, bytes);
+  paramCache_[key] = paramsUsed_;
+  const Addr a = params_.address + paramsUsed_;
+  paramsUsed_ += aligned;
+  return a;
+}
+
+// ---- transfers ----
+
+void VulkanBackend::doUpload(const Buffer& dst, const float* host) {
+  const Alloc& a = alloc(dst);
+  const VkDeviceSize bytes = dst.count() * sizeof(float);
+  flush();  // the staging buffer is free and earlier work has finished
+  if (staging_.size < bytes) {
+    destroyBuffer(staging_);
+    staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(4) << 20), true);
+  }
+  std::memcpy(staging_.mapped, host, bytes);
+  VkCommandBuffer cb = recorder();
+  barrier(cb);
+  VkBufferCopy region{0, a.offset, bytes};
+  inst_.fn.vkCmdCopyBuffer(cb, staging_.buffer, arenas_[size_t(a.arena)].buffer, 1, &region);
+  flush();
+}
+
+void VulkanBackend::doDownload(const Buffer& src, float* host) {
+  const Alloc& a = alloc(src);
+  const VkDeviceSize bytes = src.count() * sizeof(float);
+  flush();
+  if (staging_.size < bytes) {
+    destroyBuffer(staging_);
+    staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(4) << 20), true);
+  }
+  VkCommandBuffer cb = recorder();
+  barrier(cb);
+  VkBufferCopy region{a.offset, 0, bytes};
+  inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(a.arena)].buffer, staging_.buffer, 1, &region);
+  auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
+  mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr,
+                                0, nullptr);
+  flush();
+  std::memcpy(host, staging_.mapped, bytes);
+}
+
+void VulkanBackend::doFill(const Buffer& dst, float value) {
+  const Alloc& a = alloc(dst);
+  uint32_t bits;
+  std::memcpy(&bits, &value, 4);
+  VkCommandBuffer cb = recorder();
+  barrier(cb);
+  inst_.fn.vkCmdFillBuffer(cb, arenas_[size_t(a.arena)].buffer, a.offset, dst.count() * sizeof(float), bits);
+}
+
+void VulkanBackend::doCopy(const Buffer& dst, const Buffer& src) {
+  const Alloc& d = alloc(dst);
+  const Alloc& s = alloc(src);
+  VkCommandBuffer cb = recorder();
+  barrier(cb);
+  VkBufferCopy region{s.offset, d.offset, src.count() * sizeof(float)};
+  if (d.arena == s.arena && region.srcOffset == region.dstOffset) return;
+  inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(s.arena)].buffer, arenas_[size_t(d.arena)].buffer, 1, &region);
+}
+
+// Internal temporaries (the blurred image of the structure tensor), one per size and slot.
+Buffer VulkanBackend::scratch(int slot, int w, int h) {
+  auto key = std::make_tuple(slot, w, h);
+  auto it = scratch_.find(key);
+  if (it != scratch_.end()) return it->second;
+  const bool wasValid = frameValid_;
+  Buffer b = create(w, h, 1);
+  frameValid_ = wasValid;
+  scratch_[key] = b;
+  return b;
+}
+
+}  // namespace cs::vk

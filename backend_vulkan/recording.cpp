@@ -1,0 +1,207 @@
+// The Vulkan backend's command recording: pipelines (one per shader, made on first use),
+// the immediate command buffer and the recorded frame, submission and fences, replay, and
+// stage times from timestamp queries.
+#include <algorithm>
+
+#include "curvestereo/image.hpp"
+#include "shader_table.hpp"
+#include "vulkan_impl.hpp"
+
+namespace cs::vk {
+
+const char* const kShaderNames[kShaderCount] = {"warp",
+                                                "downsample",
+                                                "upsample",
+                                                "normalise_moments",
+                                                "normalise",
+                                                "structure_tensor_blur",
+                                                "structure_tensor",
+                                                "structure_tensor_steps",
+                                                "warp_derivatives",
+                                                "primal_dual_dual",
+                                                "primal_dual_primal",
+                                                "median",
+                                                "accumulate",
+                                                "fields_f32",
+                                                "fields_f64",
+                                                "triangulate_f32",
+                                                "triangulate_f64",
+                                                "sweep_warp_f32",
+                                                "sweep_warp_f64",
+                                                "sweep_cost",
+                                                "sweep_aggregate",
+                                                "sweep_select_f32",
+                                                "sweep_select_f64",
+                                                "sweep_initialise_f32",
+                                                "sweep_initialise_f64"};
+
+VkPipeline VulkanBackend::pipeline(Shader s) {
+  if (pipelines_[s]) return pipelines_[s];
+  const vk::EmbeddedShader* found = nullptr;
+  for (const auto& e : vk::embeddedShaders())
+    if (std::strcmp(e.name, kShaderNames[s]) == 0) found = &e;
+  if (!found) throw Error(std::string("vulkan backend: shader ") + kShaderNames[s] + " is not embedded");
+  auto smci = vkStruct<VkShaderModuleCreateInfo>(VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO);
+  smci.codeSize = found->bytes;
+  smci.pCode = found->code;
+  VkShaderModule module;
+  check(inst_.fn.vkCreateShaderModule(dev_, &smci, nullptr, &module), "vkCreateShaderModule");
+  auto cpci = vkStruct<VkComputePipelineCreateInfo>(VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO);
+  cpci.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+  cpci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  cpci.stage.module = module;
+  cpci.stage.pName = "main";
+  cpci.layout = layout_;
+  VkResult r = inst_.fn.vkCreateComputePipelines(dev_, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipelines_[s]);
+  inst_.fn.vkDestroyShaderModule(dev_, module, nullptr);
+  check(r, "vkCreateComputePipelines");
+  return pipelines_[s];
+}
+
+// ---- command recording and submission ----
+
+VkCommandBuffer VulkanBackend::recorder() {
+  ensureUsable();
+  if (recordingFrame_) return frameCmd_;
+  if (!immRecording_) {
+    auto bi = vkStruct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    check(inst_.fn.vkBeginCommandBuffer(immCmd_, &bi), "vkBeginCommandBuffer");
+    immRecording_ = true;
+  }
+  return immCmd_;
+}
+
+// Every command depends on everything before it (kernels read what the previous ones
+// wrote; transfers and dispatches interleave): one full memory barrier between them.
+void VulkanBackend::barrier(VkCommandBuffer cb) {
+  auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
+  mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_HOST_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
+                     VK_ACCESS_TRANSFER_WRITE_BIT;
+  const VkPipelineStageFlags stages = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+  inst_.fn.vkCmdPipelineBarrier(cb, stages | VK_PIPELINE_STAGE_HOST_BIT, stages, 0, 1, &mb, 0, nullptr, 0, nullptr);
+}
+
+void VulkanBackend::waitFence(VkFence fence, const char* what) {
+  VkResult r = inst_.fn.vkWaitForFences(dev_, 1, &fence, VK_TRUE, timeoutNs_);
+  if (r == VK_TIMEOUT) {
+    hung_ = true;
+    throw Error(std::string("vulkan backend: ") + what + " did not finish within " +
+                std::to_string(timeoutNs_ / 1000000000ull) + " s (device hung?)");
+  }
+  check(r, what);
+  check(inst_.fn.vkResetFences(dev_, 1, &fence), "vkResetFences");
+}
+
+void VulkanBackend::abortFrameRecording() {
+  // Something needs the results of the frame before endFrame(): run what was recorded
+  // as ordinary work and do not replay it.
+  if (!recordingFrame_) return;
+  recordingFrame_ = false;
+  frameValid_ = false;
+  check(inst_.fn.vkEndCommandBuffer(frameCmd_), "vkEndCommandBuffer");
+  submit(frameCmd_, frameFence_);
+  frameInFlight_ = true;
+}
+
+void VulkanBackend::submit(VkCommandBuffer cb, VkFence fence) {
+  auto si = vkStruct<VkSubmitInfo>(VK_STRUCTURE_TYPE_SUBMIT_INFO);
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cb;
+  check(inst_.fn.vkQueueSubmit(queue_, 1, &si, fence), "vkQueueSubmit");
+}
+
+// Submits pending work and waits for everything in flight.
+void VulkanBackend::flush() {
+  ensureUsable();
+  abortFrameRecording();
+  if (immRecording_) {
+    immRecording_ = false;
+    check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
+    submit(immCmd_, immFence_);
+    immInFlight_ = true;
+  }
+  if (frameInFlight_) {
+    frameInFlight_ = false;
+    waitFence(frameFence_, "the frame");
+  }
+  if (immInFlight_) {
+    immInFlight_ = false;
+    waitFence(immFence_, "queued work");
+    check(inst_.fn.vkResetCommandBuffer(immCmd_, 0), "vkResetCommandBuffer");
+  }
+}
+
+void VulkanBackend::synchronize() { flush(); }
+
+void VulkanBackend::beginFrame() {
+  flush();
+  check(inst_.fn.vkResetCommandBuffer(frameCmd_, 0), "vkResetCommandBuffer");
+  auto bi = vkStruct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
+  check(inst_.fn.vkBeginCommandBuffer(frameCmd_, &bi), "vkBeginCommandBuffer");
+  recordingFrame_ = true;
+  frameValid_ = false;
+  frameHasTimestamps_ = false;
+}
+
+void VulkanBackend::endFrame() {
+  if (!recordingFrame_) return;  // aborted: already submitted
+  recordingFrame_ = false;
+  check(inst_.fn.vkEndCommandBuffer(frameCmd_), "vkEndCommandBuffer");
+  submit(frameCmd_, frameFence_);
+  frameInFlight_ = true;
+  // A profiled frame holds timestamp writes (queries reset once per profiled frame): it
+  // is run, not replayed.
+  frameValid_ = !frameHasTimestamps_;
+}
+
+void VulkanBackend::replayFrame() {
+  if (!frameValid_) throw Error("vulkan backend: no recorded frame to replay");
+  flush();  // uploads are done; the previous frame has finished
+  submit(frameCmd_, frameFence_);
+  frameInFlight_ = true;
+}
+
+// ---- stage timing with timestamp queries ----
+
+void VulkanBackend::beginStage(const std::string& name) {
+  if (!queryPool_) {
+    Backend::beginStage(name);
+    return;
+  }
+  VkCommandBuffer cb = recorder();
+  if (recordingFrame_) frameHasTimestamps_ = true;
+  if (queryCount_ == 0) inst_.fn.vkCmdResetQueryPool(cb, queryPool_, 0, queryCapacity_);
+  if (queryCount_ >= queryCapacity_) return;  // beyond capacity the rest of the batch goes to the last stage
+  inst_.fn.vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queryPool_, queryCount_++);
+  stampNames_.push_back(name);
+}
+
+std::vector<StageTime> VulkanBackend::takeStageTimes() {
+  if (!queryPool_) return Backend::takeStageTimes();
+  std::vector<StageTime> out;
+  if (queryCount_ == 0) return out;
+  beginStage("");
+  flush();
+  std::vector<uint64_t> ticks(queryCount_);
+  check(inst_.fn.vkGetQueryPoolResults(dev_, queryPool_, 0, queryCount_, ticks.size() * sizeof(uint64_t), ticks.data(),
+                                       sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+        "vkGetQueryPoolResults");
+  const double msPerTick = double(props_.limits.timestampPeriod) * 1e-6;
+  for (size_t i = 0; i + 1 < ticks.size(); ++i) {
+    if (stampNames_[i].empty()) continue;
+    const uint64_t a = ticks[i] & timestampMask_, b = ticks[i + 1] & timestampMask_;
+    const double ms = double((b - a) & timestampMask_) * msPerTick;
+    auto it = std::find_if(out.begin(), out.end(), [&](const StageTime& s) { return s.name == stampNames_[i]; });
+    if (it == out.end())
+      out.push_back({stampNames_[i], ms});
+    else
+      it->ms += ms;
+  }
+  queryCount_ = 0;
+  stampNames_.clear();
+  return out;
+}
+
+}  // namespace cs::vk

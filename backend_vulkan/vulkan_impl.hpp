@@ -1,0 +1,199 @@
+// The Vulkan backend's class (vulkan_backend.hpp describes the backend), shared by its
+// sources, one per concern: device.cpp (loader, instance, device choice),
+// vulkan_backend.cpp (the logical device), memory.cpp (arenas, parameter blocks,
+// transfers), recording.cpp (command buffers, submission, frame replay, timestamps) and
+// kernels.cpp (the dispatches of the kernels).
+#pragma once
+#include <cstdint>
+#include <cstring>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "curvestereo/backend.hpp"
+#include "device.hpp"
+
+namespace cs::vk {
+
+// The shaders (kShaderNames: their names in the embedded table).
+enum Shader {
+  kWarp,
+  kDownsample,
+  kUpsample,
+  kNormaliseMoments,
+  kNormalise,
+  kTensorBlur,
+  kTensor,
+  kTensorSteps,
+  kWarpDerivatives,
+  kDual,
+  kPrimal,
+  kMedian,
+  kAccumulate,
+  kFields32,
+  kFields64,
+  kTriangulate32,
+  kTriangulate64,
+  kSweepWarp32,
+  kSweepWarp64,
+  kSweepCost,
+  kSweepAggregate,
+  kSweepSelect32,
+  kSweepSelect64,
+  kSweepInitialise32,
+  kSweepInitialise64,
+  kShaderCount
+};
+extern const char* const kShaderNames[kShaderCount];
+
+constexpr uint32_t kPushBytes = 128;
+constexpr uint32_t kGroup = 16;
+
+using Addr = uint64_t;
+
+class VulkanBackend final : public Backend {
+ public:
+  explicit VulkanBackend(const std::string& spec);
+  ~VulkanBackend() override;
+
+  std::string name() const override { return "vulkan"; }
+  std::string device() const override { return description_; }
+  unsigned long long memoryBytes() const override;
+
+  void synchronize() override;
+  void beginFrame() override;
+  void endFrame() override;
+  bool canReplayFrame() const override { return frameValid_; }
+  void replayFrame() override;
+  void beginStage(const std::string& name) override;
+  std::vector<StageTime> takeStageTimes() override;
+
+ protected:
+  Buffer doCreate(int width, int height, int channels) override;
+  void doUpload(const Buffer& dst, const float* host) override;
+  void doDownload(const Buffer& src, float* host) override;
+  void doFill(const Buffer& dst, float value) override;
+  void doCopy(const Buffer& dst, const Buffer& src) override;
+
+  void doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
+                const FieldsParams& params) override;
+  void doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
+  void doDownsample(const Buffer& dst, const Buffer& src, float scale) override;
+  void doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
+                   const NormaliseParams& params) override;
+  void doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
+                         const TensorParams& params) override;
+  void doWarpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0, const Buffer& i1,
+                         const Buffer& trajectory, const Buffer& w, const Buffer& u, const Buffer& mask,
+                         const Buffer& confidence, float weightFloor) override;
+  void doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+                    const Buffer& mask, const PrimalDualParams& params) override;
+  void doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
+  void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
+                    float duMax) override;
+  void doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) override;
+  void doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
+                   const SweepParams& p) override;
+  void doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                        const SweepParams& p) override;
+  void doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
+                     const SweepParams& p) override;
+  void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
+                         const Buffer& other, const Buffer& mask, const SweepParams& p,
+                         const ConsistencyParams& c) override;
+  void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
+                     const CameraParams& cam0, const double tPrime[3]) override;
+
+ private:
+  struct Arena {
+    VkBuffer buffer = VK_NULL_HANDLE;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    VkDeviceAddress address = 0;
+    VkDeviceSize size = 0, used = 0;
+    void* mapped = nullptr;
+  };
+  struct Alloc {
+    int arena;
+    VkDeviceSize offset, bytes;
+  };
+
+  void check(VkResult r, const char* what);
+  void ensureUsable() const;
+  uint32_t memoryType(uint32_t bits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const;
+  Arena makeBuffer(VkDeviceSize bytes, bool hostVisible);
+  void destroyBuffer(Arena& a);
+  const Alloc& alloc(const Buffer& b) const;
+  Addr addr(const Buffer& b) const;
+  Addr paramBlock(const void* data, size_t bytes);
+  Addr sweepParamBlock(const SweepParams& p);
+  VkPipeline pipeline(Shader s);
+
+  VkCommandBuffer recorder();
+  void barrier(VkCommandBuffer cb);
+  void flush();
+  void waitFence(VkFence fence, const char* what);
+  void abortFrameRecording();
+  // Submits one ended command buffer, signalling fence when done.
+  void submit(VkCommandBuffer cb, VkFence fence);
+  // A w x h grid of pixels in the 16 x 16 work groups of common.glsl.
+  template <class PC>
+  void dispatch(Shader s, const PC& pc, int w, int h);
+  // groupsX x groupsY work groups, for shaders that map their invocations otherwise.
+  template <class PC>
+  void dispatchGroups(Shader s, const PC& pc, uint32_t groupsX, uint32_t groupsY);
+  Buffer scratch(int slot, int w, int h);
+
+  std::string description_;
+  Instance inst_;
+  VkPhysicalDevice phys_ = VK_NULL_HANDLE;
+  VkPhysicalDeviceProperties props_{};
+  VkPhysicalDeviceMemoryProperties memProps_{};
+  bool float64_ = false;
+  VkDevice dev_ = VK_NULL_HANDLE;
+  VkQueue queue_ = VK_NULL_HANDLE;
+  uint32_t queueFamily_ = 0;
+  VkCommandPool pool_ = VK_NULL_HANDLE;
+  VkCommandBuffer immCmd_ = VK_NULL_HANDLE, frameCmd_ = VK_NULL_HANDLE;
+  VkFence immFence_ = VK_NULL_HANDLE, frameFence_ = VK_NULL_HANDLE;
+  VkPipelineLayout layout_ = VK_NULL_HANDLE;
+  VkPipeline pipelines_[kShaderCount] = {};
+  VkQueryPool queryPool_ = VK_NULL_HANDLE;
+  uint32_t queryCapacity_ = 0, queryCount_ = 0;
+  uint64_t timestampMask_ = ~0ull;
+  std::vector<std::string> stampNames_;
+
+  std::vector<Arena> arenas_;
+  std::vector<Alloc> allocs_;
+  Arena staging_, params_;
+  VkDeviceSize paramsUsed_ = 0;
+  unsigned long long allocatedBytes_ = 0;
+  std::map<std::string, VkDeviceSize> paramCache_;
+  std::map<std::tuple<int, int, int>, Buffer> scratch_;
+
+  bool immRecording_ = false, immInFlight_ = false, frameInFlight_ = false;
+  bool recordingFrame_ = false, frameValid_ = false, frameHasTimestamps_ = false;
+  bool lost_ = false, hung_ = false;
+  uint64_t timeoutNs_ = 120ull * 1000 * 1000 * 1000;
+};
+
+template <class PC>
+void VulkanBackend::dispatch(Shader s, const PC& pc, int w, int h) {
+  dispatchGroups(s, pc, (uint32_t(w) + kGroup - 1) / kGroup, (uint32_t(h) + kGroup - 1) / kGroup);
+}
+
+template <class PC>
+void VulkanBackend::dispatchGroups(Shader s, const PC& pc, uint32_t groupsX, uint32_t groupsY) {
+  static_assert(sizeof(PC) <= kPushBytes, "push constants exceed 128 bytes");
+  VkPipeline p = pipeline(s);
+  VkCommandBuffer cb = recorder();
+  uint8_t bytes[kPushBytes] = {};
+  std::memcpy(bytes, &pc, sizeof(PC));
+  barrier(cb);
+  inst_.fn.vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, p);
+  inst_.fn.vkCmdPushConstants(cb, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, kPushBytes, bytes);
+  inst_.fn.vkCmdDispatch(cb, groupsX, groupsY, 1);
+}
+
+}  // namespace cs::vk
