@@ -29,7 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
-import curvestereo as cs
+# Python puts this script's folder first on sys.path, and it holds the package's sources
+# (python/curvestereo) without the compiled module: import the built one instead.
+sys.path = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+import curvestereo as cs  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 

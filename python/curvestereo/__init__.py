@@ -14,6 +14,14 @@ message. See help(curvestereo.Stereo) and the README's "Python" section.
 # NumPy first: the extension needs it at run time, and this names what is missing.
 import numpy as _numpy  # noqa: F401
 
+try:
+    from . import _curvestereo  # noqa: F401
+except ImportError as e:  # e.g. python/curvestereo itself on sys.path, not the build's copy
+    raise ImportError(
+        f"curvestereo's compiled module is missing beside {__file__}: build it (README 'Python': "
+        "cmake ... then PYTHONPATH=build/python) or pip install the project"
+    ) from e
+
 from ._curvestereo import (  # noqa: F401
     Error,
     Result,

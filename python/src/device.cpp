@@ -15,6 +15,7 @@
 #include <cuda_runtime_api.h>
 
 #include <chrono>
+#include <exception>
 #include <mutex>
 
 #include "binding.hpp"
@@ -47,10 +48,14 @@ struct CudaContext {
   cudaEvent_t event = nullptr;
   std::mutex eventLock;  // one event, recorded from whichever thread frees a buffer
 
+  bool pools = false;  // stream-ordered allocation (cudaMallocAsync) works on this device
+
   explicit CudaContext(int dev) : device(dev) {
     DeviceGuard guard(device);
     check(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), "cudaStreamCreate");
     check(cudaEventCreateWithFlags(&event, cudaEventDisableTiming), "cudaEventCreate");
+    int supported = 0;
+    pools = cudaDeviceGetAttribute(&supported, cudaDevAttrMemoryPoolsSupported, device) == cudaSuccess && supported;
   }
   ~CudaContext() {
     DeviceGuard guard(device);
@@ -65,6 +70,8 @@ struct CudaContext {
   }
 };
 
+// Stream-ordered where the device has memory pools (a frame's allocations cost next to
+// nothing), else plain cudaMalloc / cudaFree (which waits for the whole device: safe too).
 struct DeviceBuffer {
   std::shared_ptr<CudaContext> ctx;
   void* ptr = nullptr;
@@ -72,13 +79,20 @@ struct DeviceBuffer {
 
   DeviceBuffer(std::shared_ptr<CudaContext> c, size_t n) : ctx(std::move(c)), bytes(n) {
     DeviceGuard guard(ctx->device);
-    check(cudaMallocAsync(&ptr, bytes ? bytes : 1, ctx->stream), "cudaMallocAsync");
+    if (ctx->pools)
+      check(cudaMallocAsync(&ptr, bytes ? bytes : 1, ctx->stream), "cudaMallocAsync");
+    else
+      check(cudaMalloc(&ptr, bytes ? bytes : 1), "cudaMalloc");
   }
   // May run on any thread, with or without the GIL (a DLPack consumer's deleter): CUDA only.
   ~DeviceBuffer() {
     DeviceGuard guard(ctx->device);
-    ctx->waitFor(cudaStreamLegacy);
-    cudaFreeAsync(ptr, ctx->stream);
+    if (ctx->pools) {
+      ctx->waitFor(cudaStreamLegacy);
+      cudaFreeAsync(ptr, ctx->stream);
+    } else {
+      cudaFree(ptr);
+    }
   }
 };
 
@@ -215,6 +229,14 @@ class DevicePath {
       pb::gil_scoped_release nogil;
       DeviceGuard guard(ctx_->device);
       cudaStream_t s = ctx_->stream;
+      // On an error part-way, wait for what was queued before the inputs are let go.
+      struct SyncOnError {
+        cudaStream_t s;
+        int exceptions = std::uncaught_exceptions();
+        ~SyncOnError() {
+          if (std::uncaught_exceptions() > exceptions) cudaStreamSynchronize(s);
+        }
+      } syncOnError{s};
       float* dst[2] = {static_cast<float*>(inputs_->ptr), static_cast<float*>(inputs_->ptr) + n};
       check(cudaMemsetAsync(flag_->ptr, 0, sizeof(unsigned), s), "cudaMemsetAsync");
       for (int k = 0; k < 2; ++k) {
