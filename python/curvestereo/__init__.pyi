@@ -116,6 +116,7 @@ class Stereo:
         preset: str = "realtime",
         backend: str = "auto",
         *,
+        device: int | str = ...,
         outputs: Sequence[Literal["disparity", "warp", "points", "depth", "valid", "z"]] | None = None,
         profile: bool | None = None,
         # Solver parameters (Stereo.params lists them all; CLI spellings such as

@@ -280,6 +280,8 @@ class PyStereo {
         outputs = pb::reinterpret_borrow<pb::object>(item.second);
       else if (key == "profile")
         profile = pb::reinterpret_borrow<pb::object>(item.second);
+      else if (key == "device")  // the CLI's --device: an index or a name substring
+        backendSpec_ += ":" + std::string(pb::str(item.second));
       else
         overrides[item.first] = item.second;
     }
@@ -287,7 +289,7 @@ class PyStereo {
     outputs_ = parseOutputs(outputs);
     {
       pb::gil_scoped_release nogil;  // setting up a GPU backend takes a while
-      stereo_ = std::make_unique<Stereo>(rig, params_, backend);
+      stereo_ = std::make_unique<Stereo>(rig, params_, backendSpec_);
     }
     stereo_->setOutputs(outputs_);
     // Stage timing synchronises at every stage and stops GPU frame replay: on by default
@@ -506,7 +508,7 @@ PYBIND11_MODULE(_curvestereo, m) {
 Stereo(rig, preset="realtime", backend="auto", *, outputs=None, profile=None, **overrides)
 
 preset: one of presets(). backend: "auto", "cpu", "cuda", "vulkan", optionally with a
-device ("vulkan:1", "cuda:0"). overrides: solver parameters by name (warps=20,
+device ("vulkan:1", "cuda:0"; or device=1 / device="RTX", as the CLI's --device). overrides: solver parameters by name (warps=20,
 lambda_=3.0, du_max=0.3, init="planesweep", ...; see Stereo.params for all). outputs: the
 optional outputs to compute, a subset of ["disparity", "warp", "points"] (depth and valid
 always; fewer means less to transfer from a GPU). profile: fill Result.stages (default: on

@@ -1,5 +1,5 @@
-"""Shared fixtures: a tiny synthetic rig and pair (no files needed), the CLI when the tests
-run from a build tree (CURVESTEREO_CLI, set by ctest), and the shared data folder."""
+"""Shared fixtures: a tiny synthetic rig and pair (no files needed), and the CLI when the
+tests run from a build tree (CURVESTEREO_CLI, set by ctest; else build*/tools/curvestereo)."""
 import os
 import shutil
 import subprocess
@@ -101,14 +101,6 @@ def synth_pair(cli, tmp_path_factory):
     """A pair rendered by `curvestereo synth` (real scene, ground truth), 96 x 96."""
     d = tmp_path_factory.mktemp("synth")
     run_cli(cli, "synth", "-o", d, "--size", 96)
-    return d
-
-
-@pytest.fixture(scope="session")
-def shared_data():
-    d = Path(os.environ.get("CURVESTEREO_SHARED_DATA", REPO.parent / "shared" / "data"))
-    if not d.is_dir():
-        pytest.skip("../shared/data is not present")
     return d
 
 
