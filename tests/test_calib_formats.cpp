@@ -382,8 +382,8 @@ TEST_CASE("the format comes from the content; unrecognised files are one line") 
   CHECK(cs::detectCalibFormat("%YAML:1.0\n---\n") == CalibFormat::OpenCv);
   checkError("", {"empty"});
   checkError("  \n\t\n", {"empty"});
-  checkError("camera: 1\n", {"not a recognised calibration", "Kalibr", "Basalt", "OpenCV"});
-  checkError("[1, 2, 3]\n", {"not a calibration file"});
+  checkError("camera: 1\n", {"not a Kalibr camchain, Basalt calibration.json or OpenCV", "cam0"});
+  checkError("[1, 2, 3]\n", {"not a Kalibr camchain"});
   checkError("{\"value0\": [1, 2", {"JSON syntax error"});
   const std::string missing = (cs::test::tempDir("calib_missing") / "none.json").string();
   CHECK_THROWS_WITH_AS(cs::loadCalibration(missing), doctest::Contains((missing + ": cannot open file").c_str()),

@@ -10,9 +10,10 @@ namespace cs {
 
 namespace {
 
-const char* kExpected =
-    "expected a Kalibr camchain (cam0, cam1), a Basalt calibration.json (value0.T_imu_cam, intrinsics, "
-    "resolution) or an OpenCV FileStorage file (K1, D1, K2, D2, R, T)";
+// Names every format, so the message fits whichever the user meant.
+const char* kNotACalibration =
+    "not a Kalibr camchain, Basalt calibration.json or OpenCV FileStorage stereo file (expected the keys cam0 and "
+    "cam1, value0.T_imu_cam / intrinsics / resolution, or K1 D1 K2 D2 R T)";
 
 bool hasAny(const YAML::Node& map, std::initializer_list<const char*> keys) {
   for (const char* key : keys)
@@ -44,11 +45,11 @@ CalibFormat detectCalibFormat(const std::string& text, const std::string& name) 
   if (text.compare(0, 6, "%YAML:") == 0) return CalibFormat::OpenCv;
   const calib::YamlDoc doc(name);
   const YAML::Node root = doc.parse(text, first == '{' ? "JSON" : "YAML");
-  if (!root.IsMap()) doc.fail(std::string("not a calibration file (") + kExpected + ")");
+  if (!root.IsMap()) doc.fail(kNotACalibration);
   if (hasAny(root, {"cam0", "cam1"})) return CalibFormat::Kalibr;
   if (hasAny(root, {"value0", "T_imu_cam"})) return CalibFormat::Basalt;
   if (hasAny(root, {"K1", "M1", "D1", "K2", "M2", "D2", "R", "T"})) return CalibFormat::OpenCv;
-  doc.fail(std::string("not a recognised calibration (") + kExpected + ")");
+  doc.fail(kNotACalibration);
 }
 
 Rig parseCalibration(const std::string& text, const std::string& name, CalibFormat* format) {
