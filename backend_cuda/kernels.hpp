@@ -159,7 +159,8 @@ cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, 
 
 // volume, costs, aggregated: p.planes channels. best: 2 channels (q, cost). other: the
 // reverse sweep's best. launchSweepAggregate: p.planes <= kMaxSweepPlanes (else
-// cudaErrorInvalidValue); aggregated and costs must not alias.
+// cudaErrorInvalidValue); aggregated and costs must not alias; spare: scratch of three
+// times aggregated's size (the directions other than +x, walked at the same time).
 cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepDev& p);
 cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume, Img mask, const SweepDev& p);
 cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p);
