@@ -45,7 +45,9 @@ bool bilinear(const ImageF& radial, const Vec2<double>& p, float& out) {
   return true;
 }
 
-void requireCameraSize(const Camera& cam0, const ImageF& radial, const char* what) {
+// The model is built from cam0.params without further checks, so they must be sound.
+void checkInputs(const Camera& cam0, const ImageF& radial, const char* what) {
+  cam0.validate();
   if (radial.width != cam0.width || radial.height != cam0.height)
     throw Error(std::string(what) + ": the depth image is " + std::to_string(radial.width) + "x" +
                 std::to_string(radial.height) + " but camera 0 is " + std::to_string(cam0.width) + "x" +
@@ -96,7 +98,7 @@ float sampleRadial(const ImageF& radial, const Vec2<double>& p, DepthSampling sa
 }
 
 ImageF pinholeDepth(const Camera& cam0, const ImageF& radial, const PinholeView& view, DepthSampling sampling) {
-  requireCameraSize(cam0, radial, "pinhole depth");
+  checkInputs(cam0, radial, "pinhole depth");
   return resample(
       cam0, radial, view.width, view.height, sampling, [&](int x, int y) { return view.ray(x, y); },
       [](const Vec3<double>& ray) { return ray.z() / ray.norm(); });
@@ -110,7 +112,7 @@ Vec3<double> equirectRay(double x, double y, int width) {
 }
 
 ImageF equirectRange(const Camera& cam0, const ImageF& radial, int width, DepthSampling sampling) {
-  requireCameraSize(cam0, radial, "equirectangular range");
+  checkInputs(cam0, radial, "equirectangular range");
   if (width < 4 || width % 2 || width > kMaxSide)
     throw Error("equirectangular width must be even and 4 to " + std::to_string(kMaxSide) + " px, got " +
                 std::to_string(width));
