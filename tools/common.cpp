@@ -13,9 +13,9 @@
 namespace cs::cli {
 
 const std::set<std::string> kSolverOptions = {
-    "preset",    "warps",      "iterations", "levels",        "lambda",      "du-max",  "alpha0",  "alpha1",
-    "max-fov",   "gamma",      "median",     "backend",       "mask",        "epipole", "beta",    "eta",
-    "device",    "init",       "init-level", "init-parallax", "init-radius", "init-p1", "init-p2", "occlusion-weight",
+    "preset",    "warps",      "iterations",  "levels",        "lambda",      "du-max",  "alpha0",  "alpha1",
+    "max-fov",   "gamma",      "median",      "backend",       "mask",        "epipole", "beta",    "eta",
+    "device",    "init",       "init-level",  "init-parallax", "init-radius", "init-p1", "init-p2", "occlusion-weight",
     "data-term", "norm-sigma", "noise-level", "init-warps"};
 
 std::string backendFromArgs(const Args& args) {
@@ -92,7 +92,7 @@ ImageF loadImageFor(const std::string& path, const Camera& cam, const char* whic
 
 StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftPath, const std::string& rightPath,
                               bool scaleIntrinsics) {
-  StereoInputs in{loadKalibr(calib), loadImage(leftPath, "left"), loadImage(rightPath, "right")};
+  StereoInputs in{loadCalibration(calib), loadImage(leftPath, "left"), loadImage(rightPath, "right")};
   const ImageF &l = in.left, &r = in.right;
   if (l.width != r.width || l.height != r.height)
     throw Error("left image '" + leftPath + "' is " + sizeText(l.width, l.height) + " but right image '" + rightPath +
@@ -122,32 +122,14 @@ StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftP
   return in;
 }
 
-void writeDepthPng(const std::string& path, const ImageF& radialDepth) {
-  // Inverse depth spreads near and far structure evenly; the range comes from the
-  // 2nd/98th percentiles so a few outliers do not wash the picture out.
-  ImageF inv(radialDepth.width, radialDepth.height, NAN);
-  std::vector<float> finite;
-  for (size_t i = 0; i < inv.size(); ++i) {
-    float d = radialDepth.data[i];
-    if (std::isnan(d) || d <= 0) continue;
-    inv.data[i] = std::isinf(d) ? 0.f : 1.f / d;
-    finite.push_back(inv.data[i]);
-  }
-  float lo = 0.f, hi = 1.f;
-  if (!finite.empty()) {
-    std::sort(finite.begin(), finite.end());
-    lo = finite[size_t(0.02 * double(finite.size() - 1))];
-    hi = finite[size_t(0.98 * double(finite.size() - 1))];
-    if (hi <= lo) hi = lo + 1e-3f;
-  }
-  writePngRgb(path, colorizeScalar(inv, lo, hi));
-}
+void writeDepthPng(const std::string& path, const ImageF& radialDepth) { writePngRgb(path, depthPicture(radialDepth)); }
 
 float minConfidenceFromArgs(const Args& args, const Params& params) {
   if (!args.has("min-confidence")) return 0.f;
   if (params.init != Params::Init::PlaneSweep)
     throw Error(
-        "--min-confidence needs the plane-sweep initialiser's confidence (--init planesweep; on in --preset realtime and quality)");
+        "--min-confidence needs the plane-sweep initialiser's confidence (--init planesweep; on in --preset realtime "
+        "and quality)");
   const double c = args.getDouble("min-confidence", 0.0);
   if (!(c >= 0 && c <= 1)) throw Error("--min-confidence must be in [0, 1]");
   return float(c);

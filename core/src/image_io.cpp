@@ -634,6 +634,25 @@ Image<uint32_t> colorizeScalar(const ImageF& values, float lo, float hi) {
   return out;
 }
 
+Image<uint32_t> depthPicture(const ImageF& radialDepth) {
+  ImageF inverse(radialDepth.width, radialDepth.height, NAN);
+  std::vector<float> finite;
+  for (size_t i = 0; i < inverse.size(); ++i) {
+    const float d = radialDepth.data[i];
+    if (std::isnan(d) || d <= 0) continue;
+    inverse.data[i] = std::isinf(d) ? 0.f : 1.f / d;
+    finite.push_back(inverse.data[i]);
+  }
+  float lo = 0.f, hi = 1.f;
+  if (!finite.empty()) {
+    std::sort(finite.begin(), finite.end());
+    lo = finite[size_t(0.02 * double(finite.size() - 1))];
+    hi = finite[size_t(0.98 * double(finite.size() - 1))];
+    if (hi <= lo) hi = lo + 1e-3f;
+  }
+  return colorizeScalar(inverse, lo, hi);
+}
+
 // maxMagnitude <= 0 (or non-finite) means "scale by the largest known flow".
 Image<uint32_t> colorizeFlow(const FlowImage& flow, float maxMagnitude) {
   if (!(maxMagnitude > 0.f) || !std::isfinite(maxMagnitude)) maxMagnitude = largestKnownMagnitude(flow);

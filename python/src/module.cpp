@@ -128,28 +128,6 @@ void writeExrFile(const Path& file, pb::handle obj) {
   writeExr(path, imageFromArray(a, "write_exr image"));
 }
 
-// The CLI's depth.png (tools/common.cpp writeDepthPng, not part of the library): inverse
-// depth on the library's colour map, its range the 2nd / 98th percentile so that a few
-// outliers do not wash the picture out; invalid black. Kept identical on purpose.
-Image<uint32_t> depthColours(const ImageF& radialDepth) {
-  ImageF inv(radialDepth.width, radialDepth.height, NAN);
-  std::vector<float> finite;
-  for (size_t i = 0; i < inv.size(); ++i) {
-    const float d = radialDepth.data[i];
-    if (std::isnan(d) || d <= 0) continue;
-    inv.data[i] = std::isinf(d) ? 0.f : 1.f / d;
-    finite.push_back(inv.data[i]);
-  }
-  float lo = 0.f, hi = 1.f;
-  if (!finite.empty()) {
-    std::sort(finite.begin(), finite.end());
-    lo = finite[size_t(0.02 * double(finite.size() - 1))];
-    hi = finite[size_t(0.98 * double(finite.size() - 1))];
-    if (hi <= lo) hi = lo + 1e-3f;
-  }
-  return colorizeScalar(inv, lo, hi);
-}
-
 pb::array rgbArray(const Image<uint32_t>& img) {
   pb::array_t<uint8_t> out({pb::ssize_t(img.height), pb::ssize_t(img.width), pb::ssize_t(3)});
   uint8_t* o = out.mutable_data();
@@ -576,7 +554,7 @@ empty. The GIL is released while the frame is solved.)doc")
       "Write the finite points of an (..., 3) array as a binary PLY. colours: None (white), gray with the "
       "points' shape without the last axis (uint8, or float in [0, 1] such as the left image), or RGB (..., 3).");
   m.def(
-      "depth_picture", [](pb::handle depth) { return rgbArray(depthColours(floatImage2d(depth, "depth_picture"))); },
+      "depth_picture", [](pb::handle depth) { return rgbArray(depthPicture(floatImage2d(depth, "depth_picture"))); },
       pb::arg("depth"),
       "Radial depth as an H x W x 3 uint8 picture, the same as `curvestereo run`'s depth.png: inverse depth, "
       "colour-mapped between its 2nd and 98th percentile, invalid black.");

@@ -45,5 +45,9 @@ void writePly(const std::string& path, const std::vector<PlyPoint>& points);
 // become black.
 Image<uint32_t> colorizeScalar(const ImageF& values, float lo, float hi);  // turbo-like map
 Image<uint32_t> colorizeFlow(const FlowImage& flow, float maxMagnitude);   // Middlebury colour wheel
+// Radial depth as people look at it (run's depth.png): inverse depth on colorizeScalar's
+// map, its range the 2nd / 98th percentile so that a few outliers do not wash it out;
+// invalid (NaN, <= 0) black, infinity (zero disparity) at inverse depth 0.
+Image<uint32_t> depthPicture(const ImageF& radialDepth);
 
 }  // namespace cs
