@@ -9,14 +9,55 @@
 #include <sstream>
 
 #include "curvestereo/image_io.hpp"
+#include "curvestereo/param_table.hpp"
 
 namespace cs::cli {
 
-const std::set<std::string> kSolverOptions = {
-    "preset",    "warps",      "iterations",  "levels",        "lambda",      "du-max",  "alpha0",  "alpha1",
-    "max-fov",   "gamma",      "median",      "backend",       "mask",        "epipole", "beta",    "eta",
-    "device",    "init",       "init-level",  "init-parallax", "init-radius", "init-p1", "init-p2", "occlusion-weight",
-    "data-term", "norm-sigma", "noise-level", "init-warps"};
+namespace {
+
+// The options that are not parameters of the solver, then both spellings of each parameter.
+std::set<std::string> solverOptions() {
+  std::set<std::string> names = {"preset", "backend", "device", "mask"};
+  for (const ParamInfo& info : paramTable()) names.insert({info.cliName(), info.cliLongName()});
+  return names;
+}
+
+}  // namespace
+
+const std::set<std::string> kSolverOptions = solverOptions();
+
+std::string solverUsage() {
+  std::string s =
+      "solver options (run, demo, eval, bench):\n"
+      "  --backend auto|cpu|...  --device INDEX|NAME  --preset realtime|default|quality|paper  --mask PNG (run)\n"
+      "  --min-confidence C (run, demo: points.ply; needs the plane-sweep initialiser)\n";
+  const char* group = "";
+  for (const ParamInfo& info : paramTable()) {
+    if (std::string(info.group) != group) s += std::string(info.group) + ":\n";
+    group = info.group;
+    std::string value;
+    switch (info.type) {
+      case ParamInfo::Type::Int:
+        value = "N";
+        break;
+      case ParamInfo::Type::Float:
+      case ParamInfo::Type::Double:
+        value = "X";
+        break;
+      case ParamInfo::Type::Bool:
+        value = "on|off";
+        break;
+      case ParamInfo::Type::Enum:
+        for (const auto& c : info.choices) value += (value.empty() ? "" : "|") + c;
+        break;
+    }
+    std::string option = "  --" + info.cliName() + " " + value;
+    if (option.size() < 36) option.resize(36, ' ');
+    const std::string range = info.rangeText();
+    s += option + " " + info.help + (range.empty() ? "" : " (" + range + ")") + "\n";
+  }
+  return s;
+}
 
 std::string backendFromArgs(const Args& args) {
   std::string backend = args.get("backend", "auto");
@@ -26,34 +67,31 @@ std::string backendFromArgs(const Args& args) {
 
 Params paramsFromArgs(const Args& args) {
   Params p = preset(args.get("preset", "default"));
-  p.warps = args.getInt("warps", p.warps);
-  p.iterations = args.getInt("iterations", p.iterations);
-  p.levels = args.getInt("levels", p.levels);
-  if (args.has("data-term")) p = p.withDataTerm(parseDataTerm(args.get("data-term", "normalised")));
-  p.normSigma = float(args.getDouble("norm-sigma", p.normSigma));
-  p.noiseLevel = float(args.getDouble("noise-level", p.noiseLevel));
-  p.lambda = float(args.getDouble("lambda", p.lambda));
-  p.duMax = float(args.getDouble("du-max", p.duMax));
-  p.alpha0 = float(args.getDouble("alpha0", p.alpha0));
-  p.alpha1 = float(args.getDouble("alpha1", p.alpha1));
-  p.beta = float(args.getDouble("beta", p.beta));
-  p.eta = float(args.getDouble("eta", p.eta));
-  p.gamma = float(args.getDouble("gamma", p.gamma));
-  p.maxFovDeg = args.getDouble("max-fov", p.maxFovDeg);
-  p.epipoleDeg = args.getDouble("epipole", p.epipoleDeg);
-  if (args.has("init")) p.init = parseInit(args.get("init", "none"));
-  p.initLevel = args.getInt("init-level", p.initLevel);
-  p.initMaxParallaxDeg = args.getDouble("init-parallax", p.initMaxParallaxDeg);
-  p.initRadius = args.getInt("init-radius", p.initRadius);
-  p.initP1 = float(args.getDouble("init-p1", p.initP1));
-  p.initP2 = float(args.getDouble("init-p2", p.initP2));
-  p.occlusionWeight = float(args.getDouble("occlusion-weight", p.occlusionWeight));
-  p.initWarps = args.getInt("init-warps", p.initWarps);
-
-  if (args.has("median")) {
-    std::string m = args.get("median", "on");
-    if (m != "on" && m != "off") throw Error("option --median expects on or off, got '" + m + "'");
-    p.medianFilter = m == "on";
+  // In the table's order: --data-term sets its default lambda before an explicit --lambda.
+  for (const ParamInfo& info : paramTable()) {
+    const std::string shortName = info.cliName(), longName = info.cliLongName();
+    if (args.has(shortName) && args.has(longName) && shortName != longName)
+      throw Error("options --" + shortName + " and --" + longName + " set the same parameter");
+    const std::string opt = args.has(longName) ? longName : shortName;
+    if (!args.has(opt)) continue;
+    switch (info.type) {
+      case ParamInfo::Type::Int:
+        info.setNumber(p, args.getInt(opt, 0));
+        break;
+      case ParamInfo::Type::Float:
+      case ParamInfo::Type::Double:
+        info.setNumber(p, args.getDouble(opt, 0.0));
+        break;
+      case ParamInfo::Type::Bool: {
+        const std::string m = args.get(opt, "on");
+        if (m != "on" && m != "off") throw Error("option --" + opt + " expects on or off, got '" + m + "'");
+        info.setFlag(p, m == "on");
+        break;
+      }
+      case ParamInfo::Type::Enum:
+        info.setChoiceNamed(p, args.get(opt, ""));
+        break;
+    }
   }
   p.validate();
   return p;

@@ -13,9 +13,13 @@ namespace cs::cli {
 // Options every solving command accepts (for allowOnly()).
 extern const std::set<std::string> kSolverOptions;
 
-// --preset NAME plus explicit overrides (--warps, --iterations, --levels, --lambda,
-// --du-max, --alpha0, --alpha1, --max-fov, --gamma, --median on|off).
+// --preset NAME plus an option per parameter of cs::paramTable() (--warps, --du-max,
+// --median on|off, --data-term normalised|brightness, ...; an alias's spelling or the
+// full name: --max-fov or --max-fov-deg), validated.
 Params paramsFromArgs(const Args& args);
+
+// The usage text's lines for those options, from the same table.
+std::string solverUsage();
 
 // The backend spec for Stereo: --backend NAME plus --device INDEX|NAME-SUBSTRING
 // ("vulkan" + "1" -> "vulkan:1").

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "common.hpp"
 
 namespace {
 
@@ -31,13 +32,9 @@ commands:
   synth -o OUTDIR [--scene urban|indoor] [--motion binocular|forward|sideways] [--camera none|t265]
                                 render a synthetic pair with exact ground truth
 
-solver options (run, demo, eval, bench):
-  --backend auto|cpu|...  --device INDEX|NAME  --preset realtime|default|quality  --warps N
-  --iterations K  --levels L  --lambda X  --du-max PX  --max-fov DEG  --median on|off  --mask PNG (run)
-plane-sweep initialiser (on in --preset quality):
-  --init none|planesweep  --init-level L  --init-parallax DEG  --init-radius R  --init-p1 P1
-  --init-p2 P2  --occlusion-weight W  --min-confidence C (run, demo: points.ply)
-camera model (synth, demo; off unless asked; depth untouched; writes photometry.json):
+)";
+
+const char* kUsageTail = R"(camera model (synth, demo; off unless asked; depth untouched; writes photometry.json):
   --camera none|t265  then overrides: --exposure MEDIAN (target median grey, 0 = as rendered)
   --vignette RIM (both; rim/centre in (0,1])  --vignette-left RIM  --vignette-right RIM
   --vignette-mode radius|angle  --gain-left G  --gain-right G  --offset-left O  --offset-right O
@@ -47,17 +44,19 @@ camera model (synth, demo; off unless asked; depth untouched; writes photometry.
 'curvestereo <command> --help' repeats this text.
 )";
 
+std::string usage() { return kUsage + cs::cli::solverUsage() + kUsageTail; }
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
-    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    std::fputs(usage().c_str(), argc < 2 ? stderr : stdout);
     return argc < 2 ? 2 : 0;
   }
   const std::string command = argv[1];
   for (int i = 2; i < argc; ++i)
     if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-      std::fputs(kUsage, stdout);
+      std::fputs(usage().c_str(), stdout);
       return 0;
     }
   try {

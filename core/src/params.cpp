@@ -1,10 +1,10 @@
 #include "curvestereo/params.hpp"
 
 #include <cmath>
-#include <sstream>
 
 #include "curvestereo/backend.hpp"
 #include "curvestereo/image.hpp"
+#include "curvestereo/param_table.hpp"
 
 namespace cs {
 
@@ -17,38 +17,11 @@ void require(bool ok, const std::string& what) {
 }  // namespace
 
 void Params::validate() const {
-  require(levels >= 1 && levels <= 12, "levels must be in [1, 12]");
-  require(std::isfinite(scale) && scale > 1.0 && scale <= 4.0, "scale must be in (1, 4]");
-  require(minWidth >= 8, "minWidth must be >= 8");
-  require(warps >= 1 && warps <= 1000, "warps must be in [1, 1000]");
-  require(iterations >= 1 && iterations <= 1000, "iterations must be in [1, 1000]");
-  require(std::isfinite(duMax) && duMax > 0, "duMax must be > 0");
-  require(std::isfinite(normSigma) && normSigma >= 0.5f && 3.f * normSigma <= float(kMaxNormaliseRadius),
-          "normSigma must be in [0.5, " + std::to_string(kMaxNormaliseRadius / 3) + "]");
-  require(std::isfinite(noiseLevel) && noiseLevel > 0 && noiseLevel <= 1, "noiseLevel must be in (0, 1]");
-  require(std::isfinite(lambda) && lambda > 0, "lambda must be > 0");
-  require(std::isfinite(alpha0) && alpha0 > 0, "alpha0 must be > 0");
-  require(std::isfinite(alpha1) && alpha1 > 0, "alpha1 must be > 0");
-  require(std::isfinite(beta) && beta >= 0, "beta must be >= 0");
-  require(std::isfinite(eta) && eta > 0, "eta must be > 0");
-  require(std::isfinite(wMin) && wMin > 0 && wMin <= 1, "wMin must be in (0, 1]");
-  require(std::isfinite(tensorSigma) && tensorSigma >= 0 && tensorSigma <= 10, "tensorSigma must be in [0, 10]");
-  require(std::isfinite(gamma) && gamma >= 0, "gamma must be >= 0");
-  require(initLevel >= 0 && initLevel < 12, "initLevel must be in [0, 12)");
-  require(std::isfinite(initMaxParallaxDeg) && initMaxParallaxDeg > 0 && initMaxParallaxDeg < 90,
-          "initMaxParallaxDeg must be in (0, 90)");
-  require(std::isfinite(initPxPerPlane) && initPxPerPlane >= 0.25 && initPxPerPlane <= 16,
-          "initPxPerPlane must be in [0.25, 16]");
-  require(initRadius >= 1 && initRadius <= 7, "initRadius must be in [1, 7]");
-  require(std::isfinite(initP1) && std::isfinite(initP2) && initP1 >= 0 && initP2 >= initP1,
-          "initP1, initP2 must satisfy 0 <= initP1 <= initP2");
-  require(std::isfinite(lrTolerancePx) && lrTolerancePx > 0, "lrTolerancePx must be > 0");
-  require(std::isfinite(initAccept) && initAccept >= 0 && initAccept <= 1, "initAccept must be in [0, 1]");
-  require(initWarps >= 0 && initWarps <= 1000, "initWarps must be in [0, 1000]");
-  require(std::isfinite(occlusionWeight) && occlusionWeight >= 0 && occlusionWeight <= 1,
-          "occlusionWeight must be in [0, 1]");
-  require(std::isfinite(maxFovDeg) && maxFovDeg >= 0 && maxFovDeg <= 360, "maxFovDeg must be in [0, 360]");
-  require(std::isfinite(epipoleDeg) && epipoleDeg >= 0 && epipoleDeg < 90, "epipoleDeg must be in [0, 90)");
+  for (const ParamInfo& info : paramTable()) {
+    const std::string bad = info.rangeError(*this);
+    require(bad.empty(), info.cppName() + " " + bad);
+  }
+  require(initP1 >= 0 && initP2 >= initP1, "initP1, initP2 must satisfy 0 <= initP1 <= initP2");
 }
 
 Params preset(const std::string& name) {
@@ -94,13 +67,15 @@ Params Params::withDataTerm(DataTerm term) const {
 }
 
 std::string dataTermName(Params::DataTerm term) {
-  return term == Params::DataTerm::Normalised ? "normalised" : "brightness";
+  Params p;
+  p.dataTerm = term;
+  return paramInfo("data_term").text(p);
 }
 
 Params::DataTerm parseDataTerm(const std::string& name) {
-  if (name == "normalised") return Params::DataTerm::Normalised;
-  if (name == "brightness") return Params::DataTerm::Brightness;
-  throw Error("unknown data term '" + name + "' (known: normalised, brightness)");
+  Params p;
+  paramInfo("data_term").setChoiceNamed(p, name);
+  return p.dataTerm;
 }
 
 NormaliseParams normaliseParams(const Params& p) {
@@ -114,12 +89,16 @@ NormaliseParams normaliseParams(const Params& p) {
   return n;
 }
 
-std::string initName(Params::Init init) { return init == Params::Init::PlaneSweep ? "planesweep" : "none"; }
+std::string initName(Params::Init init) {
+  Params p;
+  p.init = init;
+  return paramInfo("init").text(p);
+}
 
 Params::Init parseInit(const std::string& name) {
-  if (name == "none") return Params::Init::None;
-  if (name == "planesweep") return Params::Init::PlaneSweep;
-  throw Error("unknown initialisation '" + name + "' (known: none, planesweep)");
+  Params p;
+  paramInfo("init").setChoiceNamed(p, name);
+  return p.init;
 }
 
 std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p) {
@@ -134,18 +113,15 @@ std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p) {
 }
 
 std::string describe(const Params& p) {
-  std::ostringstream s;
-  s << "levels=" << p.levels << " scale=" << p.scale << " warps=" << p.warps << " iterations=" << p.iterations
-    << " du_max=" << p.duMax << " lambda=" << p.lambda << " alpha0=" << p.alpha0 << " alpha1=" << p.alpha1
-    << " data=" << dataTermName(p.dataTerm);
-  if (p.dataTerm == Params::DataTerm::Normalised) s << " norm_sigma=" << p.normSigma << " noise_level=" << p.noiseLevel;
-  s << " beta=" << p.beta << " eta=" << p.eta << " median=" << (p.medianFilter ? "on" : "off") << " gamma=" << p.gamma
-    << " init=" << initName(p.init);
-  if (p.init == Params::Init::PlaneSweep)
-    s << " init_level=" << p.initLevel << " init_parallax=" << p.initMaxParallaxDeg << " init_radius=" << p.initRadius
-      << " init_p1=" << p.initP1 << " init_p2=" << p.initP2 << " occlusion_weight=" << p.occlusionWeight
-      << " init_warps=" << p.initWarps;
-  return s.str();
+  std::string s;
+  for (const ParamInfo& info : paramTable()) {
+    using Shown = ParamInfo::Shown;
+    const bool shown = info.shown == Shown::Always ||
+                       (info.shown == Shown::Normalised && p.dataTerm == Params::DataTerm::Normalised) ||
+                       (info.shown == Shown::PlaneSweep && p.init == Params::Init::PlaneSweep);
+    if (shown) s += (s.empty() ? "" : " ") + info.key() + "=" + info.text(p);
+  }
+  return s;
 }
 
 }  // namespace cs
