@@ -1,7 +1,7 @@
 // The camera models of core/include/curvestereo/camera_models.hpp on the device, in
 // double precision like the oracle: the same equations, branches and iteration limits.
 // What the host constructors precompute (Kannala-Brandt turning angle, valid-region
-// bounds) arrives in CamDev::a / CamDev::b.
+// bounds) arrives in CamDev::a / CamDev::b (cs::cameraConstants).
 #pragma once
 #include "common.cuh"
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "curvestereo/camera_models.hpp"
+#include "curvestereo/camera.hpp"
 #include "curvestereo/image.hpp"
 #include "kernels.hpp"
 
@@ -38,27 +38,9 @@ cudak::CamDev camDev(const CameraParams& c) {
   d.width = c.width;
   d.height = c.height;
   std::copy(c.params, c.params + 8, d.p);
-  switch (CameraModel(c.model)) {
-    case CameraModel::KannalaBrandt4: {
-      const models::KannalaBrandt4<double> kb(c.params);
-      d.a = kb.thetaMax;
-      d.b = kb.radiusMax;
-      break;
-    }
-    case CameraModel::Unified:
-      d.a = models::Unified<double>(c.params).w;
-      break;
-    case CameraModel::ExtendedUnified:
-      d.a = models::ExtendedUnified<double>(c.params).w;
-      break;
-    case CameraModel::DoubleSphere:
-      d.a = models::DoubleSphere<double>(c.params).w2;
-      break;
-    case CameraModel::PinholeRadtan:
-      break;
-    default:
-      throw Error("cuda backend: unknown camera model " + std::to_string(c.model));
-  }
+  const CameraConstants k = cameraConstants(c);
+  d.a = k.a;
+  d.b = k.b;
   return d;
 }
 

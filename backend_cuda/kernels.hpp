@@ -14,8 +14,8 @@ struct Img {
 };
 
 // A camera in the form the device camera models take (double precision, as the oracle).
-// a, b: what each model's constructor precomputes on the host:
-//   Kannala-Brandt 4: thetaMax, radiusMax;  unified, extended unified: w;  double sphere: w2.
+// a, b: what each model's constructor precomputes on the host, from cs::cameraConstants
+// (core): Kannala-Brandt 4: thetaMax, radiusMax;  unified, extended unified: w;  double sphere: w2.
 struct CamDev {
   int model;  // CameraModel
   int width, height;

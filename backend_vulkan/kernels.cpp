@@ -5,7 +5,6 @@
 #include <type_traits>
 
 #include "curvestereo/camera.hpp"
-#include "curvestereo/camera_models.hpp"
 #include "curvestereo/image.hpp"
 #include "normalise.hpp"
 #include "vulkan_impl.hpp"
@@ -56,28 +55,9 @@ VkCam<S> toVkCam(const CameraParams& c) {
   out.width = c.width;
   out.height = c.height;
   for (int i = 0; i < 8; ++i) out.p[i] = S(c.params[i]);
-  const double* p = c.params;
-  switch (CameraModel(c.model)) {
-    case CameraModel::KannalaBrandt4: {
-      models::KannalaBrandt4<S> m(p);
-      out.d[0] = m.thetaMax;
-      out.d[1] = m.radiusMax;
-      break;
-    }
-    case CameraModel::Unified:
-      out.d[0] = models::Unified<S>(p).w;
-      break;
-    case CameraModel::ExtendedUnified:
-      out.d[0] = models::ExtendedUnified<S>(p).w;
-      break;
-    case CameraModel::DoubleSphere:
-      out.d[0] = models::DoubleSphere<S>(p).w2;
-      break;
-    case CameraModel::PinholeRadtan:
-      break;
-    default:
-      throw Error("vulkan backend: unknown camera model " + std::to_string(c.model));
-  }
+  const CameraConstants k = cameraConstants(c);
+  out.d[0] = S(k.a);
+  out.d[1] = S(k.b);
   return out;
 }
 

@@ -38,6 +38,31 @@ Camera toCamera(const CameraParams& p) {
   return c;
 }
 
+CameraConstants cameraConstants(const CameraParams& c) {
+  CameraConstants k;
+  const double* p = c.params;
+  switch (CameraModel(c.model)) {
+    case CameraModel::KannalaBrandt4: {
+      const models::KannalaBrandt4<double> kb(p);
+      k.a = kb.thetaMax;
+      k.b = kb.radiusMax;
+      return k;
+    }
+    case CameraModel::Unified:
+      k.a = models::Unified<double>(p).w;
+      return k;
+    case CameraModel::ExtendedUnified:
+      k.a = models::ExtendedUnified<double>(p).w;
+      return k;
+    case CameraModel::DoubleSphere:
+      k.a = models::DoubleSphere<double>(p).w2;
+      return k;
+    case CameraModel::PinholeRadtan:
+      return k;
+  }
+  throw Error("unknown camera model " + std::to_string(c.model));
+}
+
 void Backend::beginStage(const std::string& name) {
   synchronize();
   const double t = nowMs();

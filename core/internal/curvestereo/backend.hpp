@@ -330,6 +330,16 @@ class Camera;
 CameraParams toCameraParams(const Camera& camera);
 Camera toCamera(const CameraParams& params);
 
+// What each model's constructor (camera_models.hpp) precomputes on the host, for the GPU
+// kernels' copies of the models: Kannala-Brandt a = thetaMax, b = radiusMax; unified and
+// extended unified a = w; double sphere a = w2; pinhole-radtan none. In double: a kernel
+// in float rounds them once, as the model built in float does. Throws cs::Error for an
+// unknown model.
+struct CameraConstants {
+  double a = 0, b = 0;
+};
+CameraConstants cameraConstants(const CameraParams& params);
+
 // Backends compiled into this build, in order of preference for "auto".
 std::vector<std::string> availableBackends();
 // "auto" picks the first available; an explicit name that is not available throws
