@@ -185,7 +185,7 @@ void VulkanBackend::doFields(const Buffer& mask, const Buffer& calibration, cons
     setParams(prm);
     block = paramBlock(&prm, sizeof(prm));
   }
-  frameValid_ = false;  // a new pose: the recorded frame's triangulation is stale
+  invalidateFrame();  // a new pose: the recorded frame's triangulation is stale
   PcFields pc{addr(mask), addr(calibration), addr(trajectory), block, mask.width, mask.height};
   dispatch(float64_ ? kFields64 : kFields32, pc, mask.width, mask.height);
 }

@@ -94,7 +94,7 @@ Buffer VulkanBackend::doCreate(int width, int height, int channels) {
   Arena& a = arenas_.back();
   allocs_.push_back({int(arenas_.size() - 1), a.used, bytes});
   a.used += aligned;
-  frameValid_ = false;  // a new pipeline (new buffers) must not replay an old frame
+  invalidateFrame();  // a new pipeline (new buffers) must not replay an old frame
   return b;
 }
 
@@ -118,7 +118,7 @@ Addr VulkanBackend::paramBlock(const void* data, size_t bytes) {
     flush();
     paramCache_.clear();
     paramsUsed_ = 0;
-    frameValid_ = false;
+    invalidateFrame();
   }
   std::memcpy(static_cast<char*>(params_.mapped) + paramsUsed_, data, bytes);
   paramCache_[key] = paramsUsed_;
@@ -190,9 +190,9 @@ Buffer VulkanBackend::scratch(int slot, int w, int h) {
   auto key = std::make_tuple(slot, w, h);
   auto it = scratch_.find(key);
   if (it != scratch_.end()) return it->second;
-  const bool wasValid = frameValid_;
+  const Frame was = frame_;  // a scratch buffer does not invalidate the frame
   Buffer b = create(w, h, 1);
-  frameValid_ = wasValid;
+  frame_ = was;
   scratch_[key] = b;
   return b;
 }

@@ -62,12 +62,12 @@ VkPipeline VulkanBackend::pipeline(Shader s) {
 
 VkCommandBuffer VulkanBackend::recorder() {
   ensureUsable();
-  if (recordingFrame_) return frameCmd_;
-  if (!immRecording_) {
+  if (recordingFrame()) return frameCmd_;
+  if (imm_ != Immediate::Recording) {
     auto bi = vkStruct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
     bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     check(inst_.fn.vkBeginCommandBuffer(immCmd_, &bi), "vkBeginCommandBuffer");
-    immRecording_ = true;
+    imm_ = Immediate::Recording;
   }
   return immCmd_;
 }
@@ -86,7 +86,7 @@ void VulkanBackend::barrier(VkCommandBuffer cb) {
 void VulkanBackend::waitFence(VkFence fence, const char* what) {
   VkResult r = inst_.fn.vkWaitForFences(dev_, 1, &fence, VK_TRUE, timeoutNs_);
   if (r == VK_TIMEOUT) {
-    hung_ = true;
+    health_ = Health::Hung;
     throw Error(std::string("vulkan backend: ") + what + " did not finish within " +
                 std::to_string(timeoutNs_ / 1000000000ull) + " s (device hung?)");
   }
@@ -97,12 +97,11 @@ void VulkanBackend::waitFence(VkFence fence, const char* what) {
 void VulkanBackend::abortFrameRecording() {
   // Something needs the results of the frame before endFrame(): run what was recorded
   // as ordinary work and do not replay it.
-  if (!recordingFrame_) return;
-  recordingFrame_ = false;
-  frameValid_ = false;
+  if (!recordingFrame()) return;
+  frame_ = Frame::Empty;  // until submitted
   check(inst_.fn.vkEndCommandBuffer(frameCmd_), "vkEndCommandBuffer");
   submit(frameCmd_, frameFence_);
-  frameInFlight_ = true;
+  frame_ = Frame::RunningOnce;
 }
 
 void VulkanBackend::submit(VkCommandBuffer cb, VkFence fence) {
@@ -116,18 +115,18 @@ void VulkanBackend::submit(VkCommandBuffer cb, VkFence fence) {
 void VulkanBackend::flush() {
   ensureUsable();
   abortFrameRecording();
-  if (immRecording_) {
-    immRecording_ = false;
+  if (imm_ == Immediate::Recording) {
+    imm_ = Immediate::Idle;
     check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
     submit(immCmd_, immFence_);
-    immInFlight_ = true;
+    imm_ = Immediate::InFlight;
   }
-  if (frameInFlight_) {
-    frameInFlight_ = false;
+  if (frame_ == Frame::Running || frame_ == Frame::RunningOnce) {
+    frame_ = frame_ == Frame::Running ? Frame::Ready : Frame::Empty;
     waitFence(frameFence_, "the frame");
   }
-  if (immInFlight_) {
-    immInFlight_ = false;
+  if (imm_ == Immediate::InFlight) {
+    imm_ = Immediate::Idle;
     waitFence(immFence_, "queued work");
     check(inst_.fn.vkResetCommandBuffer(immCmd_, 0), "vkResetCommandBuffer");
   }
@@ -140,27 +139,25 @@ void VulkanBackend::beginFrame() {
   check(inst_.fn.vkResetCommandBuffer(frameCmd_, 0), "vkResetCommandBuffer");
   auto bi = vkStruct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
   check(inst_.fn.vkBeginCommandBuffer(frameCmd_, &bi), "vkBeginCommandBuffer");
-  recordingFrame_ = true;
-  frameValid_ = false;
-  frameHasTimestamps_ = false;
+  frame_ = Frame::Recording;
 }
 
 void VulkanBackend::endFrame() {
-  if (!recordingFrame_) return;  // aborted: already submitted
-  recordingFrame_ = false;
-  check(inst_.fn.vkEndCommandBuffer(frameCmd_), "vkEndCommandBuffer");
-  submit(frameCmd_, frameFence_);
-  frameInFlight_ = true;
+  if (!recordingFrame()) return;  // aborted: already submitted
   // A profiled frame holds timestamp writes (queries reset once per profiled frame): it
   // is run, not replayed.
-  frameValid_ = !frameHasTimestamps_;
+  const bool timed = frame_ == Frame::RecordingTimed;
+  frame_ = Frame::Empty;  // until submitted
+  check(inst_.fn.vkEndCommandBuffer(frameCmd_), "vkEndCommandBuffer");
+  submit(frameCmd_, frameFence_);
+  frame_ = timed ? Frame::RunningOnce : Frame::Running;
 }
 
 void VulkanBackend::replayFrame() {
-  if (!frameValid_) throw Error("vulkan backend: no recorded frame to replay");
+  if (!canReplayFrame()) throw Error("vulkan backend: no recorded frame to replay");
   flush();  // uploads are done; the previous frame has finished
   submit(frameCmd_, frameFence_);
-  frameInFlight_ = true;
+  frame_ = Frame::Running;
 }
 
 // ---- stage timing with timestamp queries ----
@@ -171,7 +168,7 @@ void VulkanBackend::beginStage(const std::string& name) {
     return;
   }
   VkCommandBuffer cb = recorder();
-  if (recordingFrame_) frameHasTimestamps_ = true;
+  if (frame_ == Frame::Recording) frame_ = Frame::RecordingTimed;
   if (queryCount_ == 0) inst_.fn.vkCmdResetQueryPool(cb, queryPool_, 0, queryCapacity_);
   if (queryCount_ >= queryCapacity_) return;  // beyond capacity the rest of the batch goes to the last stage
   inst_.fn.vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queryPool_, queryCount_++);

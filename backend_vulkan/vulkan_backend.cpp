@@ -14,13 +14,14 @@ namespace vk {
 
 void VulkanBackend::check(VkResult r, const char* what) {
   if (r == VK_SUCCESS) return;
-  if (r == VK_ERROR_DEVICE_LOST) lost_ = true;
+  if (r == VK_ERROR_DEVICE_LOST && health_ == Health::Ok) health_ = Health::Lost;
   throw Error(std::string("vulkan backend: ") + what + " failed: " + resultText(r));
 }
 
 void VulkanBackend::ensureUsable() const {
-  if (hung_) throw Error("vulkan backend: the device stopped responding earlier; create a new backend");
-  if (lost_) throw Error("vulkan backend: the device was lost earlier; create a new backend");
+  if (health_ == Health::Hung)
+    throw Error("vulkan backend: the device stopped responding earlier; create a new backend");
+  if (health_ == Health::Lost) throw Error("vulkan backend: the device was lost earlier; create a new backend");
 }
 
 VulkanBackend::VulkanBackend(const std::string& spec) {
@@ -106,7 +107,7 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
 
 VulkanBackend::~VulkanBackend() {
   if (!dev_) return;
-  if (hung_) return;  // work may still run on the device: leak rather than free memory in use
+  if (health_ == Health::Hung) return;  // work may still run on the device: leak rather than free memory in use
   inst_.fn.vkDeviceWaitIdle(dev_);
   for (VkPipeline p : pipelines_)
     if (p) inst_.fn.vkDestroyPipeline(dev_, p, nullptr);

@@ -64,7 +64,7 @@ class VulkanBackend final : public Backend {
   void synchronize() override;
   void beginFrame() override;
   void endFrame() override;
-  bool canReplayFrame() const override { return frameValid_; }
+  bool canReplayFrame() const override { return frame_ == Frame::Running || frame_ == Frame::Ready; }
   void replayFrame() override;
   void beginStage(const std::string& name) override;
   std::vector<StageTime> takeStageTimes() override;
@@ -172,9 +172,29 @@ class VulkanBackend final : public Backend {
   std::map<std::string, VkDeviceSize> paramCache_;
   std::map<std::tuple<int, int, int>, Buffer> scratch_;
 
-  bool immRecording_ = false, immInFlight_ = false, frameInFlight_ = false;
-  bool recordingFrame_ = false, frameValid_ = false, frameHasTimestamps_ = false;
-  bool lost_ = false, hung_ = false;
+  // The recorded frame's command buffer (recording.cpp), one state at a time.
+  enum class Frame {
+    Empty,           // nothing to replay, nothing in flight
+    Recording,       // between beginFrame() and endFrame()
+    RecordingTimed,  // the same, holding timestamp writes: it is run once, not replayed
+    RunningOnce,     // submitted, not to be replayed (aborted, timed or invalidated)
+    Running,         // submitted, replayable
+    Ready,           // finished, replayable
+  };
+  // The immediate command buffer (uploads, downloads, kernels outside a frame).
+  enum class Immediate { Idle, Recording, InFlight };
+  // Hung (a fence timed out) outranks Lost (VK_ERROR_DEVICE_LOST): work may still run.
+  enum class Health { Ok, Lost, Hung };
+  Frame frame_ = Frame::Empty;
+  Immediate imm_ = Immediate::Idle;
+  Health health_ = Health::Ok;
+  bool recordingFrame() const { return frame_ == Frame::Recording || frame_ == Frame::RecordingTimed; }
+  // New buffers, a new pose or reused parameter blocks: the recorded frame must not be
+  // replayed (a frame being recorded is unaffected: it records the new state).
+  void invalidateFrame() {
+    if (frame_ == Frame::Ready) frame_ = Frame::Empty;
+    if (frame_ == Frame::Running) frame_ = Frame::RunningOnce;
+  }
   uint64_t timeoutNs_ = 120ull * 1000 * 1000 * 1000;
 };
 
