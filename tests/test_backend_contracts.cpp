@@ -7,6 +7,7 @@
 
 #include "curvestereo/backend.hpp"
 #include "curvestereo/image.hpp"
+#include "curvestereo/stereo.hpp"  // availableBackends
 #include "test_util.hpp"
 
 using namespace cs;

@@ -281,6 +281,20 @@ TEST_CASE("CUDA device-pointer API: the initialiser's confidence stays on the de
 }
 
 TEST_CASE("CUDA device-pointer API refuses what it cannot run") {
+  // The validation is cs::Stereo's own code (detail::StereoCore): the same messages, given
+  // before any device is needed.
+  {
+    Rig bad = smallPair(3).rig;
+    bad.cam1 = bad.cam1.scaled(0.5);
+    std::string stereoWhy;
+    try {
+      Stereo stereo(bad, preset("default"), "cpu");
+    } catch (const Error& e) {
+      stereoWhy = e.what();
+    }
+    CHECK(stereoWhy.find("differ in resolution") != std::string::npos);
+    CHECK_THROWS_WITH_AS(cuda::DeviceStereo(bad, preset("default")), stereoWhy.c_str(), Error);
+  }
   const std::string why = cuda::probe();
   if (!why.empty()) {
     MESSAGE("SKIPPED cuda device API: " << why);
@@ -292,5 +306,8 @@ TEST_CASE("CUDA device-pointer API refuses what it cannot run") {
   CHECK_THROWS_AS(cuda::DeviceStereo(pair.rig, preset("default"), cudaStreamLegacy), Error);
   cuda::DeviceStereo dev(pair.rig, preset("default"));
   CHECK_THROWS_AS(dev.compute(nullptr, nullptr), Error);
+  // setMask as Stereo's: the size checked, the pipeline kept.
+  CHECK_THROWS_WITH_AS(dev.setMask(ImageU8(7, 5, 1)), doctest::Contains("mask is 7x5 but the images are"), Error);
+  dev.setMask(ImageU8(pair.left.width, pair.left.height, 1));
 }
 #endif

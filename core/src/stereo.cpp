@@ -10,14 +10,13 @@
 
 #include "curvestereo/backend.hpp"
 #include "pipeline.hpp"
+#include "stereo_core.hpp"
 
 namespace cs {
 
 namespace {
 
-constexpr int kMaxSide = 32768;
-
-std::string sizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+using detail::sizeText;
 
 void checkImage(const ImageF& img, const Camera& cam, const char* which) {
   if (img.width != cam.width || img.height != cam.height)
@@ -108,80 +107,33 @@ void finish(DepthResult& r) {
 
 }  // namespace
 
-Stereo::Stereo(const Rig& rig, const Params& params, const std::string& backend) : rig_(rig), params_(params) {
-  rig_.validate();
-  params_.validate();
-  if (rig.cam0.width < 16 || rig.cam0.height < 16)
-    throw Error("images of " + sizeText(rig.cam0.width, rig.cam0.height) + " are too small (at least 16x16)");
-  // The image readers' limit too: larger is a corrupt calibration, not a camera.
-  if (rig.cam0.width > kMaxSide || rig.cam0.height > kMaxSide)
-    throw Error("images of " + sizeText(rig.cam0.width, rig.cam0.height) + " are too large (at most " +
-                std::to_string(kMaxSide) + " px per side)");
-  if (rig.cam1.width != rig.cam0.width || rig.cam1.height != rig.cam0.height)
-    throw Error("the cameras differ in resolution (" + sizeText(rig.cam0.width, rig.cam0.height) + " and " +
-                sizeText(rig.cam1.width, rig.cam1.height) + "): both images must have the same size");
-  backend_ = createBackend(backend, &backendWhy_);
-  backendName_ = backend_->name();
-  makePipeline();
-}
+Stereo::Stereo(const Rig& rig, const Params& params, const std::string& backend)
+    : core_(std::make_unique<detail::StereoCore>(rig, params, [&] { return createBackend(backend, &backendWhy_); })) {}
 
 Stereo::~Stereo() = default;
 
-// Every buffer of every level is allocated here, so this is where a frame too large for
-// the device fails: say which frame, not just which buffer.
-void Stereo::makePipeline() {
-  const std::string frame = sizeText(rig_.cam0.width, rig_.cam0.height);
-  const unsigned long long need = Pipeline::bufferBytes(rig_, params_);
-  const unsigned long long have = backend_->memoryBytes();
-  if (have && need > have)
-    throw Error("out of memory: a " + frame + " frame needs " + std::to_string(need) + " bytes of buffers on backend " +
-                backendName_ + ", which has " + std::to_string(have) + " bytes");
-  try {
-    pipeline_ = std::make_unique<Pipeline>(*backend_, rig_, params_, userMask_);
-    pipeline_->select({outputs_.disparity, outputs_.warp, outputs_.points, outputs_.confidence});
-    pipeline_->setPose(rig_.R, rig_.t);
-  } catch (const std::bad_alloc&) {
-    throw Error("out of memory setting up a " + frame + " frame on backend " + backendName_);
-  } catch (const Error& e) {
-    throw Error("cannot set up a " + frame + " frame on backend " + backendName_ + ": " + e.what());
-  }
-}
+void Stereo::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) { core_->setPose(R, t); }
 
-void Stereo::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
-  Rig moved = rig_;
-  moved.R = R;
-  moved.t = t;
-  moved.validate();
-  rig_ = moved;
-  pipeline_->setPose(R, t);
-}
-
-void Stereo::setMask(const ImageU8& mask) {
-  if (mask.width != rig_.cam0.width || mask.height != rig_.cam0.height)
-    throw Error("mask is " + sizeText(mask.width, mask.height) + " but the images are " +
-                sizeText(rig_.cam0.width, rig_.cam0.height));
-  // The buffers stay: only the masks of the levels and the fields are redone.
-  userMask_ = mask;
-  pipeline_->setUserMask(userMask_);
-  pipeline_->setPose(rig_.R, rig_.t);
-}
+void Stereo::setMask(const ImageU8& mask) { core_->setMask(mask); }
 
 void Stereo::setOutputs(const Outputs& outputs) {
   outputs_ = outputs;
-  pipeline_->select({outputs.disparity, outputs.warp, outputs.points, outputs.confidence});
+  core_->pipeline().select({outputs.disparity, outputs.warp, outputs.points, outputs.confidence});
 }
 
 void Stereo::setProgress(std::function<void(double)> progress) { progress_ = std::move(progress); }
 
-const std::string& Stereo::backendName() const { return backendName_; }
-std::string Stereo::deviceName() const { return backend_->device(); }
+const std::string& Stereo::backendName() const { return core_->backendName(); }
+std::string Stereo::deviceName() const { return core_->backend().device(); }
+const Rig& Stereo::rig() const { return core_->rig(); }
+const Params& Stereo::params() const { return core_->params(); }
 
 void Stereo::compute(const ImageF& left, const ImageF& right, DepthResult& result) {
-  checkImage(left, rig_.cam0, "left");
-  checkImage(right, rig_.cam1, "right");
+  checkImage(left, core_->rig().cam0, "left");
+  checkImage(right, core_->rig().cam1, "right");
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    pipeline_->run(left, right, profiling_, progress_, result);
+    core_->pipeline().run(left, right, profiling_, progress_, result);
     finish(result);
   } catch (const std::bad_alloc&) {
     throw Error("out of memory computing a " + sizeText(left.width, left.height) + " frame (host result images)");

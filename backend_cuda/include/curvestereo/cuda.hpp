@@ -46,8 +46,10 @@ class DeviceStereo {
   // stream: where every call enqueues its work; nullptr creates a private non-blocking
   // stream (see stream()). The legacy default stream (0 passed explicitly as
   // cudaStreamLegacy) cannot be recorded into a graph and is refused. device: the CUDA
-  // device index the stream belongs to. Throws cs::Error on a bad rig or parameters, or
-  // when no usable CUDA device is present.
+  // device index the stream belongs to. Validates as cs::Stereo does (the same code):
+  // throws cs::Error on a bad rig or parameters, images smaller than 16x16 or larger than
+  // 32768 px per side, cameras of different resolutions, a frame whose buffers do not fit
+  // in the device's memory, or when no usable CUDA device is present.
   DeviceStereo(const Rig& rig, const Params& params, cudaStream_t stream = nullptr, int device = 0);
   ~DeviceStereo();
   DeviceStereo(const DeviceStereo&) = delete;
@@ -55,7 +57,9 @@ class DeviceStereo {
 
   // A new relative pose (X1 = R X0 + t): the fields are recomputed on the device.
   void setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
-  // Restrict the solve to mask != 0 (host image of the rig's size).
+  // Restrict the solve to mask != 0 (host image of the rig's size, else cs::Error), as
+  // cs::Stereo::setMask: waits for the stream's queued work, keeps the buffers and the
+  // recorded frame, and redoes the levels' masks and the fields.
   void setMask(const ImageU8& mask);
 
   // Enqueues one frame and returns at once. left / right: float gray in [0, 1] of the

@@ -11,15 +11,20 @@
 #include <string>
 #include <vector>
 
-#include "curvestereo/backend.hpp"
 #include "curvestereo/image.hpp"
 #include "curvestereo/params.hpp"
 #include "curvestereo/rig.hpp"
+#include "curvestereo/timing.hpp"
 #include "curvestereo/triangulate.hpp"
 
 namespace cs {
 
-class Pipeline;
+namespace detail {
+class StereoCore;  // construction and validation shared with cs::cuda::DeviceStereo
+}
+
+// Backends compiled into this build, in order of preference for "auto".
+std::vector<std::string> availableBackends();
 
 // Where valid is 1, disparity and warp are finite and depth.radial is finite and positive
 // or +inf (zero disparity: a point at infinity; depth.z is +inf too). Where valid is 0,
@@ -43,8 +48,8 @@ class Stereo {
  public:
   // backend: "auto", "cpu", ... (see availableBackends()). Throws cs::Error on a bad
   // rig, bad parameters, an unavailable backend, images smaller than 16x16 or larger than
-  // 32768 px per side, or a frame whose buffers do not fit in the backend's memory (the
-  // message names the frame size and the bytes).
+  // 32768 px per side, cameras of different resolutions, or a frame whose buffers do not
+  // fit in the backend's memory (the message names the frame size and the bytes).
   Stereo(const Rig& rig, const Params& params, const std::string& backend = "auto");
   ~Stereo();
   Stereo(const Stereo&) = delete;
@@ -54,7 +59,8 @@ class Stereo {
   // changed. Recomputes the fields on the backend; throws cs::Error for a zero baseline
   // or a non-rotation.
   void setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
-  // Restrict the solve to mask != 0 (e.g. a lens-shading mask); same size as the images.
+  // Restrict the solve to mask != 0 (e.g. a lens-shading mask); same size as the images
+  // (else cs::Error). The buffers stay; the levels' masks and the fields are redone.
   void setMask(const ImageU8& mask);
   // Per-stage timing (DepthResult::stages). It costs a synchronisation at every stage
   // boundary and disables frame replay on GPU backends; off by default, on in bench.
@@ -86,18 +92,12 @@ class Stereo {
   std::string deviceName() const;
   // Which backend "auto" took, and why (one line).
   const std::string& backendChoice() const { return backendWhy_; }
-  const Rig& rig() const { return rig_; }
-  const Params& params() const { return params_; }
+  const Rig& rig() const;
+  const Params& params() const;
 
  private:
-  void makePipeline();  // allocates every buffer; a frame too large gives cs::Error naming its size
-
-  Rig rig_;
-  Params params_;
-  ImageU8 userMask_;
-  std::string backendName_, backendWhy_;
-  std::unique_ptr<Backend> backend_;
-  std::unique_ptr<Pipeline> pipeline_;  // set by the constructor, which throws when it cannot
+  std::string backendWhy_;
+  std::unique_ptr<detail::StereoCore> core_;  // rig, parameters, backend, pipeline
   std::function<void(double)> progress_;
   bool profiling_ = false;
   Outputs outputs_;

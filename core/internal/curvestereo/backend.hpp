@@ -1,6 +1,7 @@
 // The kernels every backend implements. The pipeline (core/src/pipeline.cpp) is the
 // only caller; it is written once against this interface. The contracts are checked here,
-// above the backends (Backend's public methods), once for all of them.
+// above the backends (Backend's public methods), once for all of them. Internal: not
+// installed; only the library's own targets and its tests see core/internal.
 //
 // Buffers are 2-D arrays of `channels` interleaved floats owned by the backend.
 // Backends may enqueue work (GPU) or run it at once (CPU); download() and
@@ -11,12 +12,9 @@
 #include <utility>
 #include <vector>
 
-namespace cs {
+#include "curvestereo/timing.hpp"
 
-struct StageTime {
-  std::string name;
-  double ms = 0;
-};
+namespace cs {
 
 struct Buffer {
   int id = -1;
@@ -340,8 +338,7 @@ struct CameraConstants {
 };
 CameraConstants cameraConstants(const CameraParams& params);
 
-// Backends compiled into this build, in order of preference for "auto".
-std::vector<std::string> availableBackends();
+// The registry (core/src/backend_registry.cpp; availableBackends() is in stereo.hpp).
 // "auto" picks the first available; an explicit name that is not available throws
 // cs::Error naming it and listing the available ones. `why` (optional) receives one line
 // saying which backend was taken and why.

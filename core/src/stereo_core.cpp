@@ -1,0 +1,78 @@
+#include "stereo_core.hpp"
+
+#include <new>
+
+#include "curvestereo/backend.hpp"
+#include "pipeline.hpp"
+
+namespace cs::detail {
+
+std::string sizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+
+void StereoCore::validate(const Rig& rig, const Params& params) {
+  rig.validate();
+  params.validate();
+  if (rig.cam0.width < kMinSide || rig.cam0.height < kMinSide)
+    throw Error("images of " + sizeText(rig.cam0.width, rig.cam0.height) + " are too small (at least " +
+                sizeText(kMinSide, kMinSide) + ")");
+  if (rig.cam0.width > kMaxSide || rig.cam0.height > kMaxSide)
+    throw Error("images of " + sizeText(rig.cam0.width, rig.cam0.height) + " are too large (at most " +
+                std::to_string(kMaxSide) + " px per side)");
+  if (rig.cam1.width != rig.cam0.width || rig.cam1.height != rig.cam0.height)
+    throw Error("the cameras differ in resolution (" + sizeText(rig.cam0.width, rig.cam0.height) + " and " +
+                sizeText(rig.cam1.width, rig.cam1.height) + "): both images must have the same size");
+}
+
+// Every buffer of every level is allocated here, so this is where a frame too large for
+// the device fails: say which frame, not just which buffer.
+StereoCore::StereoCore(const Rig& rig, const Params& params,
+                       const std::function<std::unique_ptr<Backend>()>& makeBackend)
+    : rig_(rig), params_(params) {
+  validate(rig_, params_);
+  backend_ = makeBackend();
+  backendName_ = backend_->name();
+  const std::string frame = sizeText(rig_.cam0.width, rig_.cam0.height);
+  const unsigned long long need = Pipeline::bufferBytes(rig_, params_);
+  const unsigned long long have = backend_->memoryBytes();
+  if (have && need > have)
+    throw Error("out of memory: a " + frame + " frame needs " + std::to_string(need) + " bytes of buffers on backend " +
+                backendName_ + ", which has " + std::to_string(have) + " bytes");
+  try {
+    pipeline_ = std::make_unique<Pipeline>(*backend_, rig_, params_, mask_);
+    pipeline_->setPose(rig_.R, rig_.t);
+  } catch (const std::bad_alloc&) {
+    throw Error("out of memory setting up a " + frame + " frame on backend " + backendName_);
+  } catch (const Error& e) {
+    throw Error("cannot set up a " + frame + " frame on backend " + backendName_ + ": " + e.what());
+  }
+}
+
+StereoCore::~StereoCore() = default;
+
+void StereoCore::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  Rig moved = rig_;
+  moved.R = R;
+  moved.t = t;
+  moved.validate();
+  rig_ = moved;
+  pipeline_->setPose(R, t);
+}
+
+void StereoCore::setMask(const ImageU8& mask) {
+  if (mask.width != rig_.cam0.width || mask.height != rig_.cam0.height)
+    throw Error("mask is " + sizeText(mask.width, mask.height) + " but the images are " +
+                sizeText(rig_.cam0.width, rig_.cam0.height));
+  backend_->synchronize();  // a frame still queued (DeviceStereo) reads the old mask
+  mask_ = mask;
+  pipeline_->setUserMask(mask_);
+  pipeline_->setPose(rig_.R, rig_.t);
+}
+
+DeviceIO StereoCore::deviceIO() const {
+  const Pipeline::DeviceIO io = pipeline_->deviceIO();
+  return {io.left, io.right, io.valid, io.disparity, io.warp, io.radial, io.points, io.confidence};
+}
+
+void StereoCore::runOnDevice() { pipeline_->runOnDevice(); }
+
+}  // namespace cs::detail

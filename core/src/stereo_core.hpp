@@ -1,0 +1,80 @@
+// What cs::Stereo (core/src/stereo.cpp) and cs::cuda::DeviceStereo
+// (backend_cuda/device_stereo.cpp) share, written once: the validation of the rig, the
+// parameters and a mask, the memory check, the pipeline's construction, and setPose /
+// setMask. Internal (not installed).
+#pragma once
+#include <Eigen/Core>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "curvestereo/backend.hpp"
+#include "curvestereo/image.hpp"
+#include "curvestereo/params.hpp"
+#include "curvestereo/rig.hpp"
+
+namespace cs {
+class Pipeline;
+}  // namespace cs
+
+namespace cs::detail {
+
+// The largest image side accepted (also the image readers' limit: larger is a corrupt
+// calibration, not a camera) and the smallest.
+constexpr int kMaxSide = 32768;
+constexpr int kMinSide = 16;
+
+std::string sizeText(int w, int h);
+
+// The pipeline's buffers for callers whose images are on the backend's device
+// (Pipeline::DeviceIO, without the pipeline's header).
+struct DeviceIO {
+  Buffer left, right;                             // 1 ch, full resolution
+  Buffer valid, disparity, warp, radial, points;  // 1, 1, 2, 1, 3 ch
+  Buffer confidence;                              // 1 ch; id -1 without the initialiser
+};
+
+class StereoCore {
+ public:
+  // Validates the rig (Rig::validate, sizes kMinSide..kMaxSide per side, both cameras of
+  // one resolution) and the parameters, then calls makeBackend (only when both are good),
+  // checks that the frame's buffers fit in the backend's memory (Pipeline::bufferBytes
+  // against Backend::memoryBytes) and builds the pipeline with the rig's pose. Every
+  // failure is one cs::Error; the memory and set-up ones name the frame size and backend.
+  StereoCore(const Rig& rig, const Params& params, const std::function<std::unique_ptr<Backend>()>& makeBackend);
+  ~StereoCore();
+  StereoCore(const StereoCore&) = delete;
+  StereoCore& operator=(const StereoCore&) = delete;
+
+  // The rig and parameter checks of the constructor, alone.
+  static void validate(const Rig& rig, const Params& params);
+
+  // A new relative pose (X1 = R X0 + t): validated as a rig, then the fields are redone.
+  void setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
+  // A mask of the images' size (else cs::Error naming both sizes). Work already queued
+  // on the backend finishes first; the buffers stay (a recorded frame stays valid), and
+  // the levels' masks and the fields are redone.
+  void setMask(const ImageU8& mask);
+
+  // DeviceStereo: fill io.left / io.right on the device, then runOnDevice() issues (or
+  // replays) the frame with no host transfer and no synchronisation.
+  DeviceIO deviceIO() const;
+  void runOnDevice();
+
+  Backend& backend() { return *backend_; }
+  const Backend& backend() const { return *backend_; }
+  Pipeline& pipeline() { return *pipeline_; }
+  const std::string& backendName() const { return backendName_; }
+  const Rig& rig() const { return rig_; }
+  const Params& params() const { return params_; }
+
+ private:
+  Rig rig_;
+  Params params_;
+  ImageU8 mask_;
+  std::string backendName_;
+  std::unique_ptr<Backend> backend_;
+  std::unique_ptr<Pipeline> pipeline_;  // set by the constructor, which throws when it cannot
+};
+
+}  // namespace cs::detail
