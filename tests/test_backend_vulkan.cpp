@@ -10,6 +10,7 @@
 #include <map>
 
 #include "curvestereo/stereo.hpp"
+#include "forwarding_backend.hpp"
 #include "golden_cases.hpp"
 #include "gpu_suite.hpp"
 #include "synth/scene.hpp"
@@ -64,14 +65,10 @@ std::unique_ptr<Backend> vulkanOrSkip() {
 // Forwards to a backend, giving every buffer a guard buffer right before it and two guard
 // rows after it, holding a guard value of its own (a kernel copying one buffer's guard
 // into another's changes it); check() says how many guard values changed.
-class GuardedBackend final : public Backend {
+class GuardedBackend final : public test::ForwardingBackend {
  public:
   static constexpr float kGuard = -12345.678f;
-  explicit GuardedBackend(Backend& inner) : b_(inner) {}
-
-  std::string name() const override { return b_.name(); }
-  std::string device() const override { return b_.device(); }
-  void synchronize() override { b_.synchronize(); }
+  explicit GuardedBackend(Backend& inner) : ForwardingBackend(inner) {}
 
   // Number of guard values that changed.
   long long check() {
@@ -99,38 +96,6 @@ class GuardedBackend final : public Backend {
     guards_.push_back({before, big, h, guard});
     return Buffer{big.id, w, h, c};
   }
-  void doUpload(const Buffer& d, const float* h) override { b_.upload(d, h); }
-  void doDownload(const Buffer& s, float* h) override { b_.download(s, h); }
-  void doFill(const Buffer& d, float v) override { b_.fill(d, v); }
-  void doCopy(const Buffer& d, const Buffer& s) override { b_.copy(d, s); }
-  void doFields(const Buffer& m, const Buffer& c, const Buffer& t, const FieldsParams& p) override {
-    b_.fields(m, c, t, p);
-  }
-  void doWarp(const Buffer& d, const Buffer& s, const Buffer& f) override { b_.warp(d, s, f); }
-  void doDownsample(const Buffer& d, const Buffer& s, float sc) override { b_.downsample(d, s, sc); }
-  void doUpsample(const Buffer& d, const Buffer& s, float sc, float v) override { b_.upsample(d, s, sc, v); }
-  void doNormalise(const Buffer& d, const Buffer& mo, const Buffer& s, const Buffer& m,
-                   const NormaliseParams& p) override {
-    b_.normalise(d, mo, s, m, p);
-  }
-  void doStructureTensor(const Buffer& t, const Buffer& s, const Buffer& i, const Buffer& m,
-                         const TensorParams& p) override {
-    b_.structureTensor(t, s, i, m, p);
-  }
-  void doWarpDerivatives(const DataTermBuffers& d, const Buffer& t, const Buffer& i0, const Buffer& i1,
-                         const Buffer& tr, const Buffer& w, const Buffer& u, const Buffer& m, const Buffer& c,
-                         float floor) override {
-    b_.warpDerivatives(d, t, i0, i1, tr, w, u, m, c, floor);
-  }
-  void doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& d, const Buffer& t, const Buffer& s,
-                    const Buffer& m, const PrimalDualParams& p) override {
-    b_.primalDual(pd, d, t, s, m, p);
-  }
-  void doMedian(const Buffer& d, const Buffer& s, const Buffer& m) override { b_.median(d, s, m); }
-  void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& t, const Buffer& m,
-                    float d) override {
-    b_.accumulate(u, w, u0, t, m, d);
-  }
   // The inner backend's own coarse kernels (fused or not), not the defaults.
   void doWarpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& d, const Buffer& t, const Buffer& s,
                         const Buffer& m, const PrimalDualParams& p) override {
@@ -139,27 +104,6 @@ class GuardedBackend final : public Backend {
   void doWarpTail(const WarpBuffers& w, const Buffer& median, float duMax, bool next) override {
     b_.warpTail(w, median, duMax, next);
   }
-  void doSweepWarp(const Buffer& v, const Buffer& i, const Buffer& m, const SweepParams& p) override {
-    b_.sweepWarp(v, i, m, p);
-  }
-  void doSweepCost(const Buffer& c, const Buffer& r, const Buffer& v, const Buffer& m, const SweepParams& p) override {
-    b_.sweepCost(c, r, v, m, p);
-  }
-  void doSweepAggregate(const Buffer& a, const Buffer& c, const Buffer& m, const SweepParams& p) override {
-    b_.sweepAggregate(a, c, m, p);
-  }
-  void doSweepSelect(const Buffer& b, const Buffer& a, const Buffer& c, const Buffer& m,
-                     const SweepParams& p) override {
-    b_.sweepSelect(b, a, c, m, p);
-  }
-  void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& c, const Buffer& b, const Buffer& o,
-                         const Buffer& m, const SweepParams& p, const ConsistencyParams& cp) override {
-    b_.sweepInitialise(u, w, c, b, o, m, p, cp);
-  }
-  void doTriangulate(const Buffer& r, const Buffer& p, const Buffer& w, const Buffer& m, const CameraParams& c,
-                     const double t[3]) override {
-    b_.triangulate(r, p, w, m, c, t);
-  }
 
  private:
   struct Guard {
@@ -167,7 +111,6 @@ class GuardedBackend final : public Backend {
     int height;  // rows in use
     float value;
   };
-  Backend& b_;
   std::vector<Guard> guards_;
 };
 

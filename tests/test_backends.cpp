@@ -8,6 +8,7 @@
 
 #include "curvestereo/metrics.hpp"
 #include "curvestereo/stereo.hpp"
+#include "forwarding_backend.hpp"
 #include "golden_cases.hpp"
 #include "gpu_suite.hpp"
 #include "synth/scene.hpp"
@@ -71,71 +72,9 @@ std::unique_ptr<Backend> tryBackend(const std::string& name) {
 
 // Forwards every fine kernel to a backend but keeps Backend's default coarse kernels: the
 // coarse kernels' documented sequences of fine kernels, run on that backend.
-class FineKernelsOf final : public Backend {
+class FineKernelsOf final : public test::ForwardingBackend {
  public:
-  explicit FineKernelsOf(Backend& inner) : b_(inner) {}
-  std::string name() const override { return b_.name(); }
-  std::string device() const override { return b_.device(); }
-  void synchronize() override { b_.synchronize(); }
-
- protected:
-  Buffer doCreate(int w, int h, int c) override { return b_.create(w, h, c); }
-  void doUpload(const Buffer& d, const float* h) override { b_.upload(d, h); }
-  void doDownload(const Buffer& s, float* h) override { b_.download(s, h); }
-  void doFill(const Buffer& d, float v) override { b_.fill(d, v); }
-  void doCopy(const Buffer& d, const Buffer& s) override { b_.copy(d, s); }
-  void doFields(const Buffer& m, const Buffer& c, const Buffer& t, const FieldsParams& p) override {
-    b_.fields(m, c, t, p);
-  }
-  void doWarp(const Buffer& d, const Buffer& s, const Buffer& f) override { b_.warp(d, s, f); }
-  void doDownsample(const Buffer& d, const Buffer& s, float sc) override { b_.downsample(d, s, sc); }
-  void doUpsample(const Buffer& d, const Buffer& s, float sc, float v) override { b_.upsample(d, s, sc, v); }
-  void doNormalise(const Buffer& d, const Buffer& mo, const Buffer& s, const Buffer& m,
-                   const NormaliseParams& p) override {
-    b_.normalise(d, mo, s, m, p);
-  }
-  void doStructureTensor(const Buffer& t, const Buffer& s, const Buffer& i, const Buffer& m,
-                         const TensorParams& p) override {
-    b_.structureTensor(t, s, i, m, p);
-  }
-  void doWarpDerivatives(const DataTermBuffers& d, const Buffer& t, const Buffer& i0, const Buffer& i1,
-                         const Buffer& tr, const Buffer& w, const Buffer& u, const Buffer& m, const Buffer& c,
-                         float floor) override {
-    b_.warpDerivatives(d, t, i0, i1, tr, w, u, m, c, floor);
-  }
-  void doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& d, const Buffer& t, const Buffer& s,
-                    const Buffer& m, const PrimalDualParams& p) override {
-    b_.primalDual(pd, d, t, s, m, p);
-  }
-  void doMedian(const Buffer& d, const Buffer& s, const Buffer& m) override { b_.median(d, s, m); }
-  void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& t, const Buffer& m,
-                    float d) override {
-    b_.accumulate(u, w, u0, t, m, d);
-  }
-  void doSweepWarp(const Buffer& v, const Buffer& i, const Buffer& m, const SweepParams& p) override {
-    b_.sweepWarp(v, i, m, p);
-  }
-  void doSweepCost(const Buffer& c, const Buffer& r, const Buffer& v, const Buffer& m, const SweepParams& p) override {
-    b_.sweepCost(c, r, v, m, p);
-  }
-  void doSweepAggregate(const Buffer& a, const Buffer& c, const Buffer& m, const SweepParams& p) override {
-    b_.sweepAggregate(a, c, m, p);
-  }
-  void doSweepSelect(const Buffer& b, const Buffer& a, const Buffer& c, const Buffer& m,
-                     const SweepParams& p) override {
-    b_.sweepSelect(b, a, c, m, p);
-  }
-  void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& c, const Buffer& b, const Buffer& o,
-                         const Buffer& m, const SweepParams& p, const ConsistencyParams& cp) override {
-    b_.sweepInitialise(u, w, c, b, o, m, p, cp);
-  }
-  void doTriangulate(const Buffer& r, const Buffer& p, const Buffer& w, const Buffer& m, const CameraParams& c,
-                     const double t[3]) override {
-    b_.triangulate(r, p, w, m, c, t);
-  }
-
- private:
-  Backend& b_;
+  using ForwardingBackend::ForwardingBackend;
 };
 
 bool coarseKernel(const std::string& kernel) {
