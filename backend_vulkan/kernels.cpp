@@ -187,7 +187,7 @@ void VulkanBackend::doFields(const Buffer& mask, const Buffer& calibration, cons
   }
   invalidateFrame();  // a new pose: the recorded frame's triangulation is stale
   PcFields pc{addr(mask), addr(calibration), addr(trajectory), block, mask.width, mask.height};
-  dispatch(float64_ ? kFields64 : kFields32, pc, mask.width, mask.height);
+  dispatch(float64_ ? kFieldsF64 : kFieldsF32, pc, mask.width, mask.height);
 }
 
 void VulkanBackend::doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
@@ -205,7 +205,7 @@ void VulkanBackend::doTriangulate(const Buffer& radial, const Buffer& points, co
     block = paramBlock(&prm, sizeof(prm));
   }
   PcTriangulate pc{addr(radial), addr(points), addr(w), addr(mask), block, radial.width, radial.height};
-  dispatch(float64_ ? kTriangulate64 : kTriangulate32, pc, radial.width, radial.height);
+  dispatch(float64_ ? kTriangulateF64 : kTriangulateF32, pc, radial.width, radial.height);
 }
 
 void VulkanBackend::doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
@@ -243,12 +243,12 @@ void VulkanBackend::doStructureTensor(const Buffer& tensor, const Buffer& steps,
   if (p.sigma > 0.f) {
     const Buffer rows = scratch(0, w, h), blurred = scratch(1, w, h);
     const int radius = int(std::ceil(3.f * p.sigma));
-    dispatch(kTensorBlur, PcBlur{addr(rows), addr(image), w, h, radius, 0, p.sigma}, w, h);
-    dispatch(kTensorBlur, PcBlur{addr(blurred), addr(rows), w, h, radius, 1, p.sigma}, w, h);
+    dispatch(kStructureTensorBlur, PcBlur{addr(rows), addr(image), w, h, radius, 0, p.sigma}, w, h);
+    dispatch(kStructureTensorBlur, PcBlur{addr(blurred), addr(rows), w, h, radius, 1, p.sigma}, w, h);
     smooth = addr(blurred);
   }
-  dispatch(kTensor, PcTensor{addr(tensor), smooth, w, h, p.beta, p.eta, p.wMin}, w, h);
-  dispatch(kTensorSteps, PcSteps{addr(steps), addr(tensor), addr(mask), w, h, p.alpha0, p.alpha1}, w, h);
+  dispatch(kStructureTensor, PcTensor{addr(tensor), smooth, w, h, p.beta, p.eta, p.wMin}, w, h);
+  dispatch(kStructureTensorSteps, PcSteps{addr(steps), addr(tensor), addr(mask), w, h, p.alpha0, p.alpha1}, w, h);
 }
 
 void VulkanBackend::doWarpDerivatives(const DataTermBuffers& data, const Buffer& tangent, const Buffer& i0,
@@ -279,11 +279,11 @@ void VulkanBackend::doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuff
   for (const PrimalDualStep& step : prm.schedule) {
     PcDual dual{addr(pd.uBar),   addr(pd.vBar), addr(pd.p), addr(pd.q), addr(tensor), addr(steps), addr(mask), w, h,
                 step.sigmaScale, prm.alpha0,    prm.alpha1};
-    dispatch(kDual, dual, w, h);
+    dispatch(kPrimalDualDual, dual, w, h);
     PcPrimal primal{addr(pd.u),    addr(pd.uBar), addr(pd.v),   addr(pd.vBar), addr(pd.p), addr(pd.q), addr(data.u0),
                     addr(data.iu), addr(data.iz), addr(tensor), addr(steps),   addr(mask), w,          h,
                     step.tauScale, step.theta,    prm.lambda,   prm.alpha0,    prm.alpha1};
-    dispatch(kPrimal, primal, w, h);
+    dispatch(kPrimalDualPrimal, primal, w, h);
   }
 }
 
@@ -316,7 +316,7 @@ Addr VulkanBackend::sweepParamBlock(const SweepParams& p) {
 
 void VulkanBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
   PcSweepWarp pc{addr(volume), addr(image), addr(mask), sweepParamBlock(p), volume.width, volume.height, p.planes};
-  dispatch(float64_ ? kSweepWarp64 : kSweepWarp32, pc, volume.width, volume.height);
+  dispatch(float64_ ? kSweepWarpF64 : kSweepWarpF32, pc, volume.width, volume.height);
 }
 
 void VulkanBackend::doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
@@ -348,7 +348,7 @@ void VulkanBackend::doSweepSelect(const Buffer& best, const Buffer& aggregated, 
   // the oracle where the device has shaderFloat64).
   PcSweepSelect pc{addr(best),         addr(aggregated), addr(costs), addr(mask),
                    sweepParamBlock(p), best.width,       best.height, p.planes};
-  dispatch(float64_ ? kSweepSelect64 : kSweepSelect32, pc, best.width, best.height);
+  dispatch(float64_ ? kSweepSelectF64 : kSweepSelectF32, pc, best.width, best.height);
 }
 
 void VulkanBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
@@ -357,7 +357,7 @@ void VulkanBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Bu
   // Two dispatches of one shader (dispatch puts a full barrier before each): pass 0 writes
   // the confidence and the consistent pixels' warp, pass 1 reads that confidence to fill
   // occluded pixels from the surface ahead of them.
-  const Shader shader = float64_ ? kSweepInitialise64 : kSweepInitialise32;
+  const Shader shader = float64_ ? kSweepInitialiseF64 : kSweepInitialiseF32;
   const Addr params = sweepParamBlock(p);
   for (int32_t pass = 0; pass < 2; ++pass) {
     PcSweepInitialise pc{addr(u), addr(w),  addr(confidence), addr(best),         addr(other), addr(mask), params,

@@ -9,38 +9,9 @@
 
 namespace cs::vk {
 
-const char* const kShaderNames[kShaderCount] = {"warp",
-                                                "downsample",
-                                                "upsample",
-                                                "normalise_moments",
-                                                "normalise",
-                                                "structure_tensor_blur",
-                                                "structure_tensor",
-                                                "structure_tensor_steps",
-                                                "warp_derivatives",
-                                                "primal_dual_dual",
-                                                "primal_dual_primal",
-                                                "median",
-                                                "accumulate",
-                                                "fields_f32",
-                                                "fields_f64",
-                                                "triangulate_f32",
-                                                "triangulate_f64",
-                                                "sweep_warp_f32",
-                                                "sweep_warp_f64",
-                                                "sweep_cost",
-                                                "sweep_aggregate",
-                                                "sweep_select_f32",
-                                                "sweep_select_f64",
-                                                "sweep_initialise_f32",
-                                                "sweep_initialise_f64"};
-
 VkPipeline VulkanBackend::pipeline(Shader s) {
   if (pipelines_[s]) return pipelines_[s];
-  const vk::EmbeddedShader* found = nullptr;
-  for (const auto& e : vk::embeddedShaders())
-    if (std::strcmp(e.name, kShaderNames[s]) == 0) found = &e;
-  if (!found) throw Error(std::string("vulkan backend: shader ") + kShaderNames[s] + " is not embedded");
+  const EmbeddedShader* found = &embeddedShaders().at(size_t(s));
   auto smci = vkStruct<VkShaderModuleCreateInfo>(VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO);
   smci.codeSize = found->bytes;
   smci.pCode = found->code;

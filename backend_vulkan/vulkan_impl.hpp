@@ -13,39 +13,12 @@
 
 #include "curvestereo/backend.hpp"
 #include "device.hpp"
+#include "shader_ids.hpp"
 
 namespace cs::vk {
 
-// The shaders (kShaderNames: their names in the embedded table).
-enum Shader {
-  kWarp,
-  kDownsample,
-  kUpsample,
-  kNormaliseMoments,
-  kNormalise,
-  kTensorBlur,
-  kTensor,
-  kTensorSteps,
-  kWarpDerivatives,
-  kDual,
-  kPrimal,
-  kMedian,
-  kAccumulate,
-  kFields32,
-  kFields64,
-  kTriangulate32,
-  kTriangulate64,
-  kSweepWarp32,
-  kSweepWarp64,
-  kSweepCost,
-  kSweepAggregate,
-  kSweepSelect32,
-  kSweepSelect64,
-  kSweepInitialise32,
-  kSweepInitialise64,
-  kShaderCount
-};
-extern const char* const kShaderNames[kShaderCount];
+// The shaders (enum Shader, kShaderCount) are generated from backend_vulkan/CMakeLists.txt's
+// SHADER_VARIANTS into shader_ids.hpp, in the embedded table's order.
 
 constexpr uint32_t kPushBytes = 128;
 constexpr uint32_t kGroup = 16;
