@@ -1,6 +1,7 @@
 // The Vulkan backend's kernels: each Backend kernel as the dispatches of its shaders
 // (../shaders), with the parameter blocks and push constants they read. Backend has checked
 // every kernel's arguments against its contract (backend.hpp).
+#include <algorithm>
 #include <cmath>
 #include <type_traits>
 
@@ -135,9 +136,13 @@ struct PcSweepCost {
   float flatVariance;
 };
 struct PcSweepAggregate {
-  Addr aggregated, costs, mask;
-  int32_t width, height, planes, direction;
+  Addr aggregated, spare, costs, mask;
+  int32_t width, height, planes;
   float p1, p2;
+};
+struct PcSweepCombine {
+  Addr aggregated, spare;
+  int32_t count;
 };
 struct PcSweepSelect {
   Addr best, aggregated, costs, mask, params;
@@ -332,14 +337,16 @@ void VulkanBackend::doSweepCost(const Buffer& costs, const Buffer& reference, co
 
 void VulkanBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                                      const SweepParams& p) {
-  // +x, -x, +y, -y in the oracle's order, one work group per scanline (rows for x, columns
-  // for y). The first direction writes every pixel, the others add: no fill needed.
-  // dispatchGroups puts a full barrier before each dispatch.
+  // The four directions at once, one work group per scanline and direction (+x into
+  // `aggregated`, -x, +y, -y into a scratch of three volumes), then their sum in the
+  // oracle's order. dispatchGroups puts a full barrier before each dispatch.
   const int w = aggregated.width, h = aggregated.height;
-  for (int direction = 0; direction < 4; ++direction) {
-    PcSweepAggregate pc{addr(aggregated), addr(costs), addr(mask), w, h, p.planes, direction, p.p1, p.p2};
-    dispatchGroups(kSweepAggregate, pc, uint32_t(direction < 2 ? h : w), 1);
-  }
+  const Buffer spare = scratch(2, w, h, 3 * p.planes);
+  PcSweepAggregate pc{addr(aggregated), addr(spare), addr(costs), addr(mask), w, h, p.planes, p.p1, p.p2};
+  dispatchGroups(kSweepAggregate, pc, uint32_t(std::max(w, h)), 4);
+  const int64_t count = int64_t(w) * h * p.planes;
+  PcSweepCombine sum{addr(aggregated), addr(spare), int32_t(count)};
+  dispatchGroups(kSweepCombine, sum, uint32_t((count + 255) / 256), 1);
 }
 
 void VulkanBackend::doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,

@@ -185,13 +185,14 @@ void VulkanBackend::doCopy(const Buffer& dst, const Buffer& src) {
   inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(s.arena)].buffer, arenas_[size_t(d.arena)].buffer, 1, &region);
 }
 
-// Internal temporaries (the blurred image of the structure tensor), one per size and slot.
-Buffer VulkanBackend::scratch(int slot, int w, int h) {
-  auto key = std::make_tuple(slot, w, h);
+// Internal temporaries (the blurred image of the structure tensor, the sweep aggregation's
+// three extra directions), one per size and slot.
+Buffer VulkanBackend::scratch(int slot, int w, int h, int channels) {
+  auto key = std::make_tuple(slot, w, h, channels);
   auto it = scratch_.find(key);
   if (it != scratch_.end()) return it->second;
   const Frame was = frame_;  // a scratch buffer does not invalidate the frame
-  Buffer b = create(w, h, 1);
+  Buffer b = create(w, h, channels);
   frame_ = was;
   scratch_[key] = b;
   return b;

@@ -116,7 +116,7 @@ class VulkanBackend final : public Backend {
   // groupsX x groupsY work groups, for shaders that map their invocations otherwise.
   template <class PC>
   void dispatchGroups(Shader s, const PC& pc, uint32_t groupsX, uint32_t groupsY);
-  Buffer scratch(int slot, int w, int h);
+  Buffer scratch(int slot, int w, int h, int channels = 1);
 
   std::string description_;
   Instance inst_;
@@ -143,7 +143,7 @@ class VulkanBackend final : public Backend {
   VkDeviceSize paramsUsed_ = 0;
   unsigned long long allocatedBytes_ = 0;
   std::map<std::string, VkDeviceSize> paramCache_;
-  std::map<std::tuple<int, int, int>, Buffer> scratch_;
+  std::map<std::tuple<int, int, int, int>, Buffer> scratch_;
 
   // The recorded frame's command buffer (recording.cpp), one state at a time.
   enum class Frame {

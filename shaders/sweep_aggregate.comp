@@ -1,11 +1,12 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // One scanline direction of the semi-global aggregation of the plane-sweep costs
-// (backend_cpu/plane_sweep.cpp aggregateDirection / sweepAggregate). The backend runs it
-// four times, direction 0..3 = +x, -x, +y, -y, with a pipeline barrier between them:
-// direction 0 writes `aggregated` (L at masked pixels, 0 elsewhere, so no fill pass is
-// needed: 0 + L == L), the others add to it, which forms the oracle's
-// ((L_+x + L_-x) + L_+y) + L_-y exactly.
+// (backend_cpu/plane_sweep.cpp aggregateDirection / sweepAggregate). All four directions
+// run in one dispatch, gl_WorkGroupID.y = 0..3 = +x, -x, +y, -y, each writing its own path
+// costs (L at masked pixels, 0 elsewhere): +x into `aggregated`, the others into `spare`
+// (three volumes one after the other). sweep_combine.comp then adds them in the
+// oracle's order ((L_+x + L_-x) + L_+y) + L_-y. A walk is a chain of dependent steps, so
+// four side by side keep the GPU busier than four one after the other.
 //
 // Along a line each pixel's path costs depend on the previous pixel's, so a line is
 // walked step by step; within a step the planes are independent except for m, the
@@ -22,10 +23,9 @@ const int kGroupSize = 256;   // the 16 x 16 work group of common.glsl, as a lin
 const int kMaxPlanes = 1024;  // the backend refuses more (shared memory: 2 x 4 KiB)
 
 layout(push_constant) uniform PC {
-  FBuf aggregated, costs, mask;  // aggregated, costs: `planes` channels
+  FBuf aggregated, spare, costs, mask;  // aggregated, costs: `planes` channels; spare: 3 volumes
   int width, height, planes;
-  int direction;  // 0: +x, 1: -x, 2: +y, 3: -y
-  float p1, p2;   // penalty of a step to a neighbouring plane, of any larger jump
+  float p1, p2;  // penalty of a step to a neighbouring plane, of any larger jump
 } pc;
 
 // The path costs of the last two masked steps (ping-pong: step j writes path[j & 1] and
@@ -38,8 +38,12 @@ shared float lowest[2][kGroupSize];
 void main() {
   const int lid = int(gl_LocalInvocationIndex);
   const int line = int(gl_WorkGroupID.x);
-  const bool alongRows = pc.direction < 2;
-  const bool forward = pc.direction == 0 || pc.direction == 2;
+  const int direction = int(gl_WorkGroupID.y);  // 0: +x, 1: -x, 2: +y, 3: -y
+  const bool alongRows = direction < 2;
+  const bool forward = direction == 0 || direction == 2;
+  FBuf paths = direction == 0 ? pc.aggregated : pc.spare;
+  const int volume = pc.width * pc.height * pc.planes;
+  const int offset = direction == 0 ? 0 : (direction - 1) * volume;
   const int lines = alongRows ? pc.height : pc.width;
   const int length = alongRows ? pc.width : pc.height;
   if (line >= lines) return;  // the whole group: barriers stay in uniform control flow
@@ -60,8 +64,7 @@ void main() {
     if (!masked(pc.mask, pc.width, pc.height, x, y)) {
       // The path restarts after an unmasked pixel; aggregated is 0 there.
       havePrevious = false;
-      if (pc.direction == 0)
-        for (int k = lid; k < pc.planes; k += kGroupSize) pc.aggregated.v[base + k] = 0.0;
+      for (int k = lid; k < pc.planes; k += kGroupSize) paths.v[offset + base + k] = 0.0;
       continue;
     }
     const int cur = j & 1, prev = cur ^ 1;
@@ -78,12 +81,7 @@ void main() {
       }
       path[cur][k] = l;
       localMin = min(localMin, l);
-      if (pc.direction == 0) {
-        pc.aggregated.v[base + k] = l;
-      } else {
-        precise float sum = pc.aggregated.v[base + k] + l;
-        pc.aggregated.v[base + k] = sum;
-      }
+      paths.v[offset + base + k] = l;
     }
     // m = the minimum of this step's path costs (order-free: min is exact). The first
     // barrier also publishes path[cur] for the next step's neighbours k -+ 1.
