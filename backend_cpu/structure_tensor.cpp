@@ -10,16 +10,6 @@ namespace cs::cpu {
 
 namespace {
 
-std::vector<float> gaussianTaps(float sigma) {
-  int radius = int(std::ceil(3.f * sigma));
-  std::vector<float> taps(size_t(2 * radius + 1));
-  float sum = 0.f;
-  for (int i = -radius; i <= radius; ++i)
-    sum += taps[size_t(i + radius)] = std::exp(-float(i * i) / (2.f * sigma * sigma));
-  for (auto& t : taps) t /= sum;
-  return taps;
-}
-
 // Separable Gaussian blur with clamp-to-edge; sigma 0 copies.
 std::vector<float> blur(const View& image, float sigma) {
   const int w = image.width, h = image.height;

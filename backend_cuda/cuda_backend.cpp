@@ -398,13 +398,10 @@ void CudaBackend::doStructureTensor(const Buffer& tensor, const Buffer& steps, c
   d.beta = p.beta, d.eta = p.eta, d.wMin = p.wMin, d.alpha0 = p.alpha0, d.alpha1 = p.alpha1;
   d.radius = -1;
   if (p.sigma > 0.f) {
-    // The oracle's taps (cpu/structure_tensor.cpp gaussianTaps), computed the same way.
-    const int radius = int(std::ceil(3.f * p.sigma));  // <= kMaxTensorRadius (Backend checked)
-    float sum = 0.f;
-    for (int i = -radius; i <= radius; ++i)
-      sum += d.taps[i + radius] = std::exp(-float(i * i) / (2.f * p.sigma * p.sigma));
-    for (int i = 0; i < 2 * radius + 1; ++i) d.taps[i] /= sum;
-    d.radius = radius;
+    // The oracle's taps; radius <= kMaxTensorRadius (Backend checked).
+    const std::vector<float> taps = gaussianTaps(p.sigma);
+    std::copy(taps.begin(), taps.end(), d.taps);
+    d.radius = int(taps.size() / 2);
   }
   const size_t n = size_t(image.width) * image.height;
   check(cudak::launchStructureTensor(stream_, img(slot(tensor).dev, tensor), img(slot(steps).dev, steps),

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 namespace cs {
 
@@ -18,6 +19,16 @@ double nowMs() {
 }
 
 }  // namespace
+
+std::vector<float> gaussianTaps(float sigma) {
+  const int radius = int(std::ceil(3.f * sigma));
+  std::vector<float> taps(size_t(2 * radius + 1));
+  float sum = 0.f;
+  for (int i = -radius; i <= radius; ++i)
+    sum += taps[size_t(i + radius)] = std::exp(-float(i * i) / (2.f * sigma * sigma));
+  for (float& t : taps) t /= sum;
+  return taps;
+}
 
 CameraParams toCameraParams(const Camera& camera) {
   CameraParams p;

@@ -1,6 +1,8 @@
 #include "curvestereo/params.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "curvestereo/backend.hpp"
 #include "curvestereo/image.hpp"
@@ -79,12 +81,11 @@ Params::DataTerm parseDataTerm(const std::string& name) {
 }
 
 NormaliseParams normaliseParams(const Params& p) {
+  const std::vector<float> taps = gaussianTaps(p.normSigma);
   NormaliseParams n{};
-  n.radius = std::min(kMaxNormaliseRadius, int(std::ceil(3.f * p.normSigma)));
-  float sum = 0.f;
-  for (int i = -n.radius; i <= n.radius; ++i)
-    sum += n.taps[i + n.radius] = std::exp(-float(i * i) / (2.f * p.normSigma * p.normSigma));
-  for (int i = 0; i <= 2 * n.radius; ++i) n.taps[i] /= sum;
+  if (taps.size() > std::size(n.taps)) throw Error("invalid parameter: normSigma " + std::to_string(p.normSigma));
+  std::copy(taps.begin(), taps.end(), n.taps);
+  n.radius = int(taps.size() / 2);
   n.epsilon = p.noiseLevel;
   return n;
 }

@@ -115,6 +115,11 @@ constexpr int kMaxSweepPlanes = 512;
 // to 42 px).
 constexpr int kMaxTensorRadius = 127;
 
+// The normalised Gaussian taps of standard deviation sigma > 0 over radius ceil(3 sigma)
+// (2 radius + 1 of them, the middle one at offset 0): the one definition behind the
+// structure tensor's smoothing on every backend and normaliseParams().
+std::vector<float> gaussianTaps(float sigma);
+
 // One warp's buffers at a level (DESIGN.md "Per frame" 2.3), as warpTail() takes them: the
 // estimate, the tangent, the data term and what warpDerivatives() reads to make it.
 struct WarpBuffers {
