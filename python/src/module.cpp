@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <mutex>
@@ -396,7 +397,26 @@ void bindDevice(pb::module_&) {}
 using namespace cs;
 using namespace cs::py;
 
+namespace {
+
+// pybind11 before 2.12 reads NumPy's dtype descriptor in NumPy 1's layout: under NumPy 2
+// every item size reads 0, so images would be refused with a nonsense dtype ("uint0") or
+// misread. Seen when an older pybind11's headers shadow the interpreter's own (CPATH).
+void requireNumpyThisPybindReads() {
+#if PYBIND11_VERSION_MAJOR < 2 || (PYBIND11_VERSION_MAJOR == 2 && PYBIND11_VERSION_MINOR < 12)
+  const std::string version = pb::str(pb::module_::import("numpy").attr("__version__"));
+  if (std::atoi(version.c_str()) >= 2)
+    throw pb::import_error(
+        "curvestereo was built with pybind11 " PYBIND11_TOSTRING(PYBIND11_VERSION_MAJOR) "." PYBIND11_TOSTRING(
+            PYBIND11_VERSION_MINOR) ", which cannot read NumPy " +
+        version + " arrays: rebuild it with pybind11 >= 2.12");
+#endif
+}
+
+}  // namespace
+
 PYBIND11_MODULE(_curvestereo, m) {
+  requireNumpyThisPybindReads();
   m.doc() = "Dense depth from a calibrated fisheye stereo pair, over the whole field of view (curvestereo).";
   pb::register_exception<Error>(m, "Error", PyExc_RuntimeError);
   m.attr("__version__") = CS_PY_VERSION;
