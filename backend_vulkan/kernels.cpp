@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "curvestereo/camera.hpp"
 #include "curvestereo/image.hpp"
@@ -99,16 +101,23 @@ struct PcWarpDerivatives {
   int32_t width, height, hasConfidence;
   float weightFloor;
 };
-struct PcDual {
-  Addr uBar, vBar, p, q, tensor, steps, mask;
+// primal_dual.comp: the level's block (set 0 the caller's buffers, set 1 the spare set),
+// and per dispatch the set read, the iterations and their steps.
+constexpr int kMaxPdIterations = 5;  // mirrors kMaxIterations in primal_dual.comp
+struct PdLevel {
+  Addr u[2], uBar[2], v[2], vBar[2], p[2], q[2];
+  Addr u0, iu, iz, tensor, steps, mask;
+  Addr uBarFirst, vBarFirst;
   int32_t w, h;
-  float sigmaScale, alpha0, alpha1;
+  float lambda, alpha0, alpha1;
 };
-struct PcPrimal {
-  Addr u, uBar, v, vBar, p, q, u0, iu, iz, tensor, steps, mask;
-  int32_t w, h;
-  float tauScale, theta, lambda, alpha0, alpha1;
+struct PcPrimalDual {
+  Addr level;
+  int32_t parity, iterations, first, outside;
+  float pad[2];
+  float step[kMaxPdIterations][4];  // tauScale, sigmaScale, theta, qAscent
 };
+enum : int32_t { kCopyOutside = 1, kBarsHome = 2 };  // primal_dual.comp's `outside` bits
 struct PcMedian {
   Addr dst, src, mask;
   int32_t w, h;
@@ -154,7 +163,7 @@ struct PcSweepInitialise {
   float tolerancePx, acceptConfidence;
   int32_t pass, planes;
 };
-static_assert(sizeof(PcPrimal) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
+static_assert(sizeof(PcPrimalDual) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 
 }  // namespace
 
@@ -280,16 +289,93 @@ void VulkanBackend::doWarpDerivatives(const DataTermBuffers& data, const Buffer&
 
 void VulkanBackend::doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
                                  const Buffer& steps, const Buffer& mask, const PrimalDualParams& prm) {
-  const int w = mask.width, h = mask.height;
-  for (const PrimalDualStep& step : prm.schedule) {
-    PcDual dual{addr(pd.uBar),   addr(pd.vBar), addr(pd.p), addr(pd.q), addr(tensor), addr(steps), addr(mask), w, h,
-                step.sigmaScale, prm.alpha0,    prm.alpha1};
-    dispatch(kPrimalDualDual, dual, w, h);
-    PcPrimal primal{addr(pd.u),    addr(pd.uBar), addr(pd.v),   addr(pd.vBar), addr(pd.p), addr(pd.q), addr(data.u0),
-                    addr(data.iu), addr(data.iz), addr(tensor), addr(steps),   addr(mask), w,          h,
-                    step.tauScale, step.theta,    prm.lambda,   prm.alpha0,    prm.alpha1};
-    dispatch(kPrimalDualPrimal, primal, w, h);
+  iterate(pd, data, tensor, steps, mask, prm, false);
+}
+
+void VulkanBackend::doWarpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                                     const Buffer& steps, const Buffer& mask, const PrimalDualParams& prm) {
+  iterate(pd, data, tensor, steps, mask, prm, true);
+}
+
+namespace {
+
+// Work groups the device runs at once, about (an H100's 132 SMs hold three of the wide
+// tile's): a level whose five-iteration tiles fit takes five iterations a dispatch, since
+// there the dispatches' latency is what costs (backend_cuda/primal_dual.cu measured it);
+// larger ones two or three, where the halo's redundant work would cost more.
+constexpr uint32_t kConcurrentGroups = 400;
+
+// Work groups of primal_dual.comp over a w x h level at `iterations` a dispatch.
+std::pair<uint32_t, uint32_t> pdGroups(int w, int h, int cellsW, int iterations) {
+  const int tileW = cellsW + 1 - 2 * iterations, tileH = 16 + 1 - 2 * iterations;
+  return {uint32_t((w + tileW - 1) / tileW), uint32_t((h + tileH - 1) / tileH)};
+}
+
+// The iterations of each dispatch: n split into as few parts of at most `most` as make an
+// even number (every dispatch swaps the sets, so the result ends in the caller's buffers;
+// a single iteration cannot), as even in size as they go.
+std::vector<int> pdPlan(int n, int most, int cap) {
+  int parts = (n + most - 1) / most;
+  if (parts % 2 == 1 && n > 1) parts = parts > 1 && (n + parts - 2) / (parts - 1) <= cap ? parts - 1 : parts + 1;
+  std::vector<int> plan(size_t(parts), n / parts);
+  for (int i = 0; i < n % parts; ++i) ++plan[size_t(i)];
+  return plan;
+}
+
+}  // namespace
+
+// Fused iterations (primal_dual.comp), ping-ponging between the caller's buffers (set 0)
+// and a spare set; a lone iteration's result is copied back from the spare set.
+void VulkanBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                            const Buffer& steps, const Buffer& mask, const PrimalDualParams& prm,
+                            bool barsFromPrimals) {
+  const int w = mask.width, h = mask.height, n = int(prm.schedule.size());
+  if (n == 0) {  // no iteration to read u, v as the bars: the copies themselves
+    if (barsFromPrimals) doCopy(pd.uBar, pd.u), doCopy(pd.vBar, pd.v);
+    return;
   }
+  const Buffer own[6] = {pd.u, pd.uBar, pd.v, pd.vBar, pd.p, pd.q};
+  Buffer spare[6];
+  for (int i = 0; i < 6; ++i) spare[i] = scratch(3 + i, w, h, own[i].channels);
+  PdLevel level{};
+  Addr* sets[6] = {level.u, level.uBar, level.v, level.vBar, level.p, level.q};
+  for (int i = 0; i < 6; ++i) sets[i][0] = addr(own[i]), sets[i][1] = addr(spare[i]);
+  level.u0 = addr(data.u0), level.iu = addr(data.iu), level.iz = addr(data.iz);
+  level.tensor = addr(tensor), level.steps = addr(steps), level.mask = addr(mask);
+  level.uBarFirst = barsFromPrimals ? level.u[0] : level.uBar[0];
+  level.vBarFirst = barsFromPrimals ? level.v[0] : level.vBar[0];
+  level.w = w, level.h = h;
+  level.lambda = prm.lambda, level.alpha0 = prm.alpha0, level.alpha1 = prm.alpha1;
+  const Addr block = paramBlock(&level, sizeof(level));
+
+  const int cellsW = widePrimalDual_ ? 32 : 16;
+  const std::pair<uint32_t, uint32_t> deep = pdGroups(w, h, cellsW, kMaxPdIterations);
+  const bool fits = widePrimalDual_ && deep.first * deep.second <= kConcurrentGroups;
+  const std::vector<int> plan = pdPlan(n, fits ? kMaxPdIterations : 2, widePrimalDual_ ? kMaxPdIterations : 3);
+  // Masked-out pixels never change: the first dispatch writes them only where the result
+  // needs them (into the spare set when the result ends there, the bars into set 0 when
+  // they are read from u, v).
+  const bool endsSpare = plan.size() % 2 == 1;
+  int k = 0;
+  for (size_t d = 0; d < plan.size(); ++d) {
+    PcPrimalDual pc{};
+    pc.level = block;
+    pc.parity = int32_t(d % 2);
+    pc.iterations = plan[d];
+    pc.first = d == 0;
+    if (d == 0) pc.outside = endsSpare ? kCopyOutside : barsFromPrimals ? kBarsHome : 0;
+    for (int i = 0; i < plan[d]; ++i) {
+      const PrimalDualStep& st = prm.schedule[size_t(k + i)];
+      const float sigmaQ = st.sigmaScale * 0.5f / prm.alpha0;  // as cpu/primal_dual.cpp
+      pc.step[i][0] = st.tauScale, pc.step[i][1] = st.sigmaScale, pc.step[i][2] = st.theta;
+      pc.step[i][3] = sigmaQ * prm.alpha0;
+    }
+    const std::pair<uint32_t, uint32_t> groups = pdGroups(w, h, cellsW, plan[d]);
+    dispatchGroups(widePrimalDual_ ? kPrimalDual : kPrimalDualNarrow, pc, groups.first, groups.second);
+    k += plan[d];
+  }
+  if (endsSpare)
+    for (int i = 0; i < 6; ++i) doCopy(own[i], spare[i]);
 }
 
 void VulkanBackend::doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) {

@@ -22,6 +22,8 @@ namespace cs::vk {
 
 constexpr uint32_t kPushBytes = 128;
 constexpr uint32_t kGroup = 16;
+// The shared memory of primal_dual.comp's wide tile: 32 x 16 cells of 48 bytes.
+constexpr uint32_t kWidePrimalDualShared = 32 * 16 * 48;
 
 using Addr = uint64_t;
 
@@ -63,6 +65,8 @@ class VulkanBackend final : public Backend {
                          const Buffer& confidence, float weightFloor) override;
   void doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
                     const Buffer& mask, const PrimalDualParams& params) override;
+  void doWarpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
+                        const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) override;
   void doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
   void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                     float duMax) override;
@@ -101,6 +105,10 @@ class VulkanBackend final : public Backend {
   Addr addr(const Buffer& b) const;
   Addr paramBlock(const void* data, size_t bytes);
   Addr sweepParamBlock(const SweepParams& p);
+  // primalDual (barsFromPrimals false) and warpIterations (true: the first iteration reads
+  // u, v as uBar, vBar) in primal_dual.comp's fused dispatches.
+  void iterate(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
+               const Buffer& mask, const PrimalDualParams& params, bool barsFromPrimals);
   VkPipeline pipeline(Shader s);
 
   VkCommandBuffer recorder();
@@ -124,6 +132,7 @@ class VulkanBackend final : public Backend {
   VkPhysicalDeviceProperties props_{};
   VkPhysicalDeviceMemoryProperties memProps_{};
   bool float64_ = false;
+  bool widePrimalDual_ = false;  // the device holds primal_dual.comp's wide tile
   VkDevice dev_ = VK_NULL_HANDLE;
   VkQueue queue_ = VK_NULL_HANDLE;
   uint32_t queueFamily_ = 0;

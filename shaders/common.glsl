@@ -1,11 +1,15 @@
 // Shared by every compute shader: buffer references (all buffers are reached by device
-// address from push constants), the 16x16 work group, indexing and masked-grid helpers.
+// address from push constants), the 16x16 work group (unless a shader has its own),
+// indexing and masked-grid helpers.
 // Every kernel ports the CPU oracle (backend_cpu/) operation by operation.
 #ifndef CS_COMMON_GLSL
 #define CS_COMMON_GLSL
 #extension GL_EXT_buffer_reference : require
 
+// A shader with a work group of its own defines CS_OWN_WORK_GROUP before including this.
+#ifndef CS_OWN_WORK_GROUP
 layout(local_size_x = 16, local_size_y = 16, local_size_z = 1) in;
+#endif
 
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer FBuf { float v[]; };
 

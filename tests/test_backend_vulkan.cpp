@@ -6,6 +6,7 @@
 // a usable Vulkan device the suite is reported to ctest as skipped (gpu_suite.hpp).
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <map>
 
@@ -290,6 +291,114 @@ void checkFramesAgainstOracle(const std::vector<DepthResult>& frames, const Dept
 }
 
 }  // namespace
+
+namespace {
+
+// The primal-dual's inputs at w x h, as golden_cases.cpp's primalDualCase: noise for the
+// state and the data term, a disc mask with a hole, the oracle's preconditioner.
+struct PdInputs {
+  int w, h;
+  std::map<std::string, std::vector<float>> host;  // by buffer name
+};
+
+const char* const kPdState[] = {"u", "uBar", "v", "vBar", "p", "q"};
+
+PdInputs pdInputs(int w, int h) {
+  PdInputs in{w, h, {}};
+  const size_t n = size_t(w) * h;
+  uint32_t seed = 11;
+  auto noise = [&](int channels, float amp) {
+    std::vector<float> v(n * size_t(channels));
+    for (size_t i = 0; i < v.size(); ++i) v[i] = amp * (2.f * golden::hash01(uint32_t(i) * 2891336453U + seed) - 1.f);
+    ++seed;
+    return v;
+  };
+  in.host["u"] = noise(1, 1.f), in.host["uBar"] = noise(1, 1.f), in.host["v"] = noise(2, 0.1f);
+  in.host["vBar"] = noise(2, 0.1f), in.host["p"] = noise(2, 0.5f), in.host["q"] = noise(4, 0.2f);
+  in.host["u0"] = noise(1, 1.f), in.host["iu"] = noise(1, 0.1f), in.host["iz"] = noise(1, 0.05f);
+  std::vector<float> mask(n), image(n);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      mask[size_t(y) * w + x] = std::hypot(x - 0.5 * (w - 1), y - 0.5 * (h - 1)) <= 0.45 * std::min(w, h);
+      image[size_t(y) * w + x] = 0.5f + 0.3f * std::sin(0.21f * x) * std::cos(0.17f * y) +
+                                 0.1f * golden::hash01(uint32_t(y * w + x) * 747796405U + 3);
+    }
+  mask[size_t(h / 2) * w + w / 2] = 0.f;
+  in.host["mask"] = mask;
+  auto cpu = createBackend("cpu");
+  Buffer t = cpu->create(w, h, 4), st = cpu->create(w, h, 4), img = cpu->create(w, h, 1), m = cpu->create(w, h, 1);
+  cpu->upload(img, image.data());
+  cpu->upload(m, mask.data());
+  cpu->structureTensor(t, st, img, m, {0.85f, 1e-4f, 1.f, 9.f, 17.f, 1.2f});
+  in.host["tensor"].resize(t.count());
+  in.host["steps"].resize(st.count());
+  cpu->download(t, in.host["tensor"].data());
+  cpu->download(st, in.host["steps"].data());
+  return in;
+}
+
+// The state after `iterations` iterations (of warpIterations with `warp`), all six
+// buffers one after the other.
+std::vector<float> runPrimalDual(Backend& b, const PdInputs& in, int iterations, bool warp) {
+  std::map<std::string, Buffer> buf;
+  for (const auto& [name, data] : in.host) {
+    const int channels = int(data.size() / (size_t(in.w) * in.h));
+    buf[name] = b.create(in.w, in.h, channels);
+    b.upload(buf[name], data.data());
+  }
+  const PrimalDualBuffers pd{buf["u"], buf["uBar"], buf["v"], buf["vBar"], buf["p"], buf["q"]};
+  const DataTermBuffers data{buf["u0"], buf["iu"], buf["iz"]};
+  PrimalDualParams prm{20.f, 17.f, 1.2f, {}};
+  float scale = 1.f;
+  for (int k = 0; k < iterations; ++k) {
+    const float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
+    prm.schedule.push_back({scale, 1.f / scale, theta});
+    scale *= theta;
+  }
+  if (warp)
+    b.warpIterations(pd, data, buf["tensor"], buf["steps"], buf["mask"], prm);
+  else
+    b.primalDual(pd, data, buf["tensor"], buf["steps"], buf["mask"], prm);
+  std::vector<float> out;
+  for (const char* name : kPdState) {
+    std::vector<float> host(buf[name].count());
+    b.download(buf[name], host.data());
+    out.insert(out.end(), host.begin(), host.end());
+  }
+  return out;
+}
+
+}  // namespace
+
+// primal_dual.comp runs 1 to 5 iterations a dispatch, more on small levels, in a wide tile
+// or (devices with less shared memory) a narrow one: every split and both tiles give the
+// oracle's results within the golden cases' tolerance, and the two tiles the same bits.
+TEST_CASE("vulkan: the fused primal-dual matches the oracle for every split into dispatches and both tiles") {
+  auto wide = vulkanOrSkip();
+  if (!wide) return;
+  setenv("CURVESTEREO_VULKAN_SHARED_MEMORY", "16384", 1);  // every device's minimum
+  auto narrow = createBackend("vulkan");
+  unsetenv("CURVESTEREO_VULKAN_SHARED_MEMORY");
+  auto cpu = createBackend("cpu");
+  for (const auto& [w, h] : {std::pair{45, 37}, std::pair{301, 203}}) {
+    const PdInputs in = pdInputs(w, h);
+    for (int iterations : {0, 1, 2, 3, 4, 5, 6, 7, 11}) {
+      for (bool warp : {false, true}) {
+        INFO(w << "x" << h << ", " << iterations << " iterations, " << (warp ? "warpIterations" : "primalDual"));
+        const std::vector<float> expected = runPrimalDual(*cpu, in, iterations, warp);
+        const std::vector<float> a = runPrimalDual(*wide, in, iterations, warp);
+        const std::vector<float> b = runPrimalDual(*narrow, in, iterations, warp);
+        REQUIRE(a.size() == expected.size());
+        double maxAbs = 0;
+        for (size_t i = 0; i < a.size(); ++i) maxAbs = std::max(maxAbs, double(std::abs(a[i] - expected[i])));
+        CHECK(maxAbs <= 1e-4);  // test_backends.cpp's primaldual_* tolerance
+        CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
+      }
+    }
+  }
+  if (vulkanValidationLayerActive())
+    CHECK_MESSAGE(vulkanValidationMessageCount() == 0, "last: " << vulkanValidationLastMessage());
+}
 
 TEST_CASE("vulkan: a whole solve, replayed and profiled, matches the oracle with zero validation messages") {
   auto probe = vulkanOrSkip();
