@@ -9,7 +9,7 @@
 namespace cs::cpu {
 
 void fields(const View& mask, const View& calibration, const View& trajectory, const FieldsParams& p) {
-  const Camera cam0 = toCamera(p.cam0), cam1 = toCamera(p.cam1);
+  const BuiltCamera cam0(toCamera(p.cam0)), cam1(toCamera(p.cam1));
   const Eigen::Matrix3d R = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(p.R);
   const Eigen::Vector3d t(p.t[0], p.t[1], p.t[2]);
   const FieldOptions options{p.maxFovDeg, p.epipoleDeg};

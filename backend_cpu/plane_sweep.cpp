@@ -20,7 +20,7 @@ constexpr float kNoCost = 2.f;     // cost where nothing scored (the worst 1 - Z
 double planeInverseDepth(const SweepParams& p, double k) { return p.qMax * k / double(p.planes - 1); }
 
 // Where the reference pixel's ray, on the sphere of inverse depth q, lands in the other view.
-bool projectHypothesis(const Camera& cam, const Vec3<double>& ray, const double t[3], double q, Vec2<double>& px) {
+bool projectHypothesis(const BuiltCamera& cam, const Vec3<double>& ray, const double t[3], double q, Vec2<double>& px) {
   const Vec3<double> moved(ray.x() + q * t[0], ray.y() + q * t[1], ray.z() + q * t[2]);
   return cam.project(moved, px) && cam.inImage(px);
 }
@@ -57,7 +57,7 @@ float parabolaOffset(float before, float best, float after) {
 }  // namespace
 
 void sweepWarp(const View& volume, const View& image, const View& mask, const SweepParams& p) {
-  const Camera cam = toCamera(p.cam);
+  const BuiltCamera cam(toCamera(p.cam));
   parallelRows(volume.height, [&](int y) {
     for (int x = 0; x < volume.width; ++x) {
       for (int k = 0; k < p.planes; ++k) volume.at(x, y, k) = kNoSample;
@@ -171,7 +171,7 @@ struct RoundTrip {
   Vec2<double> there;
 };
 
-RoundTrip roundTrip(const Camera& cam, const View& best, const View& other, const View& mask, const SweepParams& p,
+RoundTrip roundTrip(const BuiltCamera& cam, const View& best, const View& other, const View& mask, const SweepParams& p,
                     const ConsistencyParams& c, int x, int y) {
   RoundTrip r;
   const float q = best.at(x, y, 0);
@@ -193,8 +193,8 @@ RoundTrip roundTrip(const Camera& cam, const View& best, const View& other, cons
 }
 
 // The sweep's hypothesis q at the ray as the warp (u, w).
-bool setWarp(const View& u, const View& w, const Camera& cam, const SweepParams& p, const Vec3<double>& ray, double q,
-             int x, int y) {
+bool setWarp(const View& u, const View& w, const BuiltCamera& cam, const SweepParams& p, const Vec3<double>& ray,
+             double q, int x, int y) {
   Vec2<double> there;
   if (!projectHypothesis(cam, ray, p.t, q, there)) return false;
   const double wx = there.x() - x, wy = there.y() - y;
@@ -211,7 +211,7 @@ bool setWarp(const View& u, const View& w, const Camera& cam, const SweepParams&
 // of growing inverse depth, J t) find the nearest consistent pixel on each side, up to
 // `reach`. When the one behind is nearer (larger q) than the one ahead, the pixel takes
 // the one ahead's inverse depth; -1 otherwise (or when a side has none).
-double occludedSurface(const Camera& cam, const View& best, const View& confidence, const View& mask,
+double occludedSurface(const BuiltCamera& cam, const View& best, const View& confidence, const View& mask,
                        const SweepParams& p, float accept, const Vec3<double>& ray, int x, int y, int reach) {
   Vec2<double> px;
   Mat23<double> J;
@@ -238,7 +238,7 @@ double occludedSurface(const Camera& cam, const View& best, const View& confiden
 
 void sweepInitialise(const View& u, const View& w, const View& confidence, const View& best, const View& other,
                      const View& mask, const SweepParams& p, const ConsistencyParams& c) {
-  const Camera cam = toCamera(p.cam);
+  const BuiltCamera cam(toCamera(p.cam));
   // Pass 1: confidence everywhere; consistent pixels take the sweep's hypothesis.
   parallelRows(u.height, [&](int y) {
     for (int x = 0; x < u.width; ++x) {

@@ -11,7 +11,7 @@ namespace cs::cpu {
 
 void triangulate(const View& radial, const View& points, const View& w, const View& mask, const CameraParams& cam0p,
                  const double tPrimeArray[3]) {
-  const Camera cam0 = toCamera(cam0p);
+  const BuiltCamera cam0(toCamera(cam0p));
   const Eigen::Vector3d tPrime(tPrimeArray[0], tPrimeArray[1], tPrimeArray[2]);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   parallelRows(radial.height, [&](int y) {

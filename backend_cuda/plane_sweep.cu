@@ -47,7 +47,7 @@ __device__ __forceinline__ double planeInverseDepth(const SweepDev& p, double k)
 }
 
 // Where the reference ray, on the sphere of inverse depth q, lands in the other view
-// (Camera::project && Camera::inImage).
+// (BuiltCamera::project && inImage).
 __device__ __forceinline__ bool projectHypothesis(const CamDev& cam, const V3& ray, const double t[3], double q,
                                                   V2& px) {
   const V3 moved{ray.x + q * t[0], ray.y + q * t[1], ray.z + q * t[2]};

@@ -364,7 +364,7 @@ SweepParams sweepParams(double qMax, int planes, int radius) {
 
 // Where pixel (x, y) sees the sphere of inverse depth q in the other view, in double like
 // the oracle; false where the ray or its projection is invalid.
-bool hypothesis(const Camera& cam, const double t[3], double x, double y, double q, Vec2<double>& px) {
+bool hypothesis(const BuiltCamera& cam, const double t[3], double x, double y, double q, Vec2<double>& px) {
   Vec3<double> ray;
   if (!cam.unproject(Vec2<double>(x, y), ray)) return false;
   return cam.project(Vec3<double>(ray.x() + q * t[0], ray.y() + q * t[1], ray.z() + q * t[2]), px);
@@ -386,13 +386,13 @@ std::vector<Output> sweepWarpCase(Backend& b) {
   Session s{b};
   SweepParams p = sweepParams(4.0, 9, 2);
   p.t[2] = -0.1;
-  const Camera cam = toCamera(p.cam);
+  const BuiltCamera cam(toCamera(p.cam));
   Host image = texture(kW, kH, 30), mask = discMask(kW, kH);
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x)
       for (int k = 0; k < p.planes && mask.at(x, y) != 0.f; ++k) {
         Vec2<double> px;
-        if (hypothesis(cam, p.t, x, y, p.qMax * k / (p.planes - 1), px) && borderDistance(cam, px) < 0.05)
+        if (hypothesis(cam, p.t, x, y, p.qMax * k / (p.planes - 1), px) && borderDistance(cam.camera(), px) < 0.05)
           mask.at(x, y) = 0.f;
       }
   Buffer volume = s.make(kW, kH, p.planes);
@@ -514,7 +514,7 @@ std::vector<Output> sweepInitialiseCase(Backend& b) {
   consistency.tolerancePx = 1.5f;
   consistency.acceptConfidence = 0.3f;
   const double eAccept = std::sqrt(-std::log(double(consistency.acceptConfidence)));
-  const Camera cam = toCamera(p.cam);
+  const BuiltCamera cam(toCamera(p.cam));
   Host field = stretched(texture(kW, kH, 34)), mask = discMask(kW, kH), best(kW, kH, 2), other(kW, kH, 2);
   // False when pixel (x, y) at inverse depth q lands within `margin` px of the image
   // border or of a nearest-pixel tie.
@@ -522,7 +522,7 @@ std::vector<Output> sweepInitialiseCase(Backend& b) {
     Vec2<double> px;
     if (!hypothesis(cam, p.t, x, y, q, px) || !cam.inImage(px, -margin)) return true;
     auto tie = [&](double v) { return std::abs(v - std::floor(v) - 0.5) < margin; };
-    return borderDistance(cam, px) >= margin && !tie(px.x()) && !tie(px.y());
+    return borderDistance(cam.camera(), px) >= margin && !tie(px.x()) && !tie(px.y());
   };
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {

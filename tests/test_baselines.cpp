@@ -48,11 +48,12 @@ double texture(double u, double v) {
 
 // Camera k (centre c, X_k = Rk (X0 - c)) sees the plane z0 = Z (camera-0 frame).
 // Returns the image (2x2 supersampled) and, for camera 0, the radial depth.
-ImageF renderPlane(const Camera& cam, const Eigen::Matrix3d& Rk, const Eigen::Vector3d& c, double Z, ImageF* depth) {
-  ImageF img(cam.width, cam.height, 0.f);
-  if (depth) *depth = ImageF(cam.width, cam.height, 0.f);
-  for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) {
+ImageF renderPlane(const Camera& camera, const Eigen::Matrix3d& Rk, const Eigen::Vector3d& c, double Z, ImageF* depth) {
+  const BuiltCamera cam(camera);
+  ImageF img(camera.width, camera.height, 0.f);
+  if (depth) *depth = ImageF(camera.width, camera.height, 0.f);
+  for (int y = 0; y < camera.height; ++y)
+    for (int x = 0; x < camera.width; ++x) {
       double sum = 0;
       int hits = 0;
       for (int j = 0; j < 2; ++j)
@@ -80,18 +81,18 @@ TEST_CASE("rectification maps and their inverse round-trip; rows are epipolar li
   const Rig rig = fisheyeRig(240, Eigen::Vector3d(0.2, 0.01, 0.03), 2.0);
   for (double fov : {90.0, 165.0}) {
     const Rectification rect = makeRectification(rig, fov, 160);
-    const Camera& pin = rect.rectified.cam0;
+    const BuiltCamera pin(rect.rectified.cam0), cam0(rig.cam0);
     int checked = 0;
     for (int y = 0; y < 160; y += 7)
       for (int x = 0; x < 160; x += 7) {
         const Vec2f m = rect.map0(x, y);
         if (!std::isfinite(m.x)) continue;
         Vec2<double> p;
-        REQUIRE(sourceToRectified(pin, rig.cam0, rect.rot0, Vec2<double>(m.x, m.y), p));
+        REQUIRE(sourceToRectified(pin, cam0, rect.rot0, Vec2<double>(m.x, m.y), p));
         CHECK(std::fabs(p.x() - x) < 2e-3);  // float storage of the map
         CHECK(std::fabs(p.y() - y) < 2e-3);
         Vec2<double> back;
-        REQUIRE(rectifiedToSource(pin, rig.cam0, rect.rot0, p, back));
+        REQUIRE(rectifiedToSource(pin, cam0, rect.rot0, p, back));
         CHECK((back - Vec2<double>(m.x, m.y)).norm() < 1e-6);
         ++checked;
       }
@@ -120,6 +121,7 @@ TEST_CASE("rectification handles a baseline along the optical axis") {
 TEST_CASE("plane sweep recovers fronto-parallel planes of known depth") {
   const int n = 200;
   const Rig rig = fisheyeRig(n, Eigen::Vector3d(0.25, 0.0, 0.0), 1.5);
+  const BuiltCamera cam0(rig.cam0);
   const Eigen::Vector3d c1 = -rig.R.transpose() * rig.t;
   for (double Z : {1.5, 4.0}) {
     ImageF gt;
@@ -136,7 +138,7 @@ TEST_CASE("plane sweep recovers fronto-parallel planes of known depth") {
       for (int x = 0; x < n; ++x) {
         Vec3<double> ray;
         // Within 50 degrees of the axis: the plane fills that view in both cameras.
-        if (!rig.cam0.unproject(Vec2<double>(x, y), ray) || ray.z() < std::cos(50 * kPi / 180)) continue;
+        if (!cam0.unproject(Vec2<double>(x, y), ray) || ray.z() < std::cos(50 * kPi / 180)) continue;
         const float d = depth(x, y);
         rel.push_back(std::isfinite(d) ? std::fabs(d - gt(x, y)) / gt(x, y) : 1.0);
       }
@@ -156,7 +158,7 @@ TEST_CASE("plane sweep recovers fronto-parallel planes of known depth") {
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x) {
         Vec3<double> ray;
-        if (!rig.cam0.unproject(Vec2<double>(x, y), ray) || ray.z() < std::cos(50 * kPi / 180)) continue;
+        if (!cam0.unproject(Vec2<double>(x, y), ray) || ray.z() < std::cos(50 * kPi / 180)) continue;
         ++total;
         kept += ok(x, y);
       }
@@ -167,6 +169,7 @@ TEST_CASE("plane sweep recovers fronto-parallel planes of known depth") {
 TEST_CASE("rectified TGV is accurate inside its field of view on an easy pair") {
   const int n = 256;
   const Rig rig = fisheyeRig(n, Eigen::Vector3d(0.15, 0.0, 0.0), 0.0);
+  const BuiltCamera cam0(rig.cam0);
   const Eigen::Vector3d c1 = -rig.R.transpose() * rig.t;
   ImageF gt;
   const ImageF left = renderPlane(rig.cam0, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), 3.0, &gt);
@@ -182,7 +185,7 @@ TEST_CASE("rectified TGV is accurate inside its field of view on an easy pair") 
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
       Vec3<double> ray;
-      if (std::isnan(error(x, y)) || !rig.cam0.unproject(Vec2<double>(x, y), ray)) continue;
+      if (std::isnan(error(x, y)) || !cam0.unproject(Vec2<double>(x, y), ray)) continue;
       const double deg = std::acos(ray.z()) * 180 / kPi;
       if (deg < 35) {
         ++inside;

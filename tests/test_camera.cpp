@@ -11,6 +11,7 @@
 #include "curvestereo/image.hpp"
 #include "test_util.hpp"
 
+using cs::BuiltCamera;
 using cs::Camera;
 using cs::Mat23;
 using cs::Vec2;
@@ -20,9 +21,33 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+// A Camera with its model built in double (BuiltCamera) and in float (the precision GPU
+// shaders may use), so that the tests below project and unproject in either.
+class TestCamera : public Camera {
+ public:
+  TestCamera(const Camera& cam)  // NOLINT: implicit, so the cameras below read as plain Cameras
+      : Camera(cam), built_(cam), single_(cs::models::makeModel<float>(model, params.data(), width, height)) {}
+
+  bool project(const Vec3<double>& p, Vec2<double>& px, Mat23<double>* J = nullptr) const {
+    return built_.project(p, px, J);
+  }
+  bool unproject(const Vec2<double>& px, Vec3<double>& ray) const { return built_.unproject(px, ray); }
+  bool project(const Vec3<float>& p, Vec2<float>& px, Mat23<float>* J = nullptr) const {
+    return std::visit([&](const auto& m) { return m.project(p, px, J); }, single_);
+  }
+  bool unproject(const Vec2<float>& px, Vec3<float>& ray) const {
+    return std::visit([&](const auto& m) { return m.unproject(px, ray); }, single_);
+  }
+  double maxAngle() const { return built_.maxAngle(); }
+
+ private:
+  BuiltCamera built_;
+  cs::models::AnyModel<float> single_;
+};
+
 struct NamedCamera {
   std::string name;
-  Camera cam;
+  TestCamera cam;
 };
 
 // Realistic calibrations of every model (values as published for T265 / EuRoC / TUM VI
@@ -56,7 +81,7 @@ Vec3<double> rayAt(double theta, double phi) {
 }
 
 // Angles to test rays at: up to just inside the valid region, beyond 90 deg where the model allows.
-std::vector<double> testAngles(const Camera& cam) {
+std::vector<double> testAngles(const TestCamera& cam) {
   const double top = cam.maxAngle() - 1e-3;
   std::vector<double> angles;
   for (int i = 0; i <= 40; ++i) angles.push_back(top * i / 40.0);
@@ -66,7 +91,7 @@ std::vector<double> testAngles(const Camera& cam) {
 // Central differences with a step well inside the distance to the nearest singularity:
 // the back pole of a >180 deg lens (px varies on the scale of r there) and the edge of
 // the valid region, where px runs off to infinity for UCM xi<1 / EUCM alpha<0.5.
-Mat23<double> numericJacobian(const Camera& cam, const Vec3<double>& p, double angleToEdge) {
+Mat23<double> numericJacobian(const TestCamera& cam, const Vec3<double>& p, double angleToEdge) {
   Mat23<double> J;
   const double h = 1e-5 * std::min({p.norm(), std::hypot(p.x(), p.y()), p.norm() * angleToEdge});
   for (int k = 0; k < 3; ++k) {
@@ -234,18 +259,19 @@ TEST_CASE("maxAngle is where the valid region ends") {
     }
   }
   const double f180 = 800.0 / kPi;
-  CHECK(Camera::kannalaBrandt4(800, 800, f180, f180, 399.5, 399.5).maxAngle() == doctest::Approx(kPi));
-  CHECK(Camera::unified(512, 512, 200, 200, 256, 256, 0.9).maxAngle() == doctest::Approx(std::acos(-0.9)));
-  CHECK(Camera::unified(512, 512, 200, 200, 256, 256, 1.9).maxAngle() == doctest::Approx(std::acos(-1 / 1.9)));
-  CHECK(Camera::unified(512, 512, 200, 200, 256, 256, 0.0).maxAngle() == doctest::Approx(kPi / 2));
+  CHECK(BuiltCamera(Camera::kannalaBrandt4(800, 800, f180, f180, 399.5, 399.5)).maxAngle() == doctest::Approx(kPi));
+  CHECK(BuiltCamera(Camera::unified(512, 512, 200, 200, 256, 256, 0.9)).maxAngle() == doctest::Approx(std::acos(-0.9)));
+  CHECK(BuiltCamera(Camera::unified(512, 512, 200, 200, 256, 256, 1.9)).maxAngle() ==
+        doctest::Approx(std::acos(-1 / 1.9)));
+  CHECK(BuiltCamera(Camera::unified(512, 512, 200, 200, 256, 256, 0.0)).maxAngle() == doctest::Approx(kPi / 2));
   // Undistorted pinhole: the corner ray at (-0.5, -0.5).
   const double corner = std::atan(std::hypot(320.0, 240.0) / 500.0);
-  CHECK(Camera::pinholeRadtan(640, 480, 500, 500, 319.5, 239.5).maxAngle() == doctest::Approx(corner));
+  CHECK(BuiltCamera(Camera::pinholeRadtan(640, 480, 500, 500, 319.5, 239.5)).maxAngle() == doctest::Approx(corner));
 }
 
 TEST_CASE("Kannala-Brandt: turning point and invalid region") {
   const double f200 = 500.0 / (100.0 * kPi / 180.0);
-  const Camera cam = Camera::kannalaBrandt4(1000, 1000, f200, f200, 499.5, 499.5, -0.01, -0.002, 0, 0);
+  const TestCamera cam = Camera::kannalaBrandt4(1000, 1000, f200, f200, 499.5, 499.5, -0.01, -0.002, 0, 0);
   const double tm = cam.maxAngle();
   // d theta_d / d theta = 1 + 3 k1 t^2 + 5 k2 t^4 vanishes at maxAngle.
   CHECK(1 + 3 * -0.01 * tm * tm + 5 * -0.002 * std::pow(tm, 4) == doctest::Approx(0).epsilon(1e-12));
@@ -261,7 +287,7 @@ TEST_CASE("Kannala-Brandt: turning point and invalid region") {
 
   // The synthetic scenes' lens: radius 400 px is exactly 90 deg.
   const double f180 = 800.0 / kPi;
-  const Camera equi = Camera::kannalaBrandt4(800, 800, f180, f180, 399.5, 399.5);
+  const TestCamera equi = Camera::kannalaBrandt4(800, 800, f180, f180, 399.5, 399.5);
   REQUIRE(equi.unproject(Vec2<double>(399.5 + 400, 399.5), ray));
   CHECK((ray - Vec3<double>(1, 0, 0)).norm() < 1e-12);
 }
@@ -269,32 +295,32 @@ TEST_CASE("Kannala-Brandt: turning point and invalid region") {
 TEST_CASE("unified family and pinhole: invalid regions") {
   Vec2<double> px;
   Vec3<double> ray;
-  const Camera ucm = Camera::unified(512, 512, 465, 464, 254.9, 256.8, 1.9);
+  const TestCamera ucm = Camera::unified(512, 512, 465, 464, 254.9, 256.8, 1.9);
   CHECK_FALSE(ucm.project(rayAt(std::acos(-1 / 1.9) + 0.01, 0.4), px));
   // Beyond r^2 = 1 / (xi^2 - 1) no ray projects.
   CHECK_FALSE(ucm.unproject(Vec2<double>(254.9 + 465 * 0.7, 256.8), ray));
 
-  const Camera eucm = Camera::extendedUnified(512, 512, 191.4, 191.3, 254.9, 256.9, 0.629, 1.18);
+  const TestCamera eucm = Camera::extendedUnified(512, 512, 191.4, 191.3, 254.9, 256.9, 0.629, 1.18);
   CHECK_FALSE(eucm.project(Vec3<double>(0, 0, -1), px));
   CHECK_FALSE(eucm.unproject(Vec2<double>(254.9 + 191.4 * 2.0, 256.9), ray));  // r^2 > 1/(beta (2 alpha - 1))
 
-  const Camera ds = Camera::doubleSphere(512, 512, 158.3, 158.2, 254.9, 256.9, -0.18, 0.59);
+  const TestCamera ds = Camera::doubleSphere(512, 512, 158.3, 158.2, 254.9, 256.9, -0.18, 0.59);
   CHECK_FALSE(ds.project(Vec3<double>(0.1, 0, -1), px));
   CHECK_FALSE(ds.unproject(Vec2<double>(254.9 + 158.3 * 2.5, 256.9), ray));  // r^2 > 1/(2 alpha - 1)
 
-  const Camera pin = Camera::pinholeRadtan(752, 480, 458.654, 457.296, 367.215, 248.375, -0.28340811, 0.07395907,
-                                           0.00019359, 1.76187114e-05);
+  const TestCamera pin = Camera::pinholeRadtan(752, 480, 458.654, 457.296, 367.215, 248.375, -0.28340811, 0.07395907,
+                                               0.00019359, 1.76187114e-05);
   CHECK_FALSE(pin.project(Vec3<double>(0.1, 0.1, 0), px));
   CHECK_FALSE(pin.project(Vec3<double>(0.1, 0.1, -1), px));
 
   Camera broken = pin;
-  broken.params.pop_back();  // wrong parameter count: refused, not read out of bounds
-  CHECK_FALSE(broken.project(Vec3<double>(0, 0, 1), px));
+  broken.params.pop_back();  // wrong parameter count: refused when built, not read out of bounds
+  CHECK_THROWS_AS(BuiltCamera{broken}, cs::Error);
 }
 
 TEST_CASE("scaled() keeps the image of every ray at the scaled pixel") {
-  const Camera cam = Camera::kannalaBrandt4(848, 800, 285.7, 286.8, 420.1, 403.4, -0.0066, 0.0473, -0.0458, 0.0090);
-  const Camera half = cam.scaled(0.5);
+  const TestCamera cam = Camera::kannalaBrandt4(848, 800, 285.7, 286.8, 420.1, 403.4, -0.0066, 0.0473, -0.0458, 0.0090);
+  const TestCamera half = cam.scaled(0.5);
   CHECK(half.width == 424);
   CHECK(half.height == 400);
   CHECK(cam.scaled(1.0 / 3).width == 283);

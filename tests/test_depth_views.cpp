@@ -23,13 +23,14 @@ namespace {
 // +inf; 0 outside the image circle): plenty of depth edges.
 struct Scene {
   cs::Camera cam0;
+  cs::BuiltCamera built0;
   ImageF radial;
 };
 
 const Scene& scene() {
   static const Scene s = [] {
     const cs::synth::SynthPair pair = cs::test::smallSynthPair(160, "binocular", 0.12, 7);
-    return Scene{pair.rig.cam0, pair.depthLeft};
+    return Scene{pair.rig.cam0, cs::BuiltCamera(pair.rig.cam0), pair.depthLeft};
   }();
   return s;
 }
@@ -59,7 +60,7 @@ TEST_CASE("pinhole z-depth is the radial depth re-projected, to float precision 
       // Independently: the pixel's ray into the fisheye image, the depth at the nearest pixel.
       const cs::Vec3<double> ray((x - view.cx) / view.fx, (y - view.cy) / view.fy, 1.0);
       cs::Vec2<double> p;
-      const bool seen = s.cam0.project(ray, p) && s.cam0.inImage(p);
+      const bool seen = s.built0.project(ray, p) && s.built0.inImage(p);
       const int qx = int(std::floor(p.x() + 0.5)), qy = int(std::floor(p.y() + 0.5));
       const float r = seen && s.radial.inside(qx, qy) ? s.radial(qx, qy) : NAN;
       if (!(r > 0)) {
@@ -89,7 +90,7 @@ TEST_CASE("bilinear sampling stays on one surface and is exact where it applies"
       if (!std::isfinite(z(x, y))) continue;
       const cs::Vec3<double> ray = view.ray(x, y);
       cs::Vec2<double> p;
-      REQUIRE(s.cam0.project(ray, p));
+      REQUIRE(s.built0.project(ray, p));
       const int x0 = int(std::floor(p.x())), y0 = int(std::floor(p.y()));
       const float d[4] = {s.radial(x0, y0), s.radial(x0 + 1, y0), s.radial(x0, y0 + 1), s.radial(x0 + 1, y0 + 1)};
       const double range = double(z(x, y)) * ray.norm();

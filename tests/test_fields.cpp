@@ -38,13 +38,14 @@ TEST_CASE("calibration field maps each pixel to where its ray lands in camera 1"
   Camera cam1 = Camera::kannalaBrandt4(212, 200, 71.2, 71.5, 107.0, 99.7, -0.005, 0.039, -0.035, 0.005);
   Eigen::Matrix3d R = smallRotation();
   RigFields f = computeFields(cam0, cam1, R, Eigen::Vector3d(-0.064, 0, 0), {160.0, 3.0});
+  const BuiltCamera built0(cam0), built1(cam1);
   for (int y = 5; y < 200; y += 17)
     for (int x = 3; x < 212; x += 13) {
       if (!f.mask(x, y)) continue;
       Vec3<double> ray;
       Vec2<double> px1;
-      REQUIRE(cam0.unproject(Vec2<double>(x, y), ray));
-      REQUIRE(cam1.project(Vec3<double>(R * ray), px1));
+      REQUIRE(built0.unproject(Vec2<double>(x, y), ray));
+      REQUIRE(built1.project(Vec3<double>(R * ray), px1));
       CHECK(f.calibration(x, y).x == doctest::Approx(px1.x() - x).epsilon(1e-5));
       CHECK(f.calibration(x, y).y == doctest::Approx(px1.y() - y).epsilon(1e-5));
     }
@@ -56,16 +57,17 @@ TEST_CASE("trajectory field is the direction in which a point's image moves as i
   const Eigen::Matrix3d R = smallRotation();
   RigFields f = computeFields(cam, cam, R, t, {160.0, 3.0});
   const Eigen::Vector3d tPrime = R.transpose() * t;
+  const BuiltCamera built(cam);
   int checked = 0;
   for (int y = 4; y < 200; y += 11)
     for (int x = 4; x < 212; x += 11) {
       if (!f.mask(x, y)) continue;
       Vec3<double> ray;
-      REQUIRE(cam.unproject(Vec2<double>(x, y), ray));
+      REQUIRE(built.unproject(Vec2<double>(x, y), ray));
       // A far point (1 km) moved towards the camera: finite-difference image motion.
       Vec2<double> far, nearer;
-      REQUIRE(cam.project(Vec3<double>(1000.0 * ray + tPrime), far));
-      REQUIRE(cam.project(Vec3<double>(999.0 * ray + tPrime), nearer));
+      REQUIRE(built.project(Vec3<double>(1000.0 * ray + tPrime), far));
+      REQUIRE(built.project(Vec3<double>(999.0 * ray + tPrime), nearer));
       Vec2<double> motion = (nearer - far).normalized();
       Vec2<double> field(f.trajectory(x, y).x, f.trajectory(x, y).y);
       CHECK(field.norm() == doctest::Approx(1.0).epsilon(1e-5));

@@ -42,7 +42,7 @@ float bilinear(Grid& g, double x, double y) {
 
 // Where pixel (x, y) sees inverse depth q in the other view: project(unproject(x) + q t),
 // inside the image; false otherwise.
-bool landing(const Camera& cam, const double t[3], double x, double y, double q, Vec2<double>& px) {
+bool landing(const BuiltCamera& cam, const double t[3], double x, double y, double q, Vec2<double>& px) {
   Vec3<double> ray;
   if (!cam.unproject(Vec2<double>(x, y), ray)) return false;
   return cam.project(Vec3<double>(ray.x() + q * t[0], ray.y() + q * t[1], ray.z() + q * t[2]), px) && cam.inImage(px);
@@ -83,12 +83,13 @@ float sphereTexture(const Vec3<double>& p) {
                0.1 * std::sin(27 * u.x() + 35 * u.z() + 2));
 }
 
-SpherePair renderSphere(const Camera& cam, const double t[3], double qStar) {
-  SpherePair pair{Grid(cam.width, cam.height, 1), Grid(cam.width, cam.height, 1)};
+SpherePair renderSphere(const BuiltCamera& cam, const double t[3], double qStar) {
+  const int width = cam.camera().width, height = cam.camera().height;
+  SpherePair pair{Grid(width, height, 1), Grid(width, height, 1)};
   const Vec3<double> T(t[0], t[1], t[2]);
   const double radius = 1.0 / qStar;
-  for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) {
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
       Vec3<double> d;
       if (!cam.unproject(Vec2<double>(x, y), d)) continue;
       pair.left.at(x, y) = sphereTexture(d);
@@ -103,6 +104,7 @@ SpherePair renderSphere(const Camera& cam, const double t[3], double qStar) {
 
 TEST_CASE("sweepWarp samples image(project(ray + q_k t)) for q_k = qMax k / (planes - 1); -1 elsewhere") {
   const Camera cam = lens();
+  const BuiltCamera built(cam);
   const double t[3] = {-0.12, 0.01, 0.03};
   const SweepParams p = sweepParams(cam, t, 6.0, 7, 2);
   Grid image(cam.width, cam.height, 1), mask(cam.width, cam.height, 1, 1.f), volume(cam.width, cam.height, p.planes);
@@ -124,7 +126,7 @@ TEST_CASE("sweepWarp samples image(project(ray + q_k t)) for q_k = qMax k / (pla
         if (mask.at(x, y) == 0.f) {
           ++excluded;
           CHECK(v == -1.f);
-        } else if (!landing(cam, t, x, y, p.qMax * k / (p.planes - 1), px)) {
+        } else if (!landing(built, t, x, y, p.qMax * k / (p.planes - 1), px)) {
           ++offImage;
           CHECK(v == -1.f);
         } else {
@@ -140,6 +142,7 @@ TEST_CASE("sweepWarp samples image(project(ray + q_k t)) for q_k = qMax k / (pla
 
 TEST_CASE("cost, aggregation and selection recover the inverse depth of a textured sphere to a fraction of a plane") {
   const Camera cam = lens();
+  const BuiltCamera built(cam);
   const double t[3] = {-0.12, 0.005, 0.01};
   // ~1.1 px of motion per plane at the centre; the true sphere lies between planes.
   const SweepParams p = sweepParams(cam, t, 2.4, 9, 3);
@@ -147,7 +150,7 @@ TEST_CASE("cost, aggregation and selection recover the inverse depth of a textur
   for (const double planeStar : {2.35, 5.7}) {
     CAPTURE(planeStar);
     const double qStar = planeStar * spacing;
-    SpherePair pair = renderSphere(cam, t, qStar);
+    SpherePair pair = renderSphere(built, t, qStar);
     Grid mask(cam.width, cam.height, 1, 1.f), volume(cam.width, cam.height, p.planes), best(cam.width, cam.height, 2);
     cpu::sweepWarp(volume.view(), pair.right.view(), mask.view(), p);
     select(best, pair.left, volume, mask, p);
@@ -214,12 +217,13 @@ TEST_CASE("sweepAggregate carries a clear minimum into windows that say nothing,
 
 TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agrees; confidence 0 where it cannot") {
   const Camera cam = lens();
+  const BuiltCamera built(cam);
   const double t[3] = {-0.12, 0.005, 0.01}, back[3] = {0.12, -0.005, -0.01};
   const SweepParams p = sweepParams(cam, t, 2.4, 9, 3);
   SweepParams reverse = p;
   std::copy(back, back + 3, reverse.t);
   const double qStar = 4.4 * p.qMax / (p.planes - 1);
-  SpherePair pair = renderSphere(cam, t, qStar);
+  SpherePair pair = renderSphere(built, t, qStar);
   const int w = cam.width, h = cam.height;
   Grid mask(w, h, 1, 1.f), volume(w, h, p.planes), best(w, h, 2), other(w, h, 2);
   for (int y = 0; y < h; ++y) mask.at(60, y) = 0.f;
@@ -239,7 +243,7 @@ TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agre
   // The other view's true inverse depth of the point reference pixel (x, y) sees.
   auto otherInverseDepth = [&](int x, int y) {
     Vec3<double> ray;
-    cam.unproject(Vec2<double>(x, y), ray);
+    built.unproject(Vec2<double>(x, y), ray);
     return 1.0 / (ray / qStar + Vec3<double>(t[0], t[1], t[2])).norm();
   };
   ConsistencyParams c{};
@@ -259,7 +263,7 @@ TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agre
     for (int ny = std::max(0, y - p.planes); ny <= std::min(h - 1, y + p.planes); ++ny)
       for (int nx = std::max(0, x - p.planes); nx <= std::min(w - 1, x + p.planes); ++nx) {
         Vec2<double> there;
-        if (confidence.at(nx, ny) < c.acceptConfidence || !landing(cam, t, x, y, best.at(nx, ny, 0), there)) continue;
+        if (confidence.at(nx, ny) < c.acceptConfidence || !landing(built, t, x, y, best.at(nx, ny, 0), there)) continue;
         if (std::abs(warp.at(x, y, 0) - (there.x() - x)) < 1e-4 && std::abs(warp.at(x, y, 1) - (there.y() - y)) < 1e-4)
           return true;
       }
@@ -283,7 +287,7 @@ TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agre
       // Replaced by the sweep's w where the confidence reaches acceptConfidence; below it
       // kept, or (an occlusion) set to the inverse depth of a consistent pixel nearby.
       Vec2<double> there;
-      REQUIRE(landing(cam, t, x, y, q, there));
+      REQUIRE(landing(built, t, x, y, q, there));
       if (conf >= c.acceptConfidence) {
         ++replaced;
         CHECK(warp.at(x, y, 0) == doctest::Approx(there.x() - x).epsilon(1e-5));
@@ -409,11 +413,11 @@ const NearScene& nearScene() {
     s.truth = groundTruthWarp(p.rig, p.depthLeft);
     s.nonOccluded = nonOccludedMask(p.rig, p.depthLeft, &p.depthRight);
     s.nearObject = ImageU8(256, 256, 0);
+    const BuiltCamera cam0(p.rig.cam0);
     for (int y = 0; y < 256; ++y)
       for (int x = 0; x < 256; ++x) {
         Vec3<double> r;
-        if (!s.nonOccluded(x, y) || !std::isfinite(s.truth(x, y).x) || !p.rig.cam0.unproject(Vec2<double>(x, y), r))
-          continue;
+        if (!s.nonOccluded(x, y) || !std::isfinite(s.truth(x, y).x) || !cam0.unproject(Vec2<double>(x, y), r)) continue;
         synth::Hit hit;
         const synth::Ray ray{p.pose0.centre, p.pose0.rotation * Eigen::Vector3d(r.x(), r.y(), r.z())};
         s.nearObject(x, y) = p.scene.intersect(ray, hit) && p.scene.shapes()[hit.shape].name == "near0";

@@ -228,7 +228,7 @@ TEST_CASE("the T265 robot calibration loads") {
   CHECK(rig.t.x() == doctest::Approx(-0.0641854));
   CHECK(rig.R(0, 1) == doctest::Approx(0.000610349928068));
   // The T265 lens covers about 163 deg; its polynomial is monotone to well beyond that.
-  CHECK(rig.cam0.maxAngle() > 85.0 * M_PI / 180.0);
+  CHECK(cs::BuiltCamera(rig.cam0).maxAngle() > 85.0 * M_PI / 180.0);
 }
 
 TEST_CASE("every synthetic scene calibration loads") {

@@ -13,6 +13,7 @@
 #include "synth/scene.hpp"
 #include "test_util.hpp"
 
+using cs::BuiltCamera;
 using cs::Camera;
 using cs::ImageF;
 using cs::Vec2;
@@ -43,7 +44,7 @@ Camera doubleSphere195(int size) {
   return Camera::doubleSphere(512, 512, 158.3, 158.2, 254.9, 256.9, -0.18, 0.59).scaled(size / 512.0);
 }
 
-Vector3d pixelRay(const Camera& cam, double x, double y) {
+Vector3d pixelRay(const BuiltCamera& cam, double x, double y) {
   Vec3<double> ray;
   REQUIRE(cam.unproject(Vec2<double>(x, y), ray));
   return ray.normalized();
@@ -78,7 +79,8 @@ struct DepthCheck {
   double worstOffSurface = 0.0;
 };
 
-DepthCheck checkDepth(const Scene& scene, const Camera& cam, const Pose& pose, const ImageF& depth, int stride) {
+DepthCheck checkDepth(const Scene& scene, const Camera& camera, const Pose& pose, const ImageF& depth, int stride) {
+  const BuiltCamera cam(camera);
   DepthCheck c;
   for (int y = 0; y < depth.height; y += stride)
     for (int x = 0; x < depth.width; x += stride) {
@@ -126,12 +128,12 @@ Consistency viewConsistency(const SynthPair& p) {
   cs::synth::Random pick(99);
   Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
   Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
-  const Camera& cam1 = p.rig.cam1;
+  const BuiltCamera cam0(p.rig.cam0), cam1(p.rig.cam1);
   for (int y = 0; y < p.left.height; ++y)
     for (int x = 0; x < p.left.width; ++x) {
       const double d = p.depthLeft(x, y);
       if (!(d > 0.0) || !smoothDepthAround(p.depthLeft, x, y)) continue;
-      const Vector3d ray0 = pixelRay(p.rig.cam0, x, y);
+      const Vector3d ray0 = pixelRay(cam0, x, y);
       if (ray0.z() < kRimCosine) continue;
       // A sky point is a direction: only the rotation moves it.
       const Vector3d x1 = std::isinf(d) ? Vector3d(p.rig.R * ray0) : Vector3d(p.rig.R * (d * ray0) + p.rig.t);
@@ -235,11 +237,12 @@ TEST_CASE("synth: depth of a single analytic plane is exact") {
   options.samplesPerAxis = 2;
   ImageF image, depth;
   renderView(scene, cam, pose, options, image, depth);
+  const BuiltCamera built(cam);
   int checked = 0;
   for (int y = 0; y < 96; ++y)
     for (int x = 0; x < 96; ++x) {
       if (!(depth(x, y) > 0.f)) continue;
-      const Vector3d ray = pixelRay(cam, x, y);
+      const Vector3d ray = pixelRay(built, x, y);
       if (ray.z() <= 1e-9) {
         CHECK(std::isinf(depth(x, y)));  // rays at or beyond 90 deg never meet the wall
         continue;
@@ -291,6 +294,7 @@ TEST_CASE("synth: sky is +inf and bright, outside the image circle is 0") {
   cfg.seed = 3;
   const SynthPair p = renderPair(cfg);
   const double c = 0.5 * (96 - 1), radius = 48.0;
+  const BuiltCamera cam0(p.rig.cam0);
   int sky = 0, surface = 0;
   for (int y = 0; y < 96; ++y)
     for (int x = 0; x < 96; ++x) {
@@ -306,7 +310,7 @@ TEST_CASE("synth: sky is +inf and bright, outside the image circle is 0") {
       if (std::isinf(d)) {
         ++sky;
         // The ground reaches 100 m, so a sky ray points at most slightly downwards.
-        CHECK((p.pose0.rotation * pixelRay(p.rig.cam0, x, y)).z() > -0.03);
+        CHECK((p.pose0.rotation * pixelRay(cam0, x, y)).z() > -0.03);
         if (r < radius - 1.5 && skyAround(p.depthLeft, x, y)) CHECK(std::abs(v - 0.93) < 0.08);
       } else if (d > 0.f) {
         ++surface;
@@ -350,10 +354,11 @@ TEST_CASE("synth: fields of view beyond 180 degrees render behind the image plan
   cfg.maxFovDeg = 220;
   const SynthPair wide = renderPair(cfg);
   int behind = 0;
+  const BuiltCamera wide0(wide.rig.cam0);
   for (int y = 0; y < 96; ++y)
     for (int x = 0; x < 96; ++x) {
       if (!(wide.depthLeft(x, y) > 0.f)) continue;
-      if (pixelRay(wide.rig.cam0, x, y).z() < -0.1) ++behind;
+      if (pixelRay(wide0, x, y).z() < -0.1) ++behind;
     }
   CHECK(behind > 200);
   const DepthCheck d = checkDepth(wide.scene, wide.rig.cam0, wide.pose0, wide.depthLeft, 2);
@@ -363,9 +368,10 @@ TEST_CASE("synth: fields of view beyond 180 degrees render behind the image plan
   cfg.maxFovDeg = 180;
   const SynthPair cut = renderPair(cfg);
   CHECK(countValid(cut.depthLeft) < countValid(wide.depthLeft));
+  const BuiltCamera cut0(cut.rig.cam0);
   for (int y = 0; y < 96; ++y)
     for (int x = 0; x < 96; ++x)
-      if (cut.depthLeft(x, y) > 0.f) CHECK(pixelRay(cut.rig.cam0, x, y).z() >= -1e-9);
+      if (cut.depthLeft(x, y) > 0.f) CHECK(pixelRay(cut0, x, y).z() >= -1e-9);
 }
 
 TEST_CASE("synth: supersampling keeps the image centred on the model's pixel centres") {

@@ -23,6 +23,7 @@ Rig testRig() {
 
 TEST_CASE("triangulation inverts warpFromDepth over the image and a range of depths") {
   Rig rig = testRig();
+  const BuiltCamera cam0(rig.cam0);
   const Eigen::Vector3d tp = rig.tPrime();
   int checked = 0;
   for (int y = 3; y < 110; y += 9)
@@ -30,10 +31,10 @@ TEST_CASE("triangulation inverts warpFromDepth over the image and a range of dep
       for (double depth : {0.5, 2.0, 10.0, 60.0}) {
         Vec2<double> px(x, y), w;
         Vec3<double> ray;
-        if (!rig.cam0.unproject(px, ray) || std::atan2(ray.head<2>().norm(), ray.z()) > 1.3) continue;
+        if (!cam0.unproject(px, ray) || std::atan2(ray.head<2>().norm(), ray.z()) > 1.3) continue;
         if (std::abs(ray.normalized().dot(tp.normalized())) > 0.99) continue;  // near the epipoles
-        REQUIRE(warpFromDepth(rig.cam0, tp, px, depth, w));
-        CHECK(triangulateRadial(rig.cam0, tp, px, w) == doctest::Approx(depth).epsilon(1e-6));
+        REQUIRE(warpFromDepth(cam0, tp, px, depth, w));
+        CHECK(triangulateRadial(cam0, tp, px, w) == doctest::Approx(depth).epsilon(1e-6));
         ++checked;
       }
   CHECK(checked > 300);
@@ -41,20 +42,22 @@ TEST_CASE("triangulation inverts warpFromDepth over the image and a range of dep
 
 TEST_CASE("zero warp means infinite depth; a warp away from the epipolar direction too") {
   Rig rig = testRig();
-  CHECK(std::isinf(triangulateRadial(rig.cam0, rig.tPrime(), Vec2<double>(60, 55), Vec2<double>(0, 0))));
+  const BuiltCamera cam0(rig.cam0);
+  CHECK(std::isinf(triangulateRadial(cam0, rig.tPrime(), Vec2<double>(60, 55), Vec2<double>(0, 0))));
   Vec2<double> w;
-  REQUIRE(warpFromDepth(rig.cam0, rig.tPrime(), Vec2<double>(60, 55), 3.0, w));
-  CHECK(std::isinf(triangulateRadial(rig.cam0, rig.tPrime(), Vec2<double>(60, 55), -w)));
-  REQUIRE(warpFromDepth(rig.cam0, rig.tPrime(), Vec2<double>(60, 55), INFINITY, w));
+  REQUIRE(warpFromDepth(cam0, rig.tPrime(), Vec2<double>(60, 55), 3.0, w));
+  CHECK(std::isinf(triangulateRadial(cam0, rig.tPrime(), Vec2<double>(60, 55), -w)));
+  REQUIRE(warpFromDepth(cam0, rig.tPrime(), Vec2<double>(60, 55), INFINITY, w));
   CHECK(w.norm() < 1e-9);
 }
 
 TEST_CASE("triangulate() fills radial, z and points consistently and leaves invalid pixels NaN") {
   Rig rig = testRig();
+  const BuiltCamera cam0(rig.cam0);
   FlowImage w(120, 110, Vec2f{0, 0});
   ImageU8 valid(120, 110, 0);
   Vec2<double> wx;
-  REQUIRE(warpFromDepth(rig.cam0, rig.tPrime(), Vec2<double>(40, 50), 4.0, wx));
+  REQUIRE(warpFromDepth(cam0, rig.tPrime(), Vec2<double>(40, 50), 4.0, wx));
   w(40, 50) = {float(wx.x()), float(wx.y())};
   valid(40, 50) = 1;
   valid(41, 50) = 1;  // zero warp: infinitely far

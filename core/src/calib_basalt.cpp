@@ -209,7 +209,7 @@ std::pair<const char*, std::vector<double>> toBasalt(const Camera& cam, const st
       if (p[4] == 0 && p[5] == 0 && p[6] == 0 && p[7] == 0) return {"pinhole", {p[0], p[1], p[2], p[3]}};
       // Basalt's radtan is pinhole-radtan8; with k3..k6 = 0 it is radtan. rpmax bounds
       // the undistorted radius Basalt accepts: the widest image corner, with a margin.
-      const double rpmax = 1.05 * std::tan(std::min(cam.maxAngle(), 89.0 * M_PI / 180.0));
+      const double rpmax = 1.05 * std::tan(std::min(BuiltCamera(cam).maxAngle(), 89.0 * M_PI / 180.0));
       return {"pinhole-radtan8", {p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], 0, 0, 0, 0, rpmax}};
     }
   }

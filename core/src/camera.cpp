@@ -1,4 +1,4 @@
-// Camera: the run-time choice among the model value types of camera_models.hpp.
+// Camera (the description: factories, scaling, validation) and BuiltCamera (its model built once).
 #include "curvestereo/camera.hpp"
 
 #include <algorithm>
@@ -20,8 +20,6 @@ Camera makeCamera(CameraModel model, int w, int h, std::vector<double> params) {
   cam.params = std::move(params);
   return cam;
 }
-
-bool hasModelParams(const Camera& cam) { return int(cam.params.size()) == models::paramCount(cam.model); }
 
 }  // namespace
 
@@ -45,28 +43,6 @@ Camera Camera::doubleSphere(int w, int h, double fx, double fy, double cx, doubl
 Camera Camera::pinholeRadtan(int w, int h, double fx, double fy, double cx, double cy, double k1, double k2, double p1,
                              double p2) {
   return makeCamera(CameraModel::PinholeRadtan, w, h, {fx, fy, cx, cy, k1, k2, p1, p2});
-}
-
-template <class S>
-bool Camera::project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J) const {
-  if (!hasModelParams(*this)) return false;
-  return models::visitModel<S>(*this, [&](const auto& m) { return m.project(p, px, J); });
-}
-
-template <class S>
-bool Camera::unproject(const Vec2<S>& px, Vec3<S>& ray) const {
-  if (!hasModelParams(*this)) return false;
-  return models::visitModel<S>(*this, [&](const auto& m) { return m.unproject(px, ray); });
-}
-
-template bool Camera::project<float>(const Vec3<float>&, Vec2<float>&, Mat23<float>*) const;
-template bool Camera::project<double>(const Vec3<double>&, Vec2<double>&, Mat23<double>*) const;
-template bool Camera::unproject<float>(const Vec2<float>&, Vec3<float>&) const;
-template bool Camera::unproject<double>(const Vec2<double>&, Vec3<double>&) const;
-
-double Camera::maxAngle() const {
-  if (!hasModelParams(*this)) return 0.0;
-  return models::visitModel<double>(*this, [](const auto& m) { return m.maxAngle(); });
 }
 
 bool Camera::inImage(const Vec2<double>& px, double margin) const {
@@ -164,13 +140,19 @@ void checkModelParameters(const Camera& cam) {
   }
 }
 
+// cam, or cs::Error when its params have not the model's number of entries.
+const Camera& withModelParams(const Camera& cam) {
+  const int expected = models::paramCount(cam.model);
+  if (int(cam.params.size()) != expected)
+    fail(cam, "expected " + std::to_string(expected) + " parameters, got " + std::to_string(cam.params.size()));
+  return cam;
+}
+
 }  // namespace
 
 void Camera::validate() const {
   if (width <= 0 || height <= 0) fail(*this, "image size must be positive");
-  const int expected = models::paramCount(model);
-  if (int(params.size()) != expected)
-    fail(*this, "expected " + std::to_string(expected) + " parameters, got " + std::to_string(params.size()));
+  withModelParams(*this);
   for (size_t i = 0; i < params.size(); ++i)
     if (!std::isfinite(params[i])) fail(*this, std::string(paramName(model, i)) + " is not finite");
   if (params[0] <= 0 || params[1] <= 0)
@@ -188,6 +170,22 @@ void Camera::validate() const {
   if (std::abs(params[2] - cxCentre) > width || std::abs(params[3] - cyCentre) > height)
     fail(*this, "principal point (" + str(params[2]) + ", " + str(params[3]) + ") is far outside the image");
   checkModelParameters(*this);
+}
+
+BuiltCamera::BuiltCamera(const Camera& cam)
+    : camera_(withModelParams(cam)),
+      model_(models::makeModel<double>(cam.model, cam.params.data(), cam.width, cam.height)) {}
+
+bool BuiltCamera::project(const Vec3<double>& p, Vec2<double>& px, Mat23<double>* J) const {
+  return std::visit([&](const auto& m) { return m.project(p, px, J); }, model_);
+}
+
+bool BuiltCamera::unproject(const Vec2<double>& px, Vec3<double>& ray) const {
+  return std::visit([&](const auto& m) { return m.unproject(px, ray); }, model_);
+}
+
+double BuiltCamera::maxAngle() const {
+  return std::visit([](const auto& m) { return m.maxAngle(); }, model_);
 }
 
 }  // namespace cs

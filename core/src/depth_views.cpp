@@ -60,17 +60,20 @@ template <class RayFn, class FactorFn>
 ImageF resample(const Camera& cam0, const ImageF& radial, int width, int height, DepthSampling sampling, RayFn rayOf,
                 FactorFn factor) {
   ImageF out(width, height, kNaN);
-  models::visitModel<double>(cam0, [&](const auto& model) {
-    for (int y = 0; y < height; ++y)
-      for (int x = 0; x < width; ++x) {
-        const Vec3<double> ray = rayOf(x, y);
-        Vec2<double> p;
-        if (!model.project(ray, p, nullptr) || !cam0.inImage(p)) continue;
-        const float r = sampleRadial(radial, p, sampling);
-        if (!(r > 0)) continue;  // NaN (invalid) or 0 (ground truth's "outside the lens")
-        out(x, y) = std::isinf(r) ? r : float(double(r) * factor(ray));
-      }
-  });
+  const BuiltCamera built(cam0);
+  std::visit(
+      [&](const auto& model) {  // the model's own type: its project() inlined in the loop
+        for (int y = 0; y < height; ++y)
+          for (int x = 0; x < width; ++x) {
+            const Vec3<double> ray = rayOf(x, y);
+            Vec2<double> p;
+            if (!model.project(ray, p, nullptr) || !cam0.inImage(p)) continue;
+            const float r = sampleRadial(radial, p, sampling);
+            if (!(r > 0)) continue;  // NaN (invalid) or 0 (ground truth's "outside the lens")
+            out(x, y) = std::isinf(r) ? r : float(double(r) * factor(ray));
+          }
+      },
+      built.model());
   return out;
 }
 

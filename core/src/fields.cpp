@@ -20,8 +20,8 @@ double angleToBaseline(const Vec3<double>& ray, const Eigen::Vector3d& baselineD
 
 }  // namespace
 
-PixelFields fieldsAtPixel(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
-                          const FieldOptions& opt, int x, int y) {
+PixelFields fieldsAtPixel(const BuiltCamera& cam0, const BuiltCamera& cam1, const Eigen::Matrix3d& R,
+                          const Eigen::Vector3d& t, const FieldOptions& opt, int x, int y) {
   const Eigen::Vector3d tPrime = R.transpose() * t;
   PixelFields f;
   Vec2<double> px(x, y);
@@ -51,13 +51,14 @@ PixelFields fieldsAtPixel(const Camera& cam0, const Camera& cam1, const Eigen::M
 
 RigFields computeFields(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
                         const FieldOptions& options) {
+  const BuiltCamera built0(cam0), built1(cam1);
   RigFields out;
   out.mask = ImageU8(cam0.width, cam0.height, 0);
   out.calibration = FlowImage(cam0.width, cam0.height);
   out.trajectory = FlowImage(cam0.width, cam0.height);
   for (int y = 0; y < cam0.height; ++y)
     for (int x = 0; x < cam0.width; ++x) {
-      PixelFields f = fieldsAtPixel(cam0, cam1, R, t, options, x, y);
+      PixelFields f = fieldsAtPixel(built0, built1, R, t, options, x, y);
       out.mask(x, y) = f.valid ? 1 : 0;
       out.calibration(x, y) = f.calibration;
       out.trajectory(x, y) = f.trajectory;

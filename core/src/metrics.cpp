@@ -31,12 +31,13 @@ bool agreesWithSecondView(const ImageF& depthRight, const Vec2<double>& px1, dou
 
 FlowImage groundTruthWarp(const Rig& rig, const ImageF& depthLeft) {
   const Eigen::Vector3d tPrime = rig.tPrime();
+  const BuiltCamera cam0(rig.cam0);
   FlowImage w(depthLeft.width, depthLeft.height, Vec2f{kNaN, kNaN});
   for (int y = 0; y < depthLeft.height; ++y)
     for (int x = 0; x < depthLeft.width; ++x) {
       float d = depthLeft(x, y);
       Vec2<double> wx;
-      if (hasGroundTruth(d) && warpFromDepth(rig.cam0, tPrime, Vec2<double>(x, y), d, wx))
+      if (hasGroundTruth(d) && warpFromDepth(cam0, tPrime, Vec2<double>(x, y), d, wx))
         w(x, y) = {float(wx.x()), float(wx.y())};
     }
   return w;
@@ -44,14 +45,15 @@ FlowImage groundTruthWarp(const Rig& rig, const ImageF& depthLeft) {
 
 ImageU8 nonOccludedMask(const Rig& rig, const ImageF& depthLeft, const ImageF* depthRight) {
   ImageU8 noc(depthLeft.width, depthLeft.height, 0);
+  const BuiltCamera cam0(rig.cam0), cam1(rig.cam1);
   for (int y = 0; y < depthLeft.height; ++y)
     for (int x = 0; x < depthLeft.width; ++x) {
       float d = depthLeft(x, y);
       Vec3<double> ray;
-      if (!hasGroundTruth(d) || !rig.cam0.unproject(Vec2<double>(x, y), ray)) continue;
+      if (!hasGroundTruth(d) || !cam0.unproject(Vec2<double>(x, y), ray)) continue;
       Vec3<double> X1 = rig.R * (double(d) * ray) + rig.t;
       Vec2<double> px1;
-      if (!rig.cam1.project(X1, px1) || !rig.cam1.inImage(px1)) continue;
+      if (!cam1.project(X1, px1) || !cam1.inImage(px1)) continue;
       if (depthRight && !agreesWithSecondView(*depthRight, px1, X1.norm())) continue;
       noc(x, y) = 1;
     }

@@ -61,12 +61,13 @@ double Pipeline::sweepQMax(const Eigen::Vector3d& tPrime, const Params& params) 
 // the motion per unit of inverse depth is largest at q = 0, where it is J t' (J the
 // projection's Jacobian at the ray). Fixed per rig so a moving camera never reallocates;
 // the nearest sphere (qMax) follows the pose in setPose.
-int Pipeline::sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params) {
+int Pipeline::sweepPlanes(const Camera& camera, const Eigen::Vector3d& tPrime, const Params& params) {
+  const BuiltCamera cam(camera);
   const double qMax = sweepQMax(tPrime, params);
   const double cosMax = params.maxFovDeg > 0 ? std::cos(std::min(0.5 * params.maxFovDeg, 179.9) * M_PI / 180.0) : -1.0;
   double fastest = 0;  // px per unit inverse depth
-  for (int y = 0; y < cam.height; y += 2)
-    for (int x = 0; x < cam.width; x += 2) {
+  for (int y = 0; y < camera.height; y += 2)
+    for (int x = 0; x < camera.width; x += 2) {
       Vec3<double> ray;
       Vec2<double> px;
       Mat23<double> J;

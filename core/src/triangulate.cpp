@@ -12,7 +12,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
-double triangulateRadial(const Camera& cam0, const Eigen::Vector3d& tPrime, const Vec2<double>& x,
+double triangulateRadial(const BuiltCamera& cam0, const Eigen::Vector3d& tPrime, const Vec2<double>& x,
                          const Vec2<double>& w) {
   Vec3<double> d0, d1;
   if (!cam0.unproject(x, d0) || !cam0.unproject(Vec2<double>(x + w), d1)) return kNaN;
@@ -31,7 +31,7 @@ double triangulateRadial(const Camera& cam0, const Eigen::Vector3d& tPrime, cons
   return a;
 }
 
-bool warpFromDepth(const Camera& cam0, const Eigen::Vector3d& tPrime, const Vec2<double>& x, double radial,
+bool warpFromDepth(const BuiltCamera& cam0, const Eigen::Vector3d& tPrime, const Vec2<double>& x, double radial,
                    Vec2<double>& w) {
   Vec3<double> d0;
   if (!cam0.unproject(x, d0)) return false;
@@ -43,7 +43,8 @@ bool warpFromDepth(const Camera& cam0, const Eigen::Vector3d& tPrime, const Vec2
   return true;
 }
 
-DepthMaps triangulate(const Camera& cam0, const Eigen::Vector3d& tPrime, const FlowImage& w, const ImageU8& valid) {
+DepthMaps triangulate(const Camera& camera0, const Eigen::Vector3d& tPrime, const FlowImage& w, const ImageU8& valid) {
+  const BuiltCamera cam0(camera0);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   DepthMaps out;
   out.radial = ImageF(w.width, w.height, nan);

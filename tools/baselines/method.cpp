@@ -10,6 +10,7 @@ namespace cs::baselines {
 MethodResult resultFromDepth(const Rig& rig, const ImageF& radialDepth) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const Eigen::Vector3d tp = rig.tPrime();
+  const BuiltCamera cam0(rig.cam0);
   MethodResult r;
   r.depth = radialDepth;
   r.warp = FlowImage(radialDepth.width, radialDepth.height, Vec2f{nan, nan});
@@ -18,7 +19,7 @@ MethodResult resultFromDepth(const Rig& rig, const ImageF& radialDepth) {
       const float d = radialDepth(x, y);
       if (std::isnan(d) || d <= 0) continue;
       Vec2<double> w;
-      if (warpFromDepth(rig.cam0, tp, Vec2<double>(x, y), double(d), w)) r.warp(x, y) = {float(w.x()), float(w.y())};
+      if (warpFromDepth(cam0, tp, Vec2<double>(x, y), double(d), w)) r.warp(x, y) = {float(w.x()), float(w.y())};
     }
   return r;
 }

@@ -88,12 +88,12 @@ SweepResult planeSweep(const Rig& rig, const ImageF& img0Full, const ImageF& img
   if (!(p.scale > 0 && p.scale <= 1)) throw Error("plane sweep: scale must be in (0, 1]");
   const ImageF img0 = downsample(img0Full, p.scale), img1 = downsample(img1Full, p.scale);
   const double s = double(img0.width) / img0Full.width;
-  const Camera cam0 = rig.cam0.scaled(s), cam1 = rig.cam1.scaled(s);
+  const BuiltCamera cam0(rig.cam0.scaled(s)), cam1(rig.cam1.scaled(s));
   const int W = img0.width, H = img0.height, r = p.window / 2;
   const float n = float(p.window * p.window);
 
   SweepResult out;
-  out.cam = cam0;
+  out.cam = cam0.camera();
   out.qMax = 1.0 / p.minDepth;
   const Eigen::Matrix3d R = rig.R;
   const Eigen::Vector3d t = rig.t;
@@ -254,11 +254,10 @@ SweepResult planeSweep(const Rig& rig, const ImageF& img0Full, const ImageF& img
 }
 
 ImageU8 leftRightCheck(const Rig& rig, const SweepResult& ref, const SweepResult& other, double tolPx) {
-  const Camera& c0 = ref.cam;
-  const Camera& c1 = other.cam;
-  ImageU8 ok(c0.width, c0.height, 0);
-  for (int y = 0; y < c0.height; ++y)
-    for (int x = 0; x < c0.width; ++x) {
+  const BuiltCamera c0(ref.cam), c1(other.cam);
+  ImageU8 ok(ref.cam.width, ref.cam.height, 0);
+  for (int y = 0; y < ref.cam.height; ++y)
+    for (int x = 0; x < ref.cam.width; ++x) {
       const float q = ref.invDepth(x, y);
       if (std::isnan(q)) continue;
       Vec3<double> d0;

@@ -49,17 +49,18 @@ Rectification makeRectification(const Rig& rig, double fovDeg, int size) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   r.map0 = FlowImage(size, size, Vec2f{nan, nan});
   r.map1 = FlowImage(size, size, Vec2f{nan, nan});
+  const BuiltCamera pinhole(pin), cam0(rig.cam0), cam1(rig.cam1);
   for (int y = 0; y < size; ++y)
     for (int x = 0; x < size; ++x) {
       Vec2<double> s;
-      if (rectifiedToSource(pin, rig.cam0, r.rot0, Vec2<double>(x, y), s)) r.map0(x, y) = {float(s.x()), float(s.y())};
-      if (rectifiedToSource(pin, rig.cam1, r.rot1, Vec2<double>(x, y), s)) r.map1(x, y) = {float(s.x()), float(s.y())};
+      if (rectifiedToSource(pinhole, cam0, r.rot0, Vec2<double>(x, y), s)) r.map0(x, y) = {float(s.x()), float(s.y())};
+      if (rectifiedToSource(pinhole, cam1, r.rot1, Vec2<double>(x, y), s)) r.map1(x, y) = {float(s.x()), float(s.y())};
     }
   return r;
 }
 
-bool rectifiedToSource(const Camera& pinhole, const Camera& cam, const Eigen::Matrix3d& rot, const Vec2<double>& p,
-                       Vec2<double>& src) {
+bool rectifiedToSource(const BuiltCamera& pinhole, const BuiltCamera& cam, const Eigen::Matrix3d& rot,
+                       const Vec2<double>& p, Vec2<double>& src) {
   Vec3<double> ray;
   if (!pinhole.unproject(p, ray)) return false;
   const Vec3<double> rc = rot.transpose() * ray;
@@ -69,8 +70,8 @@ bool rectifiedToSource(const Camera& pinhole, const Camera& cam, const Eigen::Ma
   return cam.inImage(src);
 }
 
-bool sourceToRectified(const Camera& pinhole, const Camera& cam, const Eigen::Matrix3d& rot, const Vec2<double>& src,
-                       Vec2<double>& p) {
+bool sourceToRectified(const BuiltCamera& pinhole, const BuiltCamera& cam, const Eigen::Matrix3d& rot,
+                       const Vec2<double>& src, Vec2<double>& p) {
   Vec3<double> ray;
   if (!cam.unproject(src, ray)) return false;
   const Vec3<double> rr = rot * ray;
@@ -101,7 +102,7 @@ ImageF remap(const ImageF& img, const FlowImage& map, ImageU8* valid) {
 
 ImageF depthToSource(const Rectification& rect, const Camera& cam0, const FlowImage& rectWarp) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  const Camera& pin = rect.rectified.cam0;
+  const BuiltCamera pin(rect.rectified.cam0), cam(cam0);
   const Eigen::Vector3d tpRect = rect.rectified.tPrime();
   // Only the horizontal component carries information on the rectified rig.
   ImageF du(rectWarp.width, rectWarp.height, nan);
@@ -110,7 +111,7 @@ ImageF depthToSource(const Rectification& rect, const Camera& cam0, const FlowIm
   for (int y = 0; y < cam0.height; ++y)
     for (int x = 0; x < cam0.width; ++x) {
       Vec2<double> p;
-      if (!sourceToRectified(pin, cam0, rect.rot0, Vec2<double>(x, y), p)) continue;
+      if (!sourceToRectified(pin, cam, rect.rot0, Vec2<double>(x, y), p)) continue;
       const float u = sampleBilinear(du, p.x(), p.y());
       if (std::isnan(u)) continue;
       // The rectified point p + (u, 0) in image 1 and p in image 0 share camera 0's centre

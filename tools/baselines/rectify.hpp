@@ -30,12 +30,12 @@ Rectification makeRectification(const Rig& rig, double fovDeg, int size);
 
 // Source pixel of camera `cam` (rotation rot: X_rect = rot X_cam) seen through rectified
 // pixel p; false when the ray lies outside the camera's valid region or image.
-bool rectifiedToSource(const Camera& pinhole, const Camera& cam, const Eigen::Matrix3d& rot, const Vec2<double>& p,
-                       Vec2<double>& src);
+bool rectifiedToSource(const BuiltCamera& pinhole, const BuiltCamera& cam, const Eigen::Matrix3d& rot,
+                       const Vec2<double>& p, Vec2<double>& src);
 // The inverse: the rectified pixel on which source pixel `src` lands; false when the ray
 // points behind the rectified camera or falls outside the rectified image.
-bool sourceToRectified(const Camera& pinhole, const Camera& cam, const Eigen::Matrix3d& rot, const Vec2<double>& src,
-                       Vec2<double>& p);
+bool sourceToRectified(const BuiltCamera& pinhole, const BuiltCamera& cam, const Eigen::Matrix3d& rot,
+                       const Vec2<double>& src, Vec2<double>& p);
 
 // Bilinear resampling of img through a map (NaN entries give 0 and a 0 in `valid`).
 ImageF remap(const ImageF& img, const FlowImage& map, ImageU8* valid = nullptr);

@@ -41,7 +41,7 @@ double radiusAt(const Camera& camera, int x, int y) {
 
 // Angle of the pixel's ray off the optical axis / 90 deg (angle mode). Pixels the model
 // cannot unproject receive no light: a large value, so the factor clamps to 0.
-double angleAt(const Camera& camera, int x, int y) {
+double angleAt(const BuiltCamera& camera, int x, int y) {
   Vec3<double> ray;
   if (!camera.unproject(Vec2<double>(x, y), ray) || !ray.allFinite()) return 1e3;
   const double cosine = std::clamp(ray.normalized().z(), -1.0, 1.0);
@@ -215,9 +215,10 @@ std::string describePhotometry(const CameraPhotometry& m, double exposureScale) 
 ImageF vignetting(const Camera& camera, double rim, VignetteMode mode) {
   ImageF factor(camera.width, camera.height, 1.f);
   if (rim == 1.0) return factor;
+  const BuiltCamera built(camera);
   for (int y = 0; y < camera.height; ++y)
     for (int x = 0; x < camera.width; ++x) {
-      const double s = mode == VignetteMode::Angle ? angleAt(camera, x, y) : radiusAt(camera, x, y);
+      const double s = mode == VignetteMode::Angle ? angleAt(built, x, y) : radiusAt(camera, x, y);
       factor(x, y) = float(std::max(0.0, 1.0 - (1.0 - rim) * s * s));
     }
   return factor;

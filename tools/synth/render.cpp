@@ -80,12 +80,13 @@ void renderRow(const Scene& scene, const Rays& rays, int samples, int y, ImageF&
 }
 
 // Angular size (rad) of one pixel at the principal point: sets the texture detail.
-double pixelAngle(const Camera& camera) {
-  const double cx = camera.params.at(2), cy = camera.params.at(3);
+double pixelAngle(const Camera& cam) {
+  const double cx = cam.params.at(2), cy = cam.params.at(3);
+  const BuiltCamera camera(cam);
   Vec3<double> a, b;
   if (camera.unproject(Vec2<double>(cx - 0.5, cy), a) && camera.unproject(Vec2<double>(cx + 0.5, cy), b))
     return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0));
-  return 1.0 / camera.params.at(0);
+  return 1.0 / cam.params.at(0);
 }
 
 Vector3d motionCentre(const SynthConfig& cfg) {
@@ -114,24 +115,27 @@ void renderView(const Scene& scene, const Camera& camera, const Pose& pose, cons
   image = ImageF(camera.width, camera.height, 0.f);
   depth = ImageF(camera.width, camera.height, 0.f);
   camera.validate();
-  models::visitModel<double>(camera, [&](const auto& model) {
-    const RayGenerator rays(model, pose, options.maxFovDeg);
-    // Rows are handed out dynamically, but each row's result depends only on the row, so
-    // the images are identical for any number of threads. Only the calling thread reports.
-    std::atomic<int> nextRow{0}, rowsDone{0};
-    auto work = [&](bool reports) {
-      for (int y = nextRow++; y < camera.height; y = nextRow++) {
-        renderRow(scene, rays, samples, y, image, depth);
-        const int done = ++rowsDone;
-        if (reports && progress) progress(double(done) / camera.height);
-      }
-    };
-    const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
-    std::vector<std::thread> helpers;
-    for (unsigned i = 1; i < threads; ++i) helpers.emplace_back(work, false);
-    work(true);
-    for (auto& t : helpers) t.join();
-  });
+  const BuiltCamera built(camera);
+  std::visit(
+      [&](const auto& model) {
+        const RayGenerator rays(model, pose, options.maxFovDeg);
+        // Rows are handed out dynamically, but each row's result depends only on the row, so
+        // the images are identical for any number of threads. Only the calling thread reports.
+        std::atomic<int> nextRow{0}, rowsDone{0};
+        auto work = [&](bool reports) {
+          for (int y = nextRow++; y < camera.height; y = nextRow++) {
+            renderRow(scene, rays, samples, y, image, depth);
+            const int done = ++rowsDone;
+            if (reports && progress) progress(double(done) / camera.height);
+          }
+        };
+        const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+        std::vector<std::thread> helpers;
+        for (unsigned i = 1; i < threads; ++i) helpers.emplace_back(work, false);
+        work(true);
+        for (auto& t : helpers) t.join();
+      },
+      built.model());
   if (progress) progress(1.0);
 }
 

@@ -1,23 +1,16 @@
-// Camera models as small value types (project / unproject / Jacobian / valid region),
-// and `Camera`, the run-time choice among them that a rig file describes.
+// Camera, the description of a camera as a calibration file gives it (model, image size,
+// parameters), and BuiltCamera, a Camera with its model built once, which projects and
+// unprojects (the model value types are in camera_models.hpp).
 //
 // Conventions: pixel (0,0) is the centre of the top-left pixel; camera frame
 // x right, y down, z forward. unproject() returns a unit ray.
 #pragma once
-#include <Eigen/Core>
 #include <string>
 #include <vector>
 
+#include "curvestereo/camera_models.hpp"
+
 namespace cs {
-
-template <class S>
-using Vec2 = Eigen::Matrix<S, 2, 1>;
-template <class S>
-using Vec3 = Eigen::Matrix<S, 3, 1>;
-template <class S>
-using Mat23 = Eigen::Matrix<S, 2, 3>;
-
-enum class CameraModel { KannalaBrandt4, Unified, ExtendedUnified, DoubleSphere, PinholeRadtan };
 
 class Camera {
  public:
@@ -37,17 +30,6 @@ class Camera {
   static Camera pinholeRadtan(int w, int h, double fx, double fy, double cx, double cy, double k1 = 0, double k2 = 0,
                               double p1 = 0, double p2 = 0);
 
-  // False when p lies outside the model's valid region (then px/J are unspecified).
-  // J (optional) is d(px)/d(p), 2x3.
-  template <class S>
-  bool project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J = nullptr) const;
-  // False when px lies outside the model's valid region. ray has unit length.
-  template <class S>
-  bool unproject(const Vec2<S>& px, Vec3<S>& ray) const;
-
-  // The largest angle (radians) between the optical axis and a ray that the model
-  // represents one-to-one (e.g. where a Kannala-Brandt polynomial stops increasing).
-  double maxAngle() const;
   // px inside the image rectangle [-0.5, w-0.5] x [-0.5, h-0.5], shrunk by margin.
   bool inImage(const Vec2<double>& px, double margin = 0.0) const;
   // The camera for the same lens imaged at resolution scaled by s (pixel-centre aware).
@@ -56,6 +38,34 @@ class Camera {
   std::string modelName() const;
   // Throws cs::Error naming the problem if any parameter is non-finite or absurd.
   void validate() const;
+};
+
+// A Camera with its model built: the model struct of camera().model in double precision,
+// whose constructor computed what every call needs (e.g. the Kannala-Brandt turning angle).
+// Build one per camera, not per pixel, and project / unproject with it. An immutable value:
+// copy it freely; its methods may run concurrently. After editing a Camera, build again.
+class BuiltCamera {
+ public:
+  // Throws cs::Error when cam.params has not the model's number of entries (the values are
+  // Camera::validate's to check).
+  explicit BuiltCamera(const Camera& cam);
+
+  const Camera& camera() const { return camera_; }
+  const models::AnyModel<double>& model() const { return model_; }
+
+  // False when p lies outside the model's valid region (then px/J are unspecified).
+  // J (optional) is d(px)/d(p), 2x3.
+  bool project(const Vec3<double>& p, Vec2<double>& px, Mat23<double>* J = nullptr) const;
+  // False when px lies outside the model's valid region. ray has unit length.
+  bool unproject(const Vec2<double>& px, Vec3<double>& ray) const;
+  // The largest angle (radians) between the optical axis and a ray that the model
+  // represents one-to-one (e.g. where a Kannala-Brandt polynomial stops increasing).
+  double maxAngle() const;
+  bool inImage(const Vec2<double>& px, double margin = 0.0) const { return camera_.inImage(px, margin); }
+
+ private:
+  Camera camera_;
+  models::AnyModel<double> model_;
 };
 
 }  // namespace cs

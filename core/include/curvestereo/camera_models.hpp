@@ -1,25 +1,37 @@
-// The camera models as small value types (one struct per model, templated on the
-// scalar), and visitModel(), which hands a Camera's model to a generic callable.
+// The camera models as small value types: one struct per model, templated on the scalar,
+// and AnyModel<S>, the run-time choice among them (a std::variant in CameraModel's order).
 //
 // Each model is built from the Camera parameter layout [fx fy cx cy extra...] and has
 //   bool project(p, px, J*)   p in the camera frame -> pixel, optional 2x3 d(px)/d(p)
 //   bool unproject(px, ray)   pixel -> unit ray
 //   bool validPoint(p)        p inside the region the model projects one-to-one
 //   double maxAngle()         largest angle to the optical axis of that region
-// Hot loops should build the model once (visitModel) instead of calling Camera::project
-// per pixel: the constructors precompute what every call needs (e.g. the
-// Kannala-Brandt turning angle).
+// The constructors precompute what every call needs (e.g. the Kannala-Brandt turning
+// angle, a scan of the distortion polynomial), so build a model once per camera, not per
+// pixel: cs::BuiltCamera (camera.hpp) holds one built from a Camera.
 //
 // Written from the published model equations: Kannala & Brandt (2006), Geyer &
 // Daniilidis / Mei & Rives (unified), Khomenko et al. (2016, extended unified),
 // Usenko, Demmel & Cremers (2018, double sphere, incl. the valid regions used here).
 #pragma once
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <utility>
+#include <variant>
 
-#include "curvestereo/camera.hpp"
+namespace cs {
+
+template <class S>
+using Vec2 = Eigen::Matrix<S, 2, 1>;
+template <class S>
+using Vec3 = Eigen::Matrix<S, 3, 1>;
+template <class S>
+using Mat23 = Eigen::Matrix<S, 2, 3>;
+
+enum class CameraModel { KannalaBrandt4, Unified, ExtendedUnified, DoubleSphere, PinholeRadtan };
+
+}  // namespace cs
 
 namespace cs::models {
 
@@ -94,28 +106,6 @@ struct KannalaBrandt4 {
   // quartic in theta^2; sampling finely and bisecting the first sign change is exact
   // enough and needs no polynomial root finder.
   static double turningAngle(double c1, double c2, double c3, double c4) {
-    // Camera::project builds the model per call: remember the last few lenses per thread
-    // so that the scan below runs once per lens, not once per pixel.
-    struct Entry {
-      double c[4];
-      double angle;
-    };
-    constexpr int kCacheSize = 4;
-    thread_local Entry cache[kCacheSize] = {};
-    thread_local int next = 0;
-    thread_local int used = 0;
-    for (int i = 0; i < used; ++i) {
-      const Entry& e = cache[i];
-      if (e.c[0] == c1 && e.c[1] == c2 && e.c[2] == c3 && e.c[3] == c4) return e.angle;
-    }
-    const double angle = scanTurningAngle(c1, c2, c3, c4);
-    cache[next] = Entry{{c1, c2, c3, c4}, angle};
-    next = (next + 1) % kCacheSize;
-    used = std::min(used + 1, kCacheSize);
-    return angle;
-  }
-
-  static double scanTurningAngle(double c1, double c2, double c3, double c4) {
     auto slope = [&](double th) {
       const double t2 = th * th;
       return 1 + t2 * (3 * c1 + t2 * (5 * c2 + t2 * (7 * c3 + t2 * 9 * c4)));
@@ -439,24 +429,27 @@ inline int paramCount(CameraModel model) {
   return -1;
 }
 
-// Calls fn(model) with the value type of cam's model in scalar S. The caller must make
-// sure cam.params has paramCount(cam.model) entries (Camera::validate checks it).
-template <class S, class Fn>
-decltype(auto) visitModel(const Camera& cam, Fn&& fn) {
-  const double* p = cam.params.data();
-  switch (cam.model) {
+// One of the models, in CameraModel's order (AnyModel<S>::index() == int(model)).
+template <class S>
+using AnyModel = std::variant<KannalaBrandt4<S>, Unified<S>, ExtendedUnified<S>, DoubleSphere<S>, PinholeRadtan<S>>;
+
+// The model `model` in scalar S from params [fx fy cx cy extra...], which must have
+// paramCount(model) entries (BuiltCamera checks it); width and height are the image's.
+template <class S>
+AnyModel<S> makeModel(CameraModel model, const double* params, int width, int height) {
+  switch (model) {
     case CameraModel::Unified:
-      return std::forward<Fn>(fn)(Unified<S>(p));
+      return Unified<S>(params);
     case CameraModel::ExtendedUnified:
-      return std::forward<Fn>(fn)(ExtendedUnified<S>(p));
+      return ExtendedUnified<S>(params);
     case CameraModel::DoubleSphere:
-      return std::forward<Fn>(fn)(DoubleSphere<S>(p));
+      return DoubleSphere<S>(params);
     case CameraModel::PinholeRadtan:
-      return std::forward<Fn>(fn)(PinholeRadtan<S>(p, cam.width, cam.height));
+      return PinholeRadtan<S>(params, width, height);
     case CameraModel::KannalaBrandt4:
       break;
   }
-  return std::forward<Fn>(fn)(KannalaBrandt4<S>(p));
+  return KannalaBrandt4<S>(params);
 }
 
 }  // namespace cs::models

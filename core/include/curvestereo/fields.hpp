@@ -23,9 +23,9 @@ struct PixelFields {
   Vec2f calibration, trajectory;  // zero where not valid
 };
 
-// The fields of one pixel (x, y) of cam0 for X1 = R X0 + t.
-PixelFields fieldsAtPixel(const Camera& cam0, const Camera& cam1, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
-                          const FieldOptions& options, int x, int y);
+// The fields of one pixel (x, y) of cam0 for X1 = R X0 + t (cameras built once, not per pixel).
+PixelFields fieldsAtPixel(const BuiltCamera& cam0, const BuiltCamera& cam1, const Eigen::Matrix3d& R,
+                          const Eigen::Vector3d& t, const FieldOptions& options, int x, int y);
 
 // Fields on cam0's pixel grid for the relative pose X1 = R X0 + t. `cam0Grid` may be a
 // scaled copy of cam0 (a pyramid level); cam1 is then scaled alike by the caller.

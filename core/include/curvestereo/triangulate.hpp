@@ -20,12 +20,12 @@ struct DepthMaps {
 // Radial depth of the point seen at pixel x of camera 0 and at x + w in the
 // rotation-compensated second camera (cam0's model, centre at -tPrime). +inf when the
 // rays do not converge in front of camera 0; NaN when x or x + w do not unproject.
-double triangulateRadial(const Camera& cam0, const Eigen::Vector3d& tPrime, const Vec2<double>& x,
+double triangulateRadial(const BuiltCamera& cam0, const Eigen::Vector3d& tPrime, const Vec2<double>& x,
                          const Vec2<double>& w);
 
 // The warp of pixel x whose point lies at radial depth `radial` (may be +inf):
 // w = pi0(radial * pi0^-1(x) + tPrime) - x. False when it does not project.
-bool warpFromDepth(const Camera& cam0, const Eigen::Vector3d& tPrime, const Vec2<double>& x, double radial,
+bool warpFromDepth(const BuiltCamera& cam0, const Eigen::Vector3d& tPrime, const Vec2<double>& x, double radial,
                    Vec2<double>& w);
 
 DepthMaps triangulate(const Camera& cam0, const Eigen::Vector3d& tPrime, const FlowImage& w, const ImageU8& valid);
