@@ -73,10 +73,12 @@ class Stereo {
     bool confidence = true;  // the initialiser's (empty without one)
   };
   void setOutputs(const Outputs& outputs);
-  // Called during compute() with the fraction of the solve done (0..1), for progress bars:
-  // after every warp of every level as the frame is issued, and with 0 at the start and 1
-  // at the end of a frame that a GPU backend replays (recorded earlier: nothing to report
-  // in between).
+  // Called during compute(), on the calling thread, with the fraction of the solve done
+  // (0..1), for progress bars: after every warp of every level as the frame is issued (a GPU
+  // backend may still be running it), ending at 1. A frame that a GPU backend replays (CUDA
+  // graph, Vulkan command buffer recorded by an earlier frame) reports only 0 when it is
+  // submitted and 1 once its results are back: it is one submission with no host code
+  // between its levels, and reporting per level would stall the real-time path there.
   void setProgress(std::function<void(double)> progress);
   // Images: float gray in [0,1], both of the rig's resolution. Throws cs::Error on
   // mismatched sizes or non-finite pixels.
