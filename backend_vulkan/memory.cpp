@@ -129,30 +129,40 @@ Addr VulkanBackend::paramBlock(const void* data, size_t bytes) {
 
 // ---- transfers ----
 
+// At least `bytes` of staging (16 MiB at least: two 848x800 images' uploads share it).
+// Only when no submitted command reads it.
+void VulkanBackend::growStaging(VkDeviceSize bytes) {
+  if (staging_.size >= bytes) return;
+  destroyBuffer(staging_);
+  staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(16) << 20), true);
+}
+
+// The copy joins the immediate command buffer, its data in the persistently mapped
+// staging buffer after the uploads before it: a frame's uploads go in one submission (the
+// next flush: beginFrame, replayFrame, a download), not one round trip each. Queue order
+// and the barrier before every command keep them after the work submitted before.
 void VulkanBackend::doUpload(const Buffer& dst, const float* host) {
   const Alloc& a = alloc(dst);
   const VkDeviceSize bytes = dst.count() * sizeof(float);
-  flush();  // the staging buffer is free and earlier work has finished
-  if (staging_.size < bytes) {
-    destroyBuffer(staging_);
-    staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(4) << 20), true);
+  VkDeviceSize offset = (stagingUsed_ + 255) & ~VkDeviceSize(255);
+  if (recordingFrame() || offset + bytes > staging_.size) {
+    flush();  // no submitted copy reads the staging buffer any more
+    offset = 0;
   }
-  std::memcpy(staging_.mapped, host, bytes);
+  growStaging(bytes);
+  std::memcpy(static_cast<char*>(staging_.mapped) + offset, host, bytes);
   VkCommandBuffer cb = recorder();
   barrier(cb);
-  VkBufferCopy region{0, a.offset, bytes};
+  VkBufferCopy region{offset, a.offset, bytes};
   inst_.fn.vkCmdCopyBuffer(cb, staging_.buffer, arenas_[size_t(a.arena)].buffer, 1, &region);
-  flush();
+  stagingUsed_ = offset + bytes;
 }
 
 void VulkanBackend::doDownload(const Buffer& src, float* host) {
   const Alloc& a = alloc(src);
   const VkDeviceSize bytes = src.count() * sizeof(float);
   flush();
-  if (staging_.size < bytes) {
-    destroyBuffer(staging_);
-    staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(4) << 20), true);
-  }
+  growStaging(bytes);
   VkCommandBuffer cb = recorder();
   barrier(cb);
   VkBufferCopy region{a.offset, 0, bytes};

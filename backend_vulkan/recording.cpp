@@ -101,6 +101,7 @@ void VulkanBackend::flush() {
     waitFence(immFence_, "queued work");
     check(inst_.fn.vkResetCommandBuffer(immCmd_, 0), "vkResetCommandBuffer");
   }
+  stagingUsed_ = 0;  // every upload's copy has run
 }
 
 void VulkanBackend::synchronize() { flush(); }
@@ -126,7 +127,7 @@ void VulkanBackend::endFrame() {
 
 void VulkanBackend::replayFrame() {
   if (!canReplayFrame()) throw Error("vulkan backend: no recorded frame to replay");
-  flush();  // uploads are done; the previous frame has finished
+  flush();  // the uploads have run; the previous frame has finished
   submit(frameCmd_, frameFence_);
   frame_ = Frame::Running;
 }

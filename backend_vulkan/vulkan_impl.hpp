@@ -104,6 +104,7 @@ class VulkanBackend final : public Backend {
   const Alloc& alloc(const Buffer& b) const;
   Addr addr(const Buffer& b) const;
   Addr paramBlock(const void* data, size_t bytes);
+  void growStaging(VkDeviceSize bytes);
   Addr sweepParamBlock(const SweepParams& p);
   // primalDual (barsFromPrimals false) and warpIterations (true: the first iteration reads
   // u, v as uBar, vBar) in primal_dual.comp's fused dispatches.
@@ -150,6 +151,7 @@ class VulkanBackend final : public Backend {
   std::vector<Alloc> allocs_;
   Arena staging_, params_;
   VkDeviceSize paramsUsed_ = 0;
+  VkDeviceSize stagingUsed_ = 0;  // by uploads in the immediate command buffer, until flushed
   unsigned long long allocatedBytes_ = 0;
   std::map<std::string, VkDeviceSize> paramCache_;
   std::map<std::tuple<int, int, int, int>, Buffer> scratch_;
