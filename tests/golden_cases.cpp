@@ -12,6 +12,17 @@
 
 namespace cs::golden {
 
+PrimalDualParams primalDualCaseParams(int iterations) {
+  PrimalDualParams p{20.f, 17.f, 1.2f, {}};
+  float scale = 1.f;
+  for (int k = 0; k < iterations; ++k) {
+    const float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
+    p.schedule.push_back({scale, 1.f / scale, theta});
+    scale *= theta;
+  }
+  return p;
+}
+
 namespace {
 
 // Odd sizes on purpose: no kernel may assume even or aligned dimensions.
@@ -190,13 +201,7 @@ std::vector<Output> primalDualCase(Backend& b) {
        iz = noise(kW, kH, 1, 17, 0.05f);
   PrimalDualBuffers pd{s.put(u), s.put(u), s.put(v), s.put(v), s.put(p), s.put(q)};
   DataTermBuffers data{s.put(u0), s.put(iu), s.put(iz)};
-  PrimalDualParams prm{20.f, 17.f, 1.2f, {}};
-  float scale = 1.f;
-  for (int k = 0; k < 6; ++k) {  // exercises the accelerated schedule (gamma = 0.35)
-    float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
-    prm.schedule.push_back({scale, 1.f / scale, theta});
-    scale *= theta;
-  }
+  const PrimalDualParams prm = primalDualCaseParams(6);  // exercises the accelerated schedule
   b.primalDual(pd, data, s.put(tensor), s.put(steps), s.put(mask), prm);
   return {s.get("primaldual_u", pd.u), s.get("primaldual_ubar", pd.uBar), s.get("primaldual_v", pd.v),
           s.get("primaldual_p", pd.p), s.get("primaldual_q", pd.q)};
@@ -231,13 +236,7 @@ std::vector<Output> warpIterationsCase(Backend& b) {
        iz = noise(kW, kH, 1, 17, 0.05f), uBar = noise(kW, kH, 1, 60, 1.f), vBar = noise(kW, kH, 2, 61, 0.1f);
   PrimalDualBuffers pd{s.put(u), s.put(uBar), s.put(v), s.put(vBar), s.put(p), s.put(q)};
   DataTermBuffers data{s.put(u0), s.put(iu), s.put(iz)};
-  PrimalDualParams prm{20.f, 17.f, 1.2f, {}};
-  float scale = 1.f;
-  for (int k = 0; k < 7; ++k) {
-    float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
-    prm.schedule.push_back({scale, 1.f / scale, theta});
-    scale *= theta;
-  }
+  const PrimalDualParams prm = primalDualCaseParams(7);
   b.warpIterations(pd, data, s.put(tensor), s.put(steps), s.put(mask), prm);
   return {s.get("warpiterations_u", pd.u), s.get("warpiterations_ubar", pd.uBar),
           s.get("warpiterations_v", pd.v), s.get("warpiterations_vbar", pd.vBar),

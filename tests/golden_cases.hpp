@@ -36,6 +36,11 @@ struct KernelCase {
   std::vector<Output> (*run)(Backend& backend);
 };
 
+// The primal-dual parameters of the kernel cases (and of the GPU suites' primal-dual
+// checks): lambda 20, alpha0 17, alpha1 1.2 and `iterations` steps of the accelerated
+// schedule with gamma = 0.35 (theta_k = 1 / sqrt(1 + 2 gamma scale_k), as the pipeline).
+PrimalDualParams primalDualCaseParams(int iterations);
+
 // All kernel cases, in a fixed order.
 const std::vector<KernelCase>& kernelCases();
 

@@ -348,13 +348,7 @@ std::vector<float> runPrimalDual(Backend& b, const PdInputs& in, int iterations,
   }
   const PrimalDualBuffers pd{buf["u"], buf["uBar"], buf["v"], buf["vBar"], buf["p"], buf["q"]};
   const DataTermBuffers data{buf["u0"], buf["iu"], buf["iz"]};
-  PrimalDualParams prm{20.f, 17.f, 1.2f, {}};
-  float scale = 1.f;
-  for (int k = 0; k < iterations; ++k) {
-    const float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
-    prm.schedule.push_back({scale, 1.f / scale, theta});
-    scale *= theta;
-  }
+  const PrimalDualParams prm = golden::primalDualCaseParams(iterations);
   if (warp)
     b.warpIterations(pd, data, buf["tensor"], buf["steps"], buf["mask"], prm);
   else

@@ -97,13 +97,7 @@ void checkPrimalDualPaths(int w, int h) {
     };
     const PrimalDualBuffers pd{put(u, 1), put(uBar, 1), put(v, 2), put(vBar, 2), put(p, 2), put(q, 4)};
     const DataTermBuffers data{put(u0, 1), put(iu, 1), put(iz, 1)};
-    PrimalDualParams prm{20.f, 17.f, 1.2f, {}};
-    float scale = 1.f;
-    for (int k = 0; k < iterations; ++k) {
-      const float theta = 1.f / std::sqrt(1.f + 0.7f * scale);
-      prm.schedule.push_back({scale, 1.f / scale, theta});
-      scale *= theta;
-    }
+    const PrimalDualParams prm = golden::primalDualCaseParams(iterations);
     const Buffer tensorBuf = put(tensor, 4), stepsBuf = put(steps, 4), maskBuf = put(mask, 1);
     if (copyBars)
       b.warpIterations(pd, data, tensorBuf, stepsBuf, maskBuf, prm);

@@ -13,15 +13,9 @@ using namespace cs;
 
 namespace {
 
+// 224 px, nearest surface 2 m, 3x3 samples per pixel.
 synth::SynthPair renderSmall(const std::string& motion, double baseline, uint32_t seed) {
-  synth::SynthConfig cfg;
-  cfg.camera = synth::defaultFisheye(224);
-  cfg.motion = motion;
-  cfg.baseline = baseline;
-  cfg.seed = seed;
-  cfg.nearest = 2.0;
-  cfg.samplesPerAxis = 3;
-  return synth::renderPair(cfg);
+  return test::smallSynthPair(224, motion, baseline, seed, 2.0, 3);
 }
 
 struct Solved {

@@ -26,16 +26,17 @@ inline std::filesystem::path tempDir(const std::string& name) {
   return p;
 }
 
-// A small synthetic fisheye pair (nearest surface 1.5 m, one sample per pixel): quick to
-// render and to solve on every backend.
-inline synth::SynthPair smallSynthPair(int size, const std::string& motion, double baseline, uint32_t seed) {
+// A small synthetic fisheye pair (by default nearest surface 1.5 m, one sample per pixel):
+// quick to render and to solve on every backend.
+inline synth::SynthPair smallSynthPair(int size, const std::string& motion, double baseline, uint32_t seed,
+                                       double nearest = 1.5, int samplesPerAxis = 1) {
   synth::SynthConfig cfg;
   cfg.camera = synth::defaultFisheye(size);
   cfg.motion = motion;
   cfg.baseline = baseline;
   cfg.seed = seed;
-  cfg.nearest = 1.5;
-  cfg.samplesPerAxis = 1;
+  cfg.nearest = nearest;
+  cfg.samplesPerAxis = samplesPerAxis;
   return synth::renderPair(cfg);
 }
 

@@ -124,40 +124,30 @@ struct PngErrorState {
 // Warnings (unknown chunks, odd gamma) do not stop decoding and would only spam stderr.
 void onPngWarning(png_structp, png_const_charp) {}
 
-class PngReadHandle {
+// A libpng read or write struct with its info struct, destroyed together.
+class PngHandle {
  public:
-  explicit PngReadHandle(PngErrorState* errors) {
-    png_ = png_create_read_struct(PNG_LIBPNG_VER_STRING, errors, onPngError, onPngWarning);
+  enum Mode { kRead, kWrite };
+  PngHandle(Mode mode, PngErrorState* errors) : mode_(mode) {
+    png_ = mode == kRead ? png_create_read_struct(PNG_LIBPNG_VER_STRING, errors, onPngError, onPngWarning)
+                         : png_create_write_struct(PNG_LIBPNG_VER_STRING, errors, onPngError, onPngWarning);
     if (png_) info_ = png_create_info_struct(png_);
   }
-  ~PngReadHandle() { png_destroy_read_struct(&png_, info_ ? &info_ : nullptr, nullptr); }
-  PngReadHandle(const PngReadHandle&) = delete;
-  PngReadHandle& operator=(const PngReadHandle&) = delete;
+  ~PngHandle() {
+    if (mode_ == kRead)
+      png_destroy_read_struct(&png_, info_ ? &info_ : nullptr, nullptr);
+    else
+      png_destroy_write_struct(&png_, info_ ? &info_ : nullptr);
+  }
+  PngHandle(const PngHandle&) = delete;
+  PngHandle& operator=(const PngHandle&) = delete;
 
   bool valid() const { return png_ && info_; }
   png_structp png() const { return png_; }
   png_infop info() const { return info_; }
 
  private:
-  png_structp png_ = nullptr;
-  png_infop info_ = nullptr;
-};
-
-class PngWriteHandle {
- public:
-  explicit PngWriteHandle(PngErrorState* errors) {
-    png_ = png_create_write_struct(PNG_LIBPNG_VER_STRING, errors, onPngError, onPngWarning);
-    if (png_) info_ = png_create_info_struct(png_);
-  }
-  ~PngWriteHandle() { png_destroy_write_struct(&png_, info_ ? &info_ : nullptr); }
-  PngWriteHandle(const PngWriteHandle&) = delete;
-  PngWriteHandle& operator=(const PngWriteHandle&) = delete;
-
-  bool valid() const { return png_ && info_; }
-  png_structp png() const { return png_; }
-  png_infop info() const { return info_; }
-
- private:
+  Mode mode_;
   png_structp png_ = nullptr;
   png_infop info_ = nullptr;
 };
@@ -275,7 +265,7 @@ void writePngBytes(const std::string& path, int width, int height, int bitDepth,
   if (width <= 0 || height <= 0) throw Error("cannot write empty image to " + quoted(path));
   FilePtr file = openForWrite(path, "image");
   PngErrorState errors{};
-  PngWriteHandle handle(&errors);
+  PngHandle handle(PngHandle::kWrite, &errors);
   if (!handle.valid()) throw Error("cannot write image " + quoted(path) + ": libpng initialisation failed");
   const size_t rowBytes = pixels.size() / size_t(height);
   std::vector<png_bytep> rows(static_cast<size_t>(height));
@@ -468,7 +458,7 @@ ImageF readPngGray(const std::string& path, PngFormat* format) {
   FilePtr file = openForRead(path, "image");
   requirePngSignature(file.get(), path);
   PngErrorState errors{};
-  PngReadHandle handle(&errors);
+  PngHandle handle(PngHandle::kRead, &errors);
   if (!handle.valid()) throw Error("cannot read PNG " + quoted(path) + ": libpng initialisation failed");
 
   png_uint_32 width = 0, height = 0;
