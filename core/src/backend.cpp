@@ -1,4 +1,5 @@
-// The Backend interface's default stage clock (host wall time between boundaries).
+// The kernel interface's helpers (gaussianTaps, the CameraParams conversions, cameraConstants)
+// and Backend's default stage clock (host wall time between boundaries).
 #include "curvestereo/backend.hpp"
 
 #include "curvestereo/camera.hpp"

@@ -6,7 +6,6 @@
 #include <string>
 
 #include "curvestereo/backend.hpp"
-#include "curvestereo/camera.hpp"
 #include "curvestereo/camera_models.hpp"
 #include "curvestereo/image.hpp"
 

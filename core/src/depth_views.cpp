@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "calib_common.hpp"
-#include "curvestereo/camera_models.hpp"
+#include "curvestereo/camera.hpp"
 #include "curvestereo/image_io.hpp"
 
 namespace cs {

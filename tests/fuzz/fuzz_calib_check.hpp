@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <string>
 
-#include "curvestereo/camera_models.hpp"
+#include "curvestereo/camera.hpp"
 #include "curvestereo/image.hpp"
 #include "curvestereo/rig.hpp"
 #include "fuzz_util.hpp"

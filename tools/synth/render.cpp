@@ -6,7 +6,7 @@
 #include <limits>
 #include <thread>
 
-#include "curvestereo/camera_models.hpp"
+#include "curvestereo/camera.hpp"
 #include "synth/scene.hpp"
 
 namespace cs::synth {
