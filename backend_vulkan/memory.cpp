@@ -32,7 +32,8 @@ uint32_t VulkanBackend::memoryType(uint32_t bits, VkMemoryPropertyFlags required
   return uint32_t(best);
 }
 
-VulkanBackend::Arena VulkanBackend::makeBuffer(VkDeviceSize bytes, bool hostVisible) {
+VulkanBackend::Arena VulkanBackend::makeBuffer(VkDeviceSize bytes, Memory kind) {
+  const bool hostVisible = kind != Memory::Device;
   Arena a;
   a.size = bytes;
   auto bci = vkStruct<VkBufferCreateInfo>(VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO);
@@ -48,11 +49,11 @@ VulkanBackend::Arena VulkanBackend::makeBuffer(VkDeviceSize bytes, bool hostVisi
   auto mai = vkStruct<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
   mai.pNext = &flags;
   mai.allocationSize = req.size;
-  mai.memoryTypeIndex =
-      hostVisible
-          ? memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                       VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
-          : memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+  const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  mai.memoryTypeIndex = kind == Memory::Device ? memoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0)
+                        : kind == Memory::Staging
+                            ? memoryType(req.memoryTypeBits, host, VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
+                            : memoryType(req.memoryTypeBits, host, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
   VkResult r = inst_.fn.vkAllocateMemory(dev_, &mai, nullptr, &a.memory);
   if (r != VK_SUCCESS) {
     inst_.fn.vkDestroyBuffer(dev_, a.buffer, nullptr);
@@ -90,7 +91,7 @@ Buffer VulkanBackend::doCreate(int width, int height, int channels) {
                 " MiB) does not fit in the " + std::to_string(heap >> 20) + " MiB of " + props_.deviceName);
   allocatedBytes_ += aligned;
   if (arenas_.empty() || arenas_.back().used + aligned > arenas_.back().size)
-    arenas_.push_back(makeBuffer(std::max<VkDeviceSize>(VkDeviceSize(64) << 20, aligned), false));
+    arenas_.push_back(makeBuffer(std::max<VkDeviceSize>(VkDeviceSize(64) << 20, aligned), Memory::Device));
   Arena& a = arenas_.back();
   allocs_.push_back({int(arenas_.size() - 1), a.used, bytes});
   a.used += aligned;
@@ -134,13 +135,14 @@ Addr VulkanBackend::paramBlock(const void* data, size_t bytes) {
 void VulkanBackend::growStaging(VkDeviceSize bytes) {
   if (staging_.size >= bytes) return;
   destroyBuffer(staging_);
-  staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(16) << 20), true);
+  staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(16) << 20), Memory::Staging);
 }
 
 // The copy joins the immediate command buffer, its data in the persistently mapped
 // staging buffer after the uploads before it: a frame's uploads go in one submission (the
 // next flush: beginFrame, replayFrame, a download), not one round trip each. Queue order
-// and the barrier before every command keep them after the work submitted before.
+// and the barrier before every command keep them after the work submitted before, and the
+// frame (replayFrame submits it behind them without waiting) after them.
 void VulkanBackend::doUpload(const Buffer& dst, const float* host) {
   const Alloc& a = alloc(dst);
   const VkDeviceSize bytes = dst.count() * sizeof(float);
@@ -158,22 +160,30 @@ void VulkanBackend::doUpload(const Buffer& dst, const float* host) {
   stagingUsed_ = offset + bytes;
 }
 
+// One submission and one wait: the copy joins the immediate command buffer (after any
+// uploads still there, in the staging buffer beyond theirs) and the flush waits for the
+// frame and the copy together.
 void VulkanBackend::doDownload(const Buffer& src, float* host) {
   const Alloc& a = alloc(src);
   const VkDeviceSize bytes = src.count() * sizeof(float);
-  flush();
+  VkDeviceSize offset = (stagingUsed_ + 255) & ~VkDeviceSize(255);
+  if (recordingFrame() || offset + bytes > staging_.size) {
+    flush();  // the frame being recorded runs first; no submitted copy reads the staging buffer
+    offset = 0;
+  }
   growStaging(bytes);
   VkCommandBuffer cb = recorder();
   barrier(cb);
-  VkBufferCopy region{a.offset, 0, bytes};
+  VkBufferCopy region{a.offset, offset, bytes};
   inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(a.arena)].buffer, staging_.buffer, 1, &region);
   auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
   mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
   mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
   inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr,
                                 0, nullptr);
+  stagingUsed_ = offset + bytes;
   flush();
-  std::memcpy(host, staging_.mapped, bytes);
+  std::memcpy(host, static_cast<const char*>(staging_.mapped) + offset, bytes);
 }
 
 void VulkanBackend::doFill(const Buffer& dst, float value) {

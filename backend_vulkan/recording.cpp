@@ -34,6 +34,11 @@ VkPipeline VulkanBackend::pipeline(Shader s) {
 VkCommandBuffer VulkanBackend::recorder() {
   ensureUsable();
   if (recordingFrame()) return frameCmd_;
+  if (imm_ == Immediate::InFlight) {  // submitted by replayFrame: done before it is recorded again
+    imm_ = Immediate::Idle;
+    waitFence(immFence_, "queued work");
+    check(inst_.fn.vkResetCommandBuffer(immCmd_, 0), "vkResetCommandBuffer");
+  }
   if (imm_ != Immediate::Recording) {
     auto bi = vkStruct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
     bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
@@ -107,6 +112,9 @@ void VulkanBackend::flush() {
 void VulkanBackend::synchronize() { flush(); }
 
 void VulkanBackend::beginFrame() {
+  // A profiled frame's uploads end here: the host's recording of the frame, which a
+  // replayed frame does not do, is no stage's time.
+  if (queryCount_ > 0 && imm_ == Immediate::Recording) beginStage("");
   flush();
   check(inst_.fn.vkResetCommandBuffer(frameCmd_, 0), "vkResetCommandBuffer");
   auto bi = vkStruct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
@@ -127,7 +135,20 @@ void VulkanBackend::endFrame() {
 
 void VulkanBackend::replayFrame() {
   if (!canReplayFrame()) throw Error("vulkan backend: no recorded frame to replay");
-  flush();  // the uploads have run; the previous frame has finished
+  ensureUsable();
+  // The previous run of the command buffer has finished before it is submitted again.
+  if (frame_ == Frame::Running) {
+    frame_ = Frame::Ready;
+    waitFence(frameFence_, "the frame");
+  }
+  // The uploads go first and are not waited for: queue order and the barrier before the
+  // frame's first command keep the frame behind them (a download's flush waits for both).
+  if (imm_ == Immediate::Recording) {
+    imm_ = Immediate::Idle;
+    check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
+    submit(immCmd_, immFence_);
+    imm_ = Immediate::InFlight;
+  }
   submit(frameCmd_, frameFence_);
   frame_ = Frame::Running;
 }

@@ -110,7 +110,7 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
     check(inst_.fn.vkCreateQueryPool(dev_, &qpci, nullptr, &queryPool_), "vkCreateQueryPool");
   }
 
-  params_ = makeBuffer(1 << 20, true);
+  params_ = makeBuffer(1 << 20, Memory::Params);
 }
 
 VulkanBackend::~VulkanBackend() {

@@ -99,7 +99,12 @@ class VulkanBackend final : public Backend {
   void check(VkResult r, const char* what);
   void ensureUsable() const;
   uint32_t memoryType(uint32_t bits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const;
-  Arena makeBuffer(VkDeviceSize bytes, bool hostVisible);
+  // Device: device-local arenas. Staging: host-visible, host-cached where the device has it
+  // (the host writes uploads and reads downloads there). Params: host-visible, device-local
+  // where the device has it (a GPU's BAR window: every invocation that reads a parameter
+  // block reads it from the GPU's memory, not across the bus).
+  enum class Memory { Device, Staging, Params };
+  Arena makeBuffer(VkDeviceSize bytes, Memory kind);
   void destroyBuffer(Arena& a);
   const Alloc& alloc(const Buffer& b) const;
   Addr addr(const Buffer& b) const;
