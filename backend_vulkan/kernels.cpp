@@ -101,6 +101,13 @@ struct PcWarpDerivatives {
   int32_t width, height, hasConfidence;
   float weightFloor;
 };
+struct PcWarpTail {  // warp_derivatives.comp with CS_WARP_TAIL
+  PcWarpDerivatives d;
+  Addr uIn;
+  float duMax;
+  int32_t derive;
+};
+static_assert(sizeof(PcWarpTail) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 // primal_dual.comp: the level's block (set 0 the caller's buffers, set 1 the spare set),
 // and per dispatch the set read, the iterations and their steps.
 constexpr int kMaxPdIterations = 5;  // mirrors kMaxIterations in primal_dual.comp
@@ -287,6 +294,26 @@ void VulkanBackend::doWarpDerivatives(const DataTermBuffers& data, const Buffer&
   dispatch(kWarpDerivatives, pc, mask.width, mask.height);
 }
 
+// The warp's tail in one or two dispatches instead of four commands: with the median, the
+// median into medianScratch, then warp_tail (warp_derivatives.comp with CS_WARP_TAIL)
+// accumulates from it into u (which the median's copy back would have done first) and,
+// with nextWarp, makes the next warp's data term; without it, warp_tail accumulates u in
+// place. Each of warp_tail's steps reads and writes the pixel's own u, w and tangent only.
+void VulkanBackend::doWarpTail(const WarpBuffers& warp, const Buffer& medianScratch, float duMax, bool nextWarp) {
+  const bool withMedian = medianScratch.id >= 0;
+  if (withMedian) doMedian(medianScratch, warp.u, warp.mask);
+  const bool weighted = warp.confidence.id >= 0;
+  const Buffer& mask = warp.mask;
+  PcWarpTail pc{
+      {addr(warp.data.u0), addr(warp.data.iu), addr(warp.data.iz), addr(warp.tangent), addr(warp.i0), addr(warp.i1),
+       addr(warp.trajectory), addr(warp.w), addr(warp.u), addr(mask), weighted ? addr(warp.confidence) : addr(mask),
+       mask.width, mask.height, weighted ? 1 : 0, warp.weightFloor},
+      withMedian ? addr(medianScratch) : addr(warp.u),
+      duMax,
+      nextWarp ? 1 : 0};
+  dispatch(kWarpTail, pc, mask.width, mask.height);
+}
+
 void VulkanBackend::doPrimalDual(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
                                  const Buffer& steps, const Buffer& mask, const PrimalDualParams& prm) {
   iterate(pd, data, tensor, steps, mask, prm, false);
@@ -374,8 +401,15 @@ void VulkanBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& 
     dispatchGroups(widePrimalDual_ ? kPrimalDual : kPrimalDualNarrow, pc, groups.first, groups.second);
     k += plan[d];
   }
-  if (endsSpare)
-    for (int i = 0; i < 6; ++i) doCopy(own[i], spare[i]);
+  if (endsSpare) {  // six independent copies behind one barrier
+    VkCommandBuffer cb = recorder();
+    barrier(cb);
+    for (int i = 0; i < 6; ++i) {
+      const Alloc &d = alloc(own[i]), &s = alloc(spare[i]);
+      VkBufferCopy region{s.offset, d.offset, own[i].count() * sizeof(float)};
+      inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(s.arena)].buffer, arenas_[size_t(d.arena)].buffer, 1, &region);
+    }
+  }
 }
 
 void VulkanBackend::doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) {

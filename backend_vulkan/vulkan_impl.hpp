@@ -67,6 +67,7 @@ class VulkanBackend final : public Backend {
                     const Buffer& mask, const PrimalDualParams& params) override;
   void doWarpIterations(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor,
                         const Buffer& steps, const Buffer& mask, const PrimalDualParams& params) override;
+  void doWarpTail(const WarpBuffers& warp, const Buffer& medianScratch, float duMax, bool nextWarp) override;
   void doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) override;
   void doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent, const Buffer& mask,
                     float duMax) override;

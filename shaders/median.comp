@@ -1,7 +1,11 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : enable
 // dst = 3x3 median of src over masked neighbours; even counts take the mean of the two
 // middle values (backend_cpu/median.cpp). Unmasked pixels copy src.
+// The oracle sorts the values as they arrive (a stable insertion sort); here each value's
+// place in that order is counted (the values below it, and the equal ones before it), so
+// the nine values stay in registers (no array indexed at run time).
 #include "common.glsl"
 
 layout(push_constant) uniform PC {
@@ -18,20 +22,22 @@ void main() {
     return;
   }
   float values[9];
+  bool inside[9];
   int n = 0;
-  for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx)
-      if (masked(pc.mask, pc.w, pc.h, x + dx, y + dy)) {
-        // insertion sort as the values arrive
-        float val = pc.src.v[(y + dy) * pc.w + x + dx];
-        int k = n++;
-        while (k > 0 && values[k - 1] > val) {
-          values[k] = values[k - 1];
-          --k;
-        }
-        values[k] = val;
-      }
-  float upper = values[n / 2];
-  if (n % 2 == 0) upper = 0.5 * (values[n / 2 - 1] + upper);
+  [[unroll]] for (int k = 0; k < 9; ++k) {
+    const int dx = k % 3 - 1, dy = k / 3 - 1;
+    inside[k] = masked(pc.mask, pc.w, pc.h, x + dx, y + dy);
+    values[k] = inside[k] ? pc.src.v[(y + dy) * pc.w + x + dx] : 0.0;
+    n += inside[k] ? 1 : 0;
+  }
+  float lower = 0.0, upper = 0.0;
+  [[unroll]] for (int k = 0; k < 9; ++k) {
+    int place = 0;
+    [[unroll]] for (int j = 0; j < 9; ++j)
+      if (inside[j] && (values[j] < values[k] || (j < k && values[j] == values[k]))) ++place;
+    if (inside[k] && place == n / 2) upper = values[k];
+    if (inside[k] && place == n / 2 - 1) lower = values[k];
+  }
+  if (n % 2 == 0) upper = 0.5 * (lower + upper);
   pc.dst.v[i] = upper;
 }

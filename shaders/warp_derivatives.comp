@@ -2,12 +2,21 @@
 #extension GL_GOOGLE_include_directive : require
 // Per warp: the tangent g = normalize(T(x + w)) and the linearised data term at x + w
 // (backend_cpu/warp_derivatives.cpp).
+// With -DCS_WARP_TAIL (the fused tail of a warp, Backend::warpTail): first the pixel's
+// accumulate (backend_cpu/accumulate.cpp) from uIn (the median of u, or u itself), then,
+// with `derive`, the next warp's derivatives from the accumulated u and w. Every step works
+// on the pixel's own u, w and tangent, so one invocation does them in the fine kernels' order.
 #include "sampling.glsl"
 
 layout(push_constant) uniform PC {
   FBuf u0, iu, iz, tangent, i0, i1, trajectory, w, u, mask, confidence;
   int width, height, hasConfidence;
   float weightFloor;
+#ifdef CS_WARP_TAIL
+  FBuf uIn;
+  float duMax;
+  int derive;
+#endif
 } pc;
 
 float derivativeAlong(FBuf image, float x, float y, float gx, float gy) {
@@ -28,18 +37,16 @@ bool sampleable(float x, float y, float gx, float gy) {
   return masked(pc.mask, pc.width, pc.height, lroundf(x), lroundf(y));
 }
 
-void main() {
-  int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
-  if (x >= pc.width || y >= pc.height) return;
-  const int i = y * pc.width + x;
-  pc.u0.v[i] = pc.u.v[i];
+// The derivatives of pixel (x, y) at index i, whose u and w are given.
+void derivatives(int x, int y, int i, bool inMask, float u, vec2 w) {
+  pc.u0.v[i] = u;
   pc.iu.v[i] = 0.0;
   pc.iz.v[i] = 0.0;
   pc.tangent.v[2 * i] = 0.0;
   pc.tangent.v[2 * i + 1] = 0.0;
-  if (!masked(pc.mask, pc.width, pc.height, x, y)) return;
+  if (!inMask) return;
 
-  const float px = float(x) + pc.w.v[2 * i], py = float(y) + pc.w.v[2 * i + 1];
+  const float px = float(x) + w.x, py = float(y) + w.y;
   float gx = sampleBilinear(pc.trajectory, pc.width, pc.height, 2, 0, px, py);
   float gy = sampleBilinear(pc.trajectory, pc.width, pc.height, 2, 1, px, py);
   float n = sqrt(gx * gx + gy * gy);
@@ -59,4 +66,29 @@ void main() {
   pc.iz.v[i] = weight * (sampleBilinear(pc.i1, pc.width, pc.height, 1, 0, px, py) - pc.i0.v[i]);
   pc.iu.v[i] =
       weight * 0.5 * (derivativeAlong(pc.i1, px, py, gx, gy) + derivativeAlong(pc.i0, float(x), float(y), gx, gy));
+}
+
+void main() {
+  int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
+  if (x >= pc.width || y >= pc.height) return;
+  const int i = y * pc.width + x;
+  const bool inMask = masked(pc.mask, pc.width, pc.height, x, y);
+#ifdef CS_WARP_TAIL
+  // du = clamp(u - u0, +-duMax); u = u0 + du; w += du * tangent at masked pixels.
+  float u = pc.uIn.v[i];
+  vec2 w = vec2(pc.w.v[2 * i], pc.w.v[2 * i + 1]);
+  if (inMask) {
+    const float u0 = pc.u0.v[i];
+    const float du = min(max(u - u0, -pc.duMax), pc.duMax);
+    u = u0 + du;
+    w.x += du * pc.tangent.v[2 * i];
+    w.y += du * pc.tangent.v[2 * i + 1];
+    pc.w.v[2 * i] = w.x;
+    pc.w.v[2 * i + 1] = w.y;
+  }
+  pc.u.v[i] = u;
+  if (pc.derive != 0) derivatives(x, y, i, inMask, u, w);
+#else
+  derivatives(x, y, i, inMask, pc.u.v[i], vec2(pc.w.v[2 * i], pc.w.v[2 * i + 1]));
+#endif
 }
