@@ -607,7 +607,7 @@ SolveInputs loadSolveInputs(const std::string& dir) {
 }
 
 std::vector<Output> runSolve(const SolveInputs& in, const std::string& backend) {
-  Params p = preset("default");
+  Params p = preset("variational");
   p.levels = 2;
   p.minWidth = 24;
   p.warps = 8;

@@ -125,7 +125,7 @@ synth::SynthPair smallPair() {
 }
 
 Params smallParams() {
-  Params params = preset("default");
+  Params params = preset("variational");
   params.minWidth = 20;
   params.warps = 4;
   return params;

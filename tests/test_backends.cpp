@@ -119,7 +119,7 @@ TEST_CASE("whole solves on every backend agree with the CPU oracle") {
   const synth::SynthPair pair = synth::renderPair(cfg);
   // "quality" adds the plane-sweep initialiser (its winner-take-all choice and left-right
   // check are discrete, so this also shows backends rarely flip them).
-  for (const char* presetName : {"default", "quality"}) {
+  for (const char* presetName : {"variational", "quality"}) {
     Params params = preset(presetName);
     params.minWidth = 20;
     params.warps = 12;
@@ -186,7 +186,7 @@ TEST_CASE("every coarse kernel on every backend gives its fine kernels' results 
 // GPU backend replays reports exactly 0 and 1 (nothing runs on the host in between).
 TEST_CASE("progress: every warp of an issued frame, 0 and 1 of a replayed one") {
   const synth::SynthPair pair = test::smallSynthPair(61, "binocular", 0.12, 4);
-  Params params = preset("default");
+  Params params = preset("variational");
   params.minWidth = 20;
   params.warps = 3;
   params.init = Params::Init::None;  // one report per warp, no sweep step

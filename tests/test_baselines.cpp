@@ -174,7 +174,7 @@ TEST_CASE("rectified TGV is accurate inside its field of view on an easy pair") 
   ImageF gt;
   const ImageF left = renderPlane(rig.cam0, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), 3.0, &gt);
   const ImageF right = renderPlane(rig.cam1, rig.R, c1, 3.0, nullptr);
-  Params params = preset("default");
+  Params params = preset("variational");
   params.warps = 20;
   const MethodResult r = runRectifiedTgv(rig, left, right, params, "cpu", 90.0, n);
   ImageF error;

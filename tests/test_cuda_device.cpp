@@ -145,7 +145,7 @@ void checkPrimalDualPaths(int w, int h) {
 TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream") {
   if (noDevice("cuda device API")) return;
   const synth::SynthPair pair = smallPair(21);
-  Params params = preset("default");
+  Params params = preset("variational");
   params.minWidth = 20;
   params.warps = 8;
   const int w = pair.left.width, h = pair.left.height;
@@ -267,7 +267,7 @@ TEST_CASE("CUDA device-pointer API: the initialiser's confidence stays on the de
       CHECK(valid > 0);
       CHECK(differ == 0);
     }
-    cuda::DeviceStereo without(pair.rig, preset("default"), stream);
+    cuda::DeviceStereo without(pair.rig, preset("variational"), stream);
     CHECK(without.compute(images, images + n).confidence == nullptr);
   }
   cudaFree(images);
@@ -282,23 +282,23 @@ TEST_CASE("CUDA device-pointer API refuses what it cannot run") {
     bad.cam1 = bad.cam1.scaled(0.5);
     std::string stereoWhy;
     try {
-      Stereo stereo(bad, preset("default"), "cpu");
+      Stereo stereo(bad, preset("variational"), "cpu");
     } catch (const Error& e) {
       stereoWhy = e.what();
     }
     CHECK(stereoWhy.find("differ in resolution") != std::string::npos);
-    CHECK_THROWS_WITH_AS(cuda::DeviceStereo(bad, preset("default")), stereoWhy.c_str(), Error);
+    CHECK_THROWS_WITH_AS(cuda::DeviceStereo(bad, preset("variational")), stereoWhy.c_str(), Error);
   }
   const std::string why = cuda::probe();
   if (!why.empty()) {
     MESSAGE("SKIPPED cuda device API: " << why);
-    CHECK_THROWS_AS(cuda::DeviceStereo(smallPair(3).rig, preset("default")), Error);
+    CHECK_THROWS_AS(cuda::DeviceStereo(smallPair(3).rig, preset("variational")), Error);
     return;
   }
   const synth::SynthPair pair = smallPair(3);
   test::gpuUsed();
-  CHECK_THROWS_AS(cuda::DeviceStereo(pair.rig, preset("default"), cudaStreamLegacy), Error);
-  cuda::DeviceStereo dev(pair.rig, preset("default"));
+  CHECK_THROWS_AS(cuda::DeviceStereo(pair.rig, preset("variational"), cudaStreamLegacy), Error);
+  cuda::DeviceStereo dev(pair.rig, preset("variational"));
   CHECK_THROWS_AS(dev.compute(nullptr, nullptr), Error);
   // setMask as Stereo's: the size checked, the pipeline kept.
   CHECK_THROWS_WITH_AS(dev.setMask(ImageU8(7, 5, 1)), doctest::Contains("mask is 7x5 but the images are"), Error);

@@ -368,7 +368,7 @@ struct NearScene {
   synth::SynthPair pair;
   FlowImage truth;
   ImageU8 nonOccluded, nearObject;  // nearObject: non-occluded pixels of near0 with a true warp
-  DepthResult plain, initialised;   // preset "default" and "quality"
+  DepthResult plain, initialised;   // preset "variational" and "quality"
 };
 
 // Per-pixel end-point error statistics over a mask.
@@ -422,7 +422,7 @@ const NearScene& nearScene() {
         const synth::Ray ray{p.pose0.centre, p.pose0.rotation * Eigen::Vector3d(r.x(), r.y(), r.z())};
         s.nearObject(x, y) = p.scene.intersect(ray, hit) && p.scene.shapes()[hit.shape].name == "near0";
       }
-    s.plain = Stereo(p.rig, preset("default"), "cpu").compute(p.left, p.right);
+    s.plain = Stereo(p.rig, preset("variational"), "cpu").compute(p.left, p.right);
     s.initialised = Stereo(p.rig, preset("quality"), "cpu").compute(p.left, p.right);
     return s;
   }();
@@ -492,17 +492,17 @@ TEST_CASE("confidence: in [0, 1] where valid, NaN where not, empty without the i
 TEST_CASE("init parameters: validation, parseInit / initName, preset quality") {
   const Params good = preset("quality");
   CHECK(good.init == Params::Init::PlaneSweep);
-  CHECK(preset("default").init == Params::Init::None);
+  CHECK(preset("variational").init == Params::Init::None);
   CHECK(preset("realtime").init == Params::Init::PlaneSweep);
   CHECK(preset("realtime").initLevel == 2);
   CHECK(preset("paper").init == Params::Init::None);
   CHECK(preset("paper").dataTerm == Params::DataTerm::Brightness);
   const auto names = presetNames();
   CHECK(std::find(names.begin(), names.end(), "quality") != names.end());
-  // quality is default plus the initialiser.
+  // quality is variational plus the initialiser.
   Params same = good;
   same.init = Params::Init::None;
-  CHECK(describe(same) == describe(preset("default")));
+  CHECK(describe(same) == describe(preset("variational")));
   CHECK(describe(good).find("init=planesweep") != std::string::npos);
   good.validate();
 
@@ -593,7 +593,7 @@ TEST_CASE("progress rises to 1 with the plane sweep counted as its share of the 
   const synth::SynthPair pair = synth::renderPair(cfg);
   for (const bool initialiser : {false, true}) {
     CAPTURE(initialiser);
-    Params params = preset(initialiser ? "quality" : "default");
+    Params params = preset(initialiser ? "quality" : "variational");
     params.warps = 3;
     Stereo stereo(pair.rig, params, "cpu");
     std::vector<double> reports;

@@ -306,7 +306,7 @@ TEST_CASE("photometry: a T265-like pair still solves (CPU, preset default)") {
   CameraPhotometry m = photometryProfile("t265");
   m.seed = 3;
   applyPhotometry(m, pair);
-  Stereo stereo(pair.rig, preset("default"), "cpu");
+  Stereo stereo(pair.rig, preset("variational"), "cpu");
   const DepthResult r = stereo.compute(pair.left, pair.right);
   long long valid = 0, bad = 0;
   for (size_t i = 0; i < r.valid.size(); ++i) {

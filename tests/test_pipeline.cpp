@@ -51,7 +51,7 @@ void checkFiniteWhereValid(const DepthResult& r) {
 
 TEST_CASE("binocular fisheye pair: accurate over the whole 180 degree image") {
   synth::SynthPair pair = renderSmall("binocular", 0.12, 3);
-  Solved s = solve(pair, preset("default"));
+  Solved s = solve(pair, preset("variational"));
   checkFiniteWhereValid(s.result);
   CHECK(s.metrics.evaluated > 20000);
   // Measured 0.6 % / 0.3 % (2026-11, 224x224, seed 3); the bounds leave room for
@@ -66,16 +66,16 @@ TEST_CASE("binocular fisheye pair: accurate over the whole 180 degree image") {
 
 TEST_CASE("more warps help: 5 warps without the initialiser are worse than the default's 30") {
   synth::SynthPair pair = renderSmall("binocular", 0.25, 5);
-  Params five = preset("default");
+  Params five = preset("variational");
   five.warps = 5;
   Solved fast = solve(pair, five);
-  Solved good = solve(pair, preset("default"));
+  Solved good = solve(pair, preset("variational"));
   CHECK(good.metrics.tau1 < fast.metrics.tau1);
 }
 
 TEST_CASE("forward motion: finite wherever valid, the epipole region masked") {
   synth::SynthPair pair = renderSmall("forward", 0.3, 4);
-  Solved s = solve(pair, preset("default"));
+  Solved s = solve(pair, preset("variational"));
   checkFiniteWhereValid(s.result);
   // The focus of expansion (straight ahead, a little to the side) is masked.
   Vec2<double> epipole;
@@ -93,7 +93,7 @@ TEST_CASE("bad input is a cs::Error with a clear message, never a crash") {
   nan(10, 10) = NAN;
   CHECK_THROWS_WITH_AS(stereo.compute(nan, pair.right), doctest::Contains("NaN"), Error);
   CHECK_THROWS_WITH_AS(createBackend("no-such-backend"), doctest::Contains("not available"), Error);
-  Params bad = preset("default");
+  Params bad = preset("variational");
   bad.warps = 0;
   CHECK_THROWS_WITH_AS(Stereo(pair.rig, bad, "cpu"), doctest::Contains("warps"), Error);
   CHECK_THROWS_WITH_AS(preset("fastest"), doctest::Contains("unknown preset"), Error);

@@ -23,7 +23,7 @@ synth::SynthPair render(const std::string& motion, uint32_t seed) {
 
 // Two solver configurations: without and with the plane-sweep initialiser (confidence).
 std::vector<std::pair<std::string, Params>> configurations() {
-  Params fast = preset("default");
+  Params fast = preset("variational");
   fast.warps = 3;
   Params sweep = preset("quality");
   sweep.warps = 3;

@@ -29,7 +29,8 @@ const std::set<std::string> kSolverOptions = solverOptions();
 std::string solverUsage() {
   std::string s =
       "solver options (run, demo, eval, bench):\n"
-      "  --backend auto|cpu|...  --device INDEX|NAME  --preset realtime|default|quality|paper  --mask PNG (run)\n"
+      "  --backend auto|cpu|...  --device INDEX|NAME  --mask PNG (run)\n"
+      "  --preset realtime|quality|variational|paper (default: realtime)\n"
       "  --min-confidence C (run, demo: points.ply; needs the plane-sweep initialiser)\n";
   const char* group = "";
   for (const ParamInfo& info : paramTable()) {
@@ -66,7 +67,7 @@ std::string backendFromArgs(const Args& args) {
 }
 
 Params paramsFromArgs(const Args& args) {
-  Params p = preset(args.get("preset", "default"));
+  Params p = preset(args.get("preset", "realtime"));
   // In the table's order: --data-term sets its default lambda before an explicit --lambda.
   for (const ParamInfo& info : paramTable()) {
     const std::string shortName = info.cliName(), longName = info.cliLongName();

@@ -27,19 +27,25 @@ void Params::validate() const {
 }
 
 Params preset(const std::string& name) {
-  // The struct's defaults are the "default" preset: N = 30 warps reach the ~100 px
-  // displacements of near objects on 12-30 cm baselines; more warps (50) and a stronger or
-  // weaker data term (lambda 12..30) changed tau>1 by under 0.5 points on the development
-  // pairs, and the accelerated schedule (gamma > 0) lost accuracy with warm-started warps.
+  // The struct's defaults are the "variational" preset, the solver alone: N = 30 warps
+  // reach the ~100 px displacements of near objects on 12-30 cm baselines; more warps (50)
+  // and a stronger or weaker data term (lambda 12..30) changed tau>1 by under 0.5 points on
+  // the development pairs, and the accelerated schedule (gamma > 0) lost accuracy with
+  // warm-started warps.
   Params p;
-  if (name == "default") return p;
+  if (name == "variational") return p;
   if (name == "realtime") {
-    // N = 5 with a plane sweep at level 2 (a quarter of the resolution): measured on the 12
-    // development pairs (CUDA, H100), mean tau>1 of clean binocular / T265-like binocular /
-    // clean and T265-like forward non-occluded pairs 7.7 / 11.4 / 14.0 / 22.8 % against
-    // 24.6 / 26.1 / 49.7 / 51.8 % without the sweep, for ~1.6 ms more per 848x800 frame
-    // (3.1 -> 4.7 ms): coarse-to-fine warping alone reaches only N x 0.2 px per level.
+    // A plane sweep at level 2 (a quarter of the resolution), then N = 5 warps a level. The
+    // largest step per warp is chosen so that a level can still travel about as far in
+    // total as the N = 30 presets do (5 x 1.0 px against 30 x 0.2): the sweep's estimate,
+    // upsampled, is several level px off at edges, and 5 x 0.2 px could not reach it.
+    // Measured on the 12 development pairs (CPU oracle), mean tau>1 of clean binocular /
+    // T265-like binocular / clean and T265-like forward non-occluded pairs: 6.4 / 9.5 /
+    // 12.0 / 20.1 % (du_max 0.2: 7.7 / 11.4 / 14.0 / 22.8; without the sweep 24.6 / 26.1 /
+    // 49.7 / 51.8), for ~1.6 ms more per 848x800 frame than without the sweep. The same
+    // step hurts the N = 30 presets (variational: 8.0 -> 13.4 % on clean binocular pairs).
     p.warps = 5;
+    p.duMax = 1.f;
     p.init = Params::Init::PlaneSweep;
     p.initLevel = 2;
     return p;
@@ -56,10 +62,13 @@ Params preset(const std::string& name) {
   }
   std::string known;
   for (auto& n : presetNames()) known += (known.empty() ? "" : ", ") + n;
+  if (name == "default")  // the name until realtime became the default (issue 15)
+    throw Error("preset 'default' is now called 'variational'; without a preset, realtime is used (known: " + known +
+                ")");
   throw Error("unknown preset '" + name + "' (known: " + known + ")");
 }
 
-std::vector<std::string> presetNames() { return {"realtime", "default", "quality", "paper"}; }
+std::vector<std::string> presetNames() { return {"realtime", "quality", "variational", "paper"}; }
 
 Params Params::withDataTerm(DataTerm term) const {
   Params p = *this;

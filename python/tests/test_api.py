@@ -8,7 +8,7 @@ from conftest import same_bits
 
 def test_module_basics():
     assert issubclass(cs.Error, RuntimeError)
-    assert {"realtime", "default", "quality"} <= set(cs.presets())
+    assert {"realtime", "variational", "quality", "paper"} <= set(cs.presets())
     assert "cpu" in cs.available_backends()
     assert cs.available_backends(usable=True)[-1] == "cpu"
     info = cs.build_info()
@@ -75,7 +75,7 @@ def test_outputs_subset_and_profile(small):
 
 def test_overrides_reach_params(tiny):
     rig = cs.load_calibration(tiny[0])
-    s = cs.Stereo(rig, "default", "cpu", warps=7, lambda_=2.5, du_max=0.3, median=False,
+    s = cs.Stereo(rig, "variational", "cpu", warps=7, lambda_=2.5, du_max=0.3, median=False,
                   **{"init-level": 0, "max_fov": 170})
     p = s.params
     assert p["warps"] == 7 and p["lambda"] == 2.5 and p["du_max"] == 0.3

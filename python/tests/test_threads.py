@@ -13,7 +13,7 @@ def test_two_threads_two_objects_match_sequential(small):
     calib, _, _ = small
     rig = cs.load_calibration(calib)
     pairs = [texture_pair(64, shift=1, seed=s) for s in (10, 11)]
-    presets = ["realtime", "default"]
+    presets = ["realtime", "variational"]
     sequential = [cs.Stereo(rig, p, "cpu").compute(*pair) for p, pair in zip(presets, pairs)]
 
     results = [[None] * 3 for _ in range(2)]
@@ -41,7 +41,7 @@ def test_two_threads_two_objects_match_sequential(small):
 
 def test_compute_releases_the_gil(small):
     calib, left, right = small
-    stereo = cs.Stereo(cs.load_calibration(calib), "default", "cpu")  # ~60 ms a frame
+    stereo = cs.Stereo(cs.load_calibration(calib), "variational", "cpu")  # ~60 ms a frame
     started, done = threading.Event(), threading.Event()
     count = 0
 

@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
     const cs::Rig same = cs::loadKalibr(path);
     if (same.cam0.width != rig.cam0.width) throw cs::Error("loadKalibr and loadCalibration disagree");
 
-    cs::Stereo stereo(rig, cs::preset("default"), "cpu");
+    cs::Stereo stereo(rig, cs::preset("realtime"), "cpu");
     // A textured pair: the right image is the left one moved 2 px (roughly along the
     // epipolar curves near the centre).
     cs::ImageF left(size, size), right(size, size);

@@ -124,10 +124,10 @@ NormaliseParams normaliseParams(const Params& p);
 std::string initName(Params::Init init);
 Params::Init parseInit(const std::string& name);
 
-// Named presets: "realtime" (N = 5 warps after a plane sweep at level 2), "default"
-// (N = 30, no initialiser), "quality"
-// (default + plane-sweep initialisation, for displacements beyond ~30 px), "paper" (the
-// paper's configuration: brightness data term, lambda 20, N = 5).
+// Named presets: "realtime" (the default of the library, the command line and Python: a
+// plane sweep at level 2, then N = 5 warps a level), "quality" (the sweep at level 1, then
+// N = 30), "variational" (the solver alone, N = 30, no initialiser: the struct's defaults)
+// and "paper" (the paper's configuration: brightness data term, lambda 20, N = 5).
 // Throws cs::Error listing the known names for an unknown one.
 Params preset(const std::string& name);
 std::vector<std::string> presetNames();

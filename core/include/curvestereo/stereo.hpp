@@ -1,6 +1,6 @@
 // The public entry point: construct with a rig and parameters, then compute(left, right).
 //
-//   cs::Stereo stereo(cs::loadKalibr("camchain.yaml"), cs::preset("default"));
+//   cs::Stereo stereo(cs::loadKalibr("camchain.yaml"));  // preset("realtime"), backend "auto"
 //   cs::DepthResult r = stereo.compute(left, right);   // r.depth: radial metres
 //   stereo.compute(left, right, r);                     // the next frame, into r's buffers
 //
@@ -46,11 +46,12 @@ struct DepthResult {
 
 class Stereo {
  public:
-  // backend: "auto", "cpu", ... (see availableBackends()). Throws cs::Error on a bad
-  // rig, bad parameters, an unavailable backend, images smaller than 16x16 or larger than
-  // 32768 px per side, cameras of different resolutions, or a frame whose buffers do not
-  // fit in the backend's memory (the message names the frame size and the bytes).
-  Stereo(const Rig& rig, const Params& params, const std::string& backend = "auto");
+  // params: preset("realtime") unless given; backend: "auto", "cpu", ... (see
+  // availableBackends()). Throws cs::Error on a bad rig, bad parameters, an unavailable
+  // backend, images smaller than 16x16 or larger than 32768 px per side, cameras of
+  // different resolutions, or a frame whose buffers do not fit in the backend's memory
+  // (the message names the frame size and the bytes).
+  explicit Stereo(const Rig& rig, const Params& params = preset("realtime"), const std::string& backend = "auto");
   ~Stereo();
   Stereo(const Stereo&) = delete;
   Stereo& operator=(const Stereo&) = delete;
