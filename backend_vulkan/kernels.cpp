@@ -403,7 +403,7 @@ void VulkanBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& 
   }
   if (endsSpare) {  // six independent copies behind one barrier
     VkCommandBuffer cb = recorder();
-    barrier(cb);
+    barrier(cb, Cmd::Transfer);
     for (int i = 0; i < 6; ++i) {
       const Alloc &d = alloc(own[i]), &s = alloc(spare[i]);
       VkBufferCopy region{s.offset, d.offset, own[i].count() * sizeof(float)};
@@ -440,8 +440,11 @@ Addr VulkanBackend::sweepParamBlock(const SweepParams& p) {
 }
 
 void VulkanBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
+  // A work group per kSweepWarpPixels pixels of a row, its invocations over their planes.
+  constexpr int kSweepWarpPixels = 32;  // mirrors kPixels in sweep_warp.comp
   PcSweepWarp pc{addr(volume), addr(image), addr(mask), sweepParamBlock(p), volume.width, volume.height, p.planes};
-  dispatch(float64_ ? kSweepWarpF64 : kSweepWarpF32, pc, volume.width, volume.height);
+  dispatchGroups(float64_ ? kSweepWarpF64 : kSweepWarpF32, pc,
+                 uint32_t((volume.width + kSweepWarpPixels - 1) / kSweepWarpPixels), uint32_t(volume.height));
 }
 
 void VulkanBackend::doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
@@ -463,7 +466,7 @@ void VulkanBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& cos
   const int w = aggregated.width, h = aggregated.height;
   const Buffer spare = scratch(2, w, h, 3 * p.planes);
   PcSweepAggregate pc{addr(aggregated), addr(spare), addr(costs), addr(mask), w, h, p.planes, p.p1, p.p2};
-  dispatchGroups(kSweepAggregate, pc, uint32_t(std::max(w, h)), 4);
+  dispatchGroups(subgroupArithmetic_ ? kSweepAggregateSubgroup : kSweepAggregate, pc, uint32_t(std::max(w, h)), 4);
   const int64_t count = int64_t(w) * h * p.planes;
   PcSweepCombine sum{addr(aggregated), addr(spare), int32_t(count)};
   dispatchGroups(kSweepCombine, sum, uint32_t((count + 255) / 256), 1);

@@ -154,7 +154,7 @@ void VulkanBackend::doUpload(const Buffer& dst, const float* host) {
   growStaging(bytes);
   std::memcpy(static_cast<char*>(staging_.mapped) + offset, host, bytes);
   VkCommandBuffer cb = recorder();
-  barrier(cb);
+  barrier(cb, Cmd::Transfer);
   VkBufferCopy region{offset, a.offset, bytes};
   inst_.fn.vkCmdCopyBuffer(cb, staging_.buffer, arenas_[size_t(a.arena)].buffer, 1, &region);
   stagingUsed_ = offset + bytes;
@@ -173,7 +173,7 @@ void VulkanBackend::doDownload(const Buffer& src, float* host) {
   }
   growStaging(bytes);
   VkCommandBuffer cb = recorder();
-  barrier(cb);
+  barrier(cb, Cmd::Transfer);
   VkBufferCopy region{a.offset, offset, bytes};
   inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(a.arena)].buffer, staging_.buffer, 1, &region);
   auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
@@ -191,7 +191,7 @@ void VulkanBackend::doFill(const Buffer& dst, float value) {
   uint32_t bits;
   std::memcpy(&bits, &value, 4);
   VkCommandBuffer cb = recorder();
-  barrier(cb);
+  barrier(cb, Cmd::Transfer);
   inst_.fn.vkCmdFillBuffer(cb, arenas_[size_t(a.arena)].buffer, a.offset, dst.count() * sizeof(float), bits);
 }
 
@@ -199,7 +199,7 @@ void VulkanBackend::doCopy(const Buffer& dst, const Buffer& src) {
   const Alloc& d = alloc(dst);
   const Alloc& s = alloc(src);
   VkCommandBuffer cb = recorder();
-  barrier(cb);
+  barrier(cb, Cmd::Transfer);
   VkBufferCopy region{s.offset, d.offset, src.count() * sizeof(float)};
   if (d.arena == s.arena && region.srcOffset == region.dstOffset) return;
   inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(s.arena)].buffer, arenas_[size_t(d.arena)].buffer, 1, &region);

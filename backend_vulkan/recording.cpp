@@ -40,6 +40,7 @@ VkCommandBuffer VulkanBackend::recorder() {
     check(inst_.fn.vkResetCommandBuffer(immCmd_, 0), "vkResetCommandBuffer");
   }
   if (imm_ != Immediate::Recording) {
+    lastImm_ = Cmd::None;
     auto bi = vkStruct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
     bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     check(inst_.fn.vkBeginCommandBuffer(immCmd_, &bi), "vkBeginCommandBuffer");
@@ -49,14 +50,36 @@ VkCommandBuffer VulkanBackend::recorder() {
 }
 
 // Every command depends on everything before it (kernels read what the previous ones
-// wrote; transfers and dispatches interleave): one full memory barrier between them.
-void VulkanBackend::barrier(VkCommandBuffer cb) {
+// wrote; transfers and dispatches interleave): a memory barrier between them. The first
+// command of a command buffer waits for everything submitted before (host writes,
+// transfers, dispatches); later ones only for the kind of command before them in the same
+// buffer (the first barrier already ordered everything earlier), compute after compute
+// alone in the usual case.
+void VulkanBackend::barrier(VkCommandBuffer cb, Cmd next) {
+  Cmd& last = cb == frameCmd_ ? lastFrame_ : lastImm_;
   auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
-  mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_HOST_WRITE_BIT;
-  mb.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
-                     VK_ACCESS_TRANSFER_WRITE_BIT;
-  const VkPipelineStageFlags stages = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
-  inst_.fn.vkCmdPipelineBarrier(cb, stages | VK_PIPELINE_STAGE_HOST_BIT, stages, 0, 1, &mb, 0, nullptr, 0, nullptr);
+  VkPipelineStageFlags src = 0, dst = 0;
+  if (last == Cmd::None || last == Cmd::Transfer) {
+    src |= VK_PIPELINE_STAGE_TRANSFER_BIT;
+    mb.srcAccessMask |= VK_ACCESS_TRANSFER_WRITE_BIT;
+  }
+  if (last == Cmd::None || last == Cmd::Dispatch) {
+    src |= VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+    mb.srcAccessMask |= VK_ACCESS_SHADER_WRITE_BIT;
+  }
+  if (last == Cmd::None) {
+    src |= VK_PIPELINE_STAGE_HOST_BIT;
+    mb.srcAccessMask |= VK_ACCESS_HOST_WRITE_BIT;
+  }
+  if (next == Cmd::Dispatch) {
+    dst = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+    mb.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+  } else {
+    dst = VK_PIPELINE_STAGE_TRANSFER_BIT;
+    mb.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  }
+  inst_.fn.vkCmdPipelineBarrier(cb, src, dst, 0, 1, &mb, 0, nullptr, 0, nullptr);
+  last = next;
 }
 
 void VulkanBackend::waitFence(VkFence fence, const char* what) {
@@ -119,6 +142,7 @@ void VulkanBackend::beginFrame() {
   check(inst_.fn.vkResetCommandBuffer(frameCmd_, 0), "vkResetCommandBuffer");
   auto bi = vkStruct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
   check(inst_.fn.vkBeginCommandBuffer(frameCmd_, &bi), "vkBeginCommandBuffer");
+  lastFrame_ = Cmd::None;
   frame_ = Frame::Recording;
 }
 

@@ -119,7 +119,9 @@ class VulkanBackend final : public Backend {
   VkPipeline pipeline(Shader s);
 
   VkCommandBuffer recorder();
-  void barrier(VkCommandBuffer cb);
+  // What a command buffer holds last, for the barrier before the next command.
+  enum class Cmd { None, Dispatch, Transfer };
+  void barrier(VkCommandBuffer cb, Cmd next);
   void flush();
   void waitFence(VkFence fence, const char* what);
   void abortFrameRecording();
@@ -139,7 +141,8 @@ class VulkanBackend final : public Backend {
   VkPhysicalDeviceProperties props_{};
   VkPhysicalDeviceMemoryProperties memProps_{};
   bool float64_ = false;
-  bool widePrimalDual_ = false;  // the device holds primal_dual.comp's wide tile
+  bool widePrimalDual_ = false;      // the device holds primal_dual.comp's wide tile
+  bool subgroupArithmetic_ = false;  // subgroup arithmetic in compute shaders
   VkDevice dev_ = VK_NULL_HANDLE;
   VkQueue queue_ = VK_NULL_HANDLE;
   uint32_t queueFamily_ = 0;
@@ -175,6 +178,7 @@ class VulkanBackend final : public Backend {
   enum class Immediate { Idle, Recording, InFlight };
   // Hung (a fence timed out) outranks Lost (VK_ERROR_DEVICE_LOST): work may still run.
   enum class Health { Ok, Lost, Hung };
+  Cmd lastImm_ = Cmd::None, lastFrame_ = Cmd::None;  // the last command of immCmd_, frameCmd_
   Frame frame_ = Frame::Empty;
   Immediate imm_ = Immediate::Idle;
   Health health_ = Health::Ok;
@@ -200,7 +204,7 @@ void VulkanBackend::dispatchGroups(Shader s, const PC& pc, uint32_t groupsX, uin
   VkCommandBuffer cb = recorder();
   uint8_t bytes[kPushBytes] = {};
   std::memcpy(bytes, &pc, sizeof(PC));
-  barrier(cb);
+  barrier(cb, Cmd::Dispatch);
   inst_.fn.vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, p);
   inst_.fn.vkCmdPushConstants(cb, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, kPushBytes, bytes);
   inst_.fn.vkCmdDispatch(cb, groupsX, groupsY, 1);

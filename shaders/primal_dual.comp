@@ -146,15 +146,14 @@ void primalPixel(ivec2 l, inout Cell c, vec4 step) {
   c.vBar = vec2(v0 + step.z * (v0 - vOld.x), v1 + step.z * (v1 - vOld.y));
 }
 
-vec2 load2(FBuf b, int i) { return vec2(b.v[2 * i], b.v[2 * i + 1]); }
-vec4 load4(FBuf b, int i) { return vec4(b.v[4 * i], b.v[4 * i + 1], b.v[4 * i + 2], b.v[4 * i + 3]); }
-void store2(FBuf b, int i, vec2 x) {
-  b.v[2 * i] = x.x;
-  b.v[2 * i + 1] = x.y;
-}
-void store4(FBuf b, int i, vec4 x) {
-  for (int k = 0; k < 4; ++k) b.v[4 * i + k] = x[k];
-}
+// The 2- and 4-channel buffers' pixels as one vector access each (buffers start 16-byte
+// aligned: memory.cpp).
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer V2Buf { vec2 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer V4Buf { vec4 v[]; };
+vec2 load2(FBuf b, int i) { return V2Buf(b).v[i]; }
+vec4 load4(FBuf b, int i) { return V4Buf(b).v[i]; }
+void store2(FBuf b, int i, vec2 x) { V2Buf(b).v[i] = x; }
+void store4(FBuf b, int i, vec4 x) { V4Buf(b).v[i] = x; }
 
 bool maskedAt(int i, int j) {
   return i >= 0 && j >= 0 && i < pc.level.w && j < pc.level.h && pc.level.mask.v[j * pc.level.w + i] != 0.0;

@@ -14,7 +14,14 @@
 // (lines, 1)), its 256 invocations over the planes (plane k on invocation k % 256, so
 // neighbouring invocations touch neighbouring floats of the interleaved buffers), the
 // previous step's path costs in shared memory and m from a shared-memory reduction.
+// With -DCS_SUBGROUP (devices with subgroup arithmetic in compute shaders) m is each
+// subgroup's subgroupMin, then the minimum of those few: one barrier a step instead of
+// one per halving of the tree.
 #include "common.glsl"
+#ifdef CS_SUBGROUP
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#endif
 
 // A cost above 1 (anticorrelated windows) says no more than "no match" (the oracle's
 // kCostCap).
@@ -48,11 +55,13 @@ void main() {
   const int length = alongRows ? pc.width : pc.height;
   if (line >= lines) return;  // the whole group: barriers stay in uniform control flow
 
+#ifndef CS_SUBGROUP
   // The reduction's first stride: half the smallest power of two covering the invocations
   // that hold a plane (those beyond hold +inf), so few planes take few rounds.
   const int holding = min(pc.planes, kGroupSize);
   int firstStride = 1;
   while (2 * firstStride < holding) firstStride *= 2;
+#endif
 
   bool havePrevious = false;  // uniform: every invocation walks the same pixels
   float previousMin = 0.0;
@@ -85,6 +94,13 @@ void main() {
     }
     // m = the minimum of this step's path costs (order-free: min is exact). The first
     // barrier also publishes path[cur] for the next step's neighbours k -+ 1.
+#ifdef CS_SUBGROUP
+    const float subgroupLowest = subgroupMin(localMin);
+    if (subgroupElect()) lowest[cur][gl_SubgroupID] = subgroupLowest;
+    barrier();
+    previousMin = lowest[cur][0];
+    for (uint s = 1u; s < gl_NumSubgroups; ++s) previousMin = min(previousMin, lowest[cur][s]);
+#else
     lowest[cur][lid] = localMin;
     barrier();
     for (int stride = firstStride; stride > 0; stride /= 2) {
@@ -92,6 +108,7 @@ void main() {
       barrier();
     }
     previousMin = lowest[cur][0];
+#endif
     havePrevious = true;
     ++j;
   }

@@ -298,7 +298,7 @@ namespace {
 // state and the data term, a disc mask with a hole, the oracle's preconditioner.
 struct PdInputs {
   int w, h;
-  std::map<std::string, std::vector<float>> host;  // by buffer name
+  std::map<std::string, std::vector<float> > host;  // by buffer name
 };
 
 const char* const kPdState[] = {"u", "uBar", "v", "vBar", "p", "q"};
@@ -392,6 +392,28 @@ TEST_CASE("vulkan: the fused primal-dual matches the oracle for every split into
   }
   if (vulkanValidationLayerActive())
     CHECK_MESSAGE(vulkanValidationMessageCount() == 0, "last: " << vulkanValidationLastMessage());
+}
+
+// sweep_aggregate.comp takes each step's minimum with subgroup arithmetic where the device
+// has it, else with a shared-memory tree: min is exact, so both give the same bits.
+TEST_CASE("vulkan: the sweep aggregation with and without subgroup arithmetic gives the same bits") {
+  auto withSubgroups = vulkanOrSkip();
+  if (!withSubgroups) return;
+  setenv("CURVESTEREO_VULKAN_SUBGROUPS", "0", 1);
+  auto without = createBackend("vulkan");
+  unsetenv("CURVESTEREO_VULKAN_SUBGROUPS");
+  for (const auto& c : golden::kernelCases()) {
+    if (c.kernel != "sweepAggregate") continue;
+    const auto a = c.run(*withSubgroups);
+    const auto b = c.run(*without);
+    REQUIRE(a.size() == b.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+      INFO(a[i].name);
+      REQUIRE(a[i].planes.data.size() == b[i].planes.data.size());
+      CHECK(std::memcmp(a[i].planes.data.data(), b[i].planes.data.data(), a[i].planes.data.size() * sizeof(float)) ==
+            0);
+    }
+  }
 }
 
 TEST_CASE("vulkan: a whole solve, replayed and profiled, matches the oracle with zero validation messages") {
