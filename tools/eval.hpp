@@ -1,0 +1,56 @@
+// The pieces of `curvestereo eval` shared by its files: a pair with ground truth and a
+// result row (cmd_eval.cpp: the command, its methods and pairs), the CSV and Markdown
+// tables (eval_report.cpp), the per-pair picture sheet (eval_sheet.cpp) and the paper's
+// warps / du_max parameter study (eval_study.cpp).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "curvestereo/image.hpp"
+#include "curvestereo/metrics.hpp"
+#include "curvestereo/params.hpp"
+#include "curvestereo/rig.hpp"
+
+namespace cs::cli::eval {
+
+// One method on one pair.
+struct Row {
+  std::string pair, method;
+  Metrics m;
+  double ms;
+  double tau1Est = 0, tau3Est = 0;  // over pixels with an estimate only (the paper's planesweep-valid convention)
+};
+
+struct Pair {
+  std::string dir, name;
+  Rig rig;
+  ImageF left, right, depthLeft, depthRight;
+};
+
+// A pair folder: camchain.yaml, left.png, right.png, depth_left.exr [, depth_right.exr].
+Pair loadPair(const std::string& dir);
+
+// "a,b,c" -> {a, b, c} (empty items dropped); numberList throws naming --option.
+std::vector<std::string> splitList(const std::string& s);
+std::vector<double> numberList(const std::string& s, const char* option);
+std::string fovName(double fov);
+
+void writeCsv(const std::string& path, const std::vector<Row>& rows);
+std::string markdown(const std::vector<Row>& rows, const Params& params, const Args& args);
+
+// One method's column of a pair's sheet.
+struct SheetEntry {
+  std::string method;
+  const ImageF* depth;
+  const ImageF* error;
+  double tau1, tau3;
+};
+// Writes DIR/<pair>_sheet.png (input and ground truth, then each method's depth over its
+// error) and each method's error and depth pictures.
+void writeSheet(const std::string& dir, const Pair& p, const std::vector<SheetEntry>& entries);
+
+// --sweep warps=A..B | dumax=A..B: the paper's two parameter studies as CSV and a plot.
+int runStudy(const Args& args, const Params& base, const std::string& backend);
+
+}  // namespace cs::cli::eval
