@@ -326,15 +326,16 @@ void VulkanBackend::doWarpIterations(const PrimalDualBuffers& pd, const DataTerm
 
 namespace {
 
-// Work groups the device runs at once, about (an H100's 132 SMs hold three of the wide
-// tile's): a level whose five-iteration tiles fit takes five iterations a dispatch, since
-// there the dispatches' latency is what costs (backend_cuda/primal_dual.cu measured it);
-// larger ones two or three, where the halo's redundant work would cost more.
+// Work groups the device runs at once, about: a level whose five-iteration tiles fit
+// takes five iterations a dispatch, since there the dispatches' latency is what costs
+// (backend_cuda/primal_dual.cu measured it); larger ones two or three, where the halo's
+// redundant work would cost more. On the H100 with the square tile (T265 pair, N = 30),
+// 400 gave 9.12 ms of primal-dual a frame, 200 9.28 and 0 (never five) 10.16.
 constexpr uint32_t kConcurrentGroups = 400;
 
 // Work groups of primal_dual.comp over a w x h level at `iterations` a dispatch.
-std::pair<uint32_t, uint32_t> pdGroups(int w, int h, int cellsW, int iterations) {
-  const int tileW = cellsW + 1 - 2 * iterations, tileH = 16 + 1 - 2 * iterations;
+std::pair<uint32_t, uint32_t> pdGroups(int w, int h, int cellsW, int cellsH, int iterations) {
+  const int tileW = cellsW + 1 - 2 * iterations, tileH = cellsH + 1 - 2 * iterations;
   return {uint32_t((w + tileW - 1) / tileW), uint32_t((h + tileH - 1) / tileH)};
 }
 
@@ -375,10 +376,14 @@ void VulkanBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& 
   level.lambda = prm.lambda, level.alpha0 = prm.alpha0, level.alpha1 = prm.alpha1;
   const Addr block = paramBlock(&level, sizeof(level));
 
-  const int cellsW = widePrimalDual_ ? 32 : 16;
-  const std::pair<uint32_t, uint32_t> deep = pdGroups(w, h, cellsW, kMaxPdIterations);
-  const bool fits = widePrimalDual_ && deep.first * deep.second <= kConcurrentGroups;
-  const std::vector<int> plan = pdPlan(n, fits ? kMaxPdIterations : 2, widePrimalDual_ ? kMaxPdIterations : 3);
+  // The square tile (32 x 32 cells) has less halo per written pixel than the wide one
+  // (32 x 16: 58 % of its cells written at three iterations against 71 %): on the H100,
+  // 9.12 against 12.35 ms of primal-dual a frame at N = 30 (T265 pair).
+  const bool narrow = pdTile_ == PdTile::Narrow;
+  const int cellsW = narrow ? 16 : 32, cellsH = pdTile_ == PdTile::Square ? 32 : 16;
+  const std::pair<uint32_t, uint32_t> deep = pdGroups(w, h, cellsW, cellsH, kMaxPdIterations);
+  const bool fits = !narrow && deep.first * deep.second <= kConcurrentGroups;
+  const std::vector<int> plan = pdPlan(n, fits ? kMaxPdIterations : 2, narrow ? 3 : kMaxPdIterations);
   // Masked-out pixels never change: the first dispatch writes them only where the result
   // needs them (into the spare set when the result ends there, the bars into set 0 when
   // they are read from u, v).
@@ -397,8 +402,9 @@ void VulkanBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& 
       pc.step[i][0] = st.tauScale, pc.step[i][1] = st.sigmaScale, pc.step[i][2] = st.theta;
       pc.step[i][3] = sigmaQ * prm.alpha0;
     }
-    const std::pair<uint32_t, uint32_t> groups = pdGroups(w, h, cellsW, plan[d]);
-    dispatchGroups(widePrimalDual_ ? kPrimalDual : kPrimalDualNarrow, pc, groups.first, groups.second);
+    const std::pair<uint32_t, uint32_t> groups = pdGroups(w, h, cellsW, cellsH, plan[d]);
+    const Shader shader = pdTile_ == PdTile::Square ? kPrimalDualSquare : narrow ? kPrimalDualNarrow : kPrimalDual;
+    dispatchGroups(shader, pc, groups.first, groups.second);
     k += plan[d];
   }
   if (endsSpare) {  // six independent copies behind one barrier

@@ -35,14 +35,18 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
   queueFamily_ = c->queueFamily;
   const char* forceFloat = std::getenv("CURVESTEREO_VULKAN_FLOAT_MODELS");
   float64_ = c->float64 && !(forceFloat && *forceFloat && std::string(forceFloat) != "0");
-  // primal_dual.comp's wide tile: 32 x 16 invocations and kWidePrimalDualShared bytes of
-  // shared memory (CURVESTEREO_VULKAN_SHARED_MEMORY lowers the device's limit, as on a
-  // device with less, for tests of the narrow tile).
+  // primal_dual.comp's tile: the largest of 32 x 32, 32 x 16 and 16 x 16 cells whose
+  // invocations and kPrimalDualCellBytes a cell of shared memory the device holds
+  // (CURVESTEREO_VULKAN_SHARED_MEMORY lowers the device's limit, as on a device with less,
+  // for tests of the smaller tiles).
   uint32_t shared = props_.limits.maxComputeSharedMemorySize;
   if (const char* m = std::getenv("CURVESTEREO_VULKAN_SHARED_MEMORY"))
     shared = std::min<uint32_t>(shared, uint32_t(std::max(0L, std::atol(m))));
-  widePrimalDual_ = shared >= kWidePrimalDualShared && props_.limits.maxComputeWorkGroupInvocations >= 512 &&
-                    props_.limits.maxComputeWorkGroupSize[0] >= 32 && props_.limits.maxComputeWorkGroupSize[1] >= 16;
+  auto holds = [&](uint32_t w, uint32_t h) {
+    return shared >= w * h * kPrimalDualCellBytes && props_.limits.maxComputeWorkGroupInvocations >= w * h &&
+           props_.limits.maxComputeWorkGroupSize[0] >= w && props_.limits.maxComputeWorkGroupSize[1] >= h;
+  };
+  pdTile_ = holds(32, 32) ? PdTile::Square : holds(32, 16) ? PdTile::Wide : PdTile::Narrow;
   if (const char* t = std::getenv("CURVESTEREO_VULKAN_TIMEOUT_S"))
     timeoutNs_ = uint64_t(std::max(1.0, std::atof(t)) * 1e9);
   inst_.fn.vkGetPhysicalDeviceMemoryProperties(phys_, &memProps_);

@@ -22,8 +22,10 @@ namespace cs::vk {
 
 constexpr uint32_t kPushBytes = 128;
 constexpr uint32_t kGroup = 16;
-// The shared memory of primal_dual.comp's wide tile: 32 x 16 cells of 48 bytes.
-constexpr uint32_t kWidePrimalDualShared = 32 * 16 * 48;
+// primal_dual.comp's tiles, the largest the device holds: 32 x 32, 32 x 16 or 16 x 16
+// cells of 48 bytes of shared memory each.
+enum class PdTile { Narrow, Wide, Square };
+constexpr uint32_t kPrimalDualCellBytes = 48;
 
 using Addr = uint64_t;
 
@@ -141,7 +143,7 @@ class VulkanBackend final : public Backend {
   VkPhysicalDeviceProperties props_{};
   VkPhysicalDeviceMemoryProperties memProps_{};
   bool float64_ = false;
-  bool widePrimalDual_ = false;      // the device holds primal_dual.comp's wide tile
+  PdTile pdTile_ = PdTile::Narrow;   // the largest tile of primal_dual.comp the device holds
   bool subgroupArithmetic_ = false;  // subgroup arithmetic in compute shaders
   VkDevice dev_ = VK_NULL_HANDLE;
   VkQueue queue_ = VK_NULL_HANDLE;

@@ -15,14 +15,19 @@
 #define CS_OWN_WORK_GROUP
 #include "common.glsl"
 
-// The wide tile (24 KiB of shared memory, 512 invocations) where the device has them,
-// else (-DCS_NARROW_TILE) 16 x 16 cells in 12 KiB, within every device's 16 KiB.
+// The square tile (-DCS_SQUARE_TILE: 32 x 32 cells, 48 KiB of shared memory, 1024
+// invocations) or the wide one (32 x 16, 24 KiB, 512) where the device has them, else
+// (-DCS_NARROW_TILE) 16 x 16 cells in 12 KiB, within every device's 16 KiB.
 #ifdef CS_NARROW_TILE
 const int kCellsW = 16;
 #else
 const int kCellsW = 32;
 #endif
+#ifdef CS_SQUARE_TILE
+const int kCellsH = 32;  // 32 x 32 cells, 48 KiB: less halo per written pixel
+#else
 const int kCellsH = 16;
+#endif
 layout(local_size_x = kCellsW, local_size_y = kCellsH, local_size_z = 1) in;
 
 const int kMaxIterations = 5;  // mirrors kMaxPdIterations in backend_vulkan/kernels.cpp
