@@ -1,6 +1,7 @@
 // NumPy <-> library images, and parsing of the GPU array protocols.
 #include <algorithm>
 #include <cstring>
+#include <type_traits>
 
 #include "binding.hpp"
 #include "dlpack.hpp"
@@ -45,26 +46,118 @@ PixelType pixelTypeOf(char kind, int bits, const char* which) {
               ": expected uint8, uint16 or float32 (convert with .astype(numpy.float32))");
 }
 
-ImageF imageFromArray(pb::handle obj, const char* which) {
-  const pb::array a = asArray(obj, which);
+HostImage hostImage(pb::handle obj, const char* which) {
+  HostImage h;
+  h.array = asArray(obj, which);
+  const pb::array& a = h.array;
   const int ndim = int(a.ndim());
   const int channels = ndim == 3 ? int(a.shape(2)) : 1;
   if (!(ndim == 2 || (ndim == 3 && (channels == 1 || channels == 3 || channels == 4))))
     throw Error(std::string(which) + " has shape " + shapeText(a) +
                 ": expected H x W (gray) or H x W x 3 (colour, R G B)");
   const pb::dtype dt = a.dtype();
-  const PixelType type = pixelTypeOf(dt.kind(), int(dt.itemsize()) * 8, which);
-  const long long h = a.shape(0), w = a.shape(1);
-  if (h > kMaxArraySide || w > kMaxArraySide)
+  h.type = pixelTypeOf(dt.kind(), int(dt.itemsize()) * 8, which);
+  if (a.shape(0) > kMaxArraySide || a.shape(1) > kMaxArraySide)
     throw Error(std::string(which) + " has shape " + shapeText(a) + ": larger than the library handles");
-  ImageF img{int(w), int(h)};
-  const StridedPixels src{static_cast<const unsigned char*>(a.data()), a.strides(0), a.strides(1),
-                          ndim == 3 ? a.strides(2) : 0, channels};
-  // Plain loops over the caller's strides (a view, a crop, a flipped BGR image): the
-  // conversion costs far less than one frame, and no intermediate copy is made.
-  for (long long y = 0; y < h; ++y)
-    for (long long x = 0; x < w; ++x) img.data[size_t(y * w + x)] = grayAt(src, int(type), y, x);
+  h.width = int(a.shape(1));
+  h.height = int(a.shape(0));
+  h.pixels = {static_cast<const unsigned char*>(a.data()), a.strides(0), a.strides(1), ndim == 3 ? a.strides(2) : 0,
+              channels};
+  return h;
+}
+
+namespace {
+
+// sampleAt for every 8- and 16-bit value, so a pixel costs a load instead of a division in
+// double (the same function fills them: the same bits).
+const float* sampleTable(PixelType type) {
+  static const std::vector<float> u8 = [] {
+    std::vector<float> t(256);
+    for (unsigned v = 0; v < 256; ++v) {
+      const unsigned char b = static_cast<unsigned char>(v);
+      t[v] = sampleAt(&b, 0);
+    }
+    return t;
+  }();
+  if (type == PixelType::U8) return u8.data();
+  static const std::vector<float> u16 = [] {
+    std::vector<float> t(65536);
+    for (unsigned v = 0; v < 65536; ++v) {
+      const unsigned short s = static_cast<unsigned short>(v);
+      t[v] = sampleAt(reinterpret_cast<const unsigned char*>(&s), 1);
+    }
+    return t;
+  }();
+  return u16.data();
+}
+
+// One row of gray pixels: a table look-up (integers) or the float itself.
+template <PixelType T>
+inline float sampleOf(const unsigned char* p, const float* table) {
+  if constexpr (T == PixelType::U8) {
+    return table[*p];
+  } else if constexpr (T == PixelType::U16) {
+    unsigned short v;
+    std::memcpy(&v, p, sizeof v);
+    return table[v];
+  } else {
+    float v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+  }
+}
+
+template <PixelType T>
+void convertRows(const StridedPixels& s, int width, int height, float* dst) {
+  const float* table = T == PixelType::F32 ? nullptr : sampleTable(T);
+  constexpr long long item = T == PixelType::U8 ? 1 : T == PixelType::U16 ? 2 : 4;
+  for (long long y = 0; y < height; ++y) {
+    const unsigned char* row = s.data + y * s.rowStride;
+    float* out = dst + y * width;
+    if (s.channels < 3) {
+      if (T == PixelType::F32 && s.colStride == item) {
+        std::memcpy(out, row, size_t(width) * sizeof(float));  // packed float gray rows
+      } else {
+        for (long long x = 0; x < width; ++x) out[x] = sampleOf<T>(row + x * s.colStride, table);
+      }
+      continue;
+    }
+    // Colour: grayAt's luma, with the samples from the tables.
+    for (long long x = 0; x < width; ++x) {
+      const unsigned char* p = row + x * s.colStride;
+      const double luma = 0.299 * sampleOf<T>(p, table) + 0.587 * sampleOf<T>(p + s.chanStride, table) +
+                          0.114 * sampleOf<T>(p + 2 * s.chanStride, table);
+      out[x] = !(luma - luma == 0.0) ? float(luma) : float(luma < 1.0 ? luma : 1.0);
+    }
+  }
+}
+
+}  // namespace
+
+void convertGray(const HostImage& h, float* dst) {
+  // Over the caller's strides (a view, a crop, a flipped BGR image), no intermediate copy.
+  switch (h.type) {
+    case PixelType::U8:
+      return convertRows<PixelType::U8>(h.pixels, h.width, h.height, dst);
+    case PixelType::U16:
+      return convertRows<PixelType::U16>(h.pixels, h.width, h.height, dst);
+    case PixelType::F32:
+      return convertRows<PixelType::F32>(h.pixels, h.width, h.height, dst);
+  }
+}
+
+ImageF imageFromArray(pb::handle obj, const char* which) {
+  ImageF img;
+  imageFromArray(obj, which, img);
   return img;
+}
+
+void imageFromArray(pb::handle obj, const char* which, ImageF& into) {
+  const HostImage h = hostImage(obj, which);
+  into.width = h.width;
+  into.height = h.height;
+  into.data.resize(size_t(h.width) * size_t(h.height));  // keeps the storage of the last frame's
+  convertGray(h, into.data.data());
 }
 
 ImageU8 maskFromArray(pb::handle obj, const char* which) {
@@ -82,63 +175,133 @@ ImageU8 maskFromArray(pb::handle obj, const char* which) {
 
 // ---------------------------------------------------------------- results
 
-namespace {
+// The storage of one result array: a capsule owns it as the array's base. Dropped, it goes
+// back to the pool it came from (if that still exists and has room), else it is freed.
+template <class T>
+struct PooledStorage {
+  std::vector<T> data;
+  std::weak_ptr<ResultPool> home;
+};
 
 template <class T>
-pb::array ownedArray(std::vector<T>&& data, const pb::dtype& dtype, std::vector<pb::ssize_t> shape) {
-  auto* heap = new std::vector<T>(std::move(data));
-  pb::capsule owner(heap, [](void* p) { delete static_cast<std::vector<T>*>(p); });
-  return pb::array(dtype, std::move(shape), {}, heap->data(), owner);
+std::vector<T> ResultPool::take(size_t n) {
+  std::vector<T> v;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto& shelf = shelfOf<T>();
+    if (!shelf.empty()) {
+      v = std::move(shelf.back());
+      shelf.pop_back();
+    }
+  }
+  v.resize(n);  // no-op for a recycled buffer of this size (the usual case): no zero fill, no page faults
+  return v;
+}
+
+template <class T>
+void ResultPool::giveBack(std::vector<T>&& v) {
+  if (v.empty()) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto& shelf = shelfOf<T>();
+  if (shelf.size() < kShelfSize) shelf.push_back(std::move(v));
+}
+
+template <class T>
+std::vector<std::vector<T>>& ResultPool::shelfOf() {
+  if constexpr (std::is_same_v<T, float>)
+    return floats_;
+  else if constexpr (std::is_same_v<T, unsigned char>)
+    return bytes_;
+  else if constexpr (std::is_same_v<T, Vec2f>)
+    return flows_;
+  else
+    return points_;
+}
+
+void ResultPool::lend(DepthResult& r) {
+  // Only the outputs the last frame had: an output not computed would free what it is lent.
+  const size_t n = lastSize_;
+  if (n == 0) return;
+  if (last_.valid) r.valid.data = take<unsigned char>(n);
+  if (last_.radial) r.depth.radial.data = take<float>(n);
+  if (last_.z) r.depth.z.data = take<float>(n);
+  if (last_.points) r.depth.points.data = take<Point3f>(n);
+  if (last_.disparity) r.disparity.data = take<float>(n);
+  if (last_.warp) r.warp.data = take<Vec2f>(n);
+  if (last_.confidence) r.confidence.data = take<float>(n);
+}
+
+namespace {
+
+// An array over pooled storage (pool may be null: plain owned storage). `Scalar` is the
+// element type NumPy sees; `extra` the trailing axis of multi-channel pixels (0: none).
+template <class T, class Scalar>
+pb::array pooledArray(std::vector<T>&& data, const std::shared_ptr<ResultPool>& pool, pb::ssize_t h, pb::ssize_t w,
+                      pb::ssize_t extra) {
+  auto* owned = new PooledStorage<T>{std::move(data), pool};
+  pb::capsule base(owned, [](void* p) {
+    auto* s = static_cast<PooledStorage<T>*>(p);
+    if (auto home = s->home.lock()) home->giveBack(std::move(s->data));
+    delete s;
+  });
+  std::vector<pb::ssize_t> shape{h, w};
+  if (extra) shape.push_back(extra);
+  return pb::array(pb::dtype::of<Scalar>(), std::move(shape), {}, reinterpret_cast<const Scalar*>(owned->data.data()),
+                   base);
 }
 
 pb::object orNone(pb::array&& a, bool present) { return present ? pb::object(std::move(a)) : pb::none(); }
 
 }  // namespace
 
-pb::array floatArray(ImageF&& img) {
-  const pb::ssize_t h = img.height, w = img.width;
-  return ownedArray(std::move(img.data), pb::dtype::of<float>(), {h, w});
+static_assert(sizeof(Vec2f) == 2 * sizeof(float), "Vec2f is two floats");
+static_assert(sizeof(Point3f) == 3 * sizeof(float), "Point3f is three floats");
+
+pb::array floatArray(ImageF&& img, const std::shared_ptr<ResultPool>& pool) {
+  return pooledArray<float, float>(std::move(img.data), pool, img.height, img.width, 0);
 }
 
-pb::array boolArray(ImageU8&& img) {
+pb::array boolArray(ImageU8&& img, const std::shared_ptr<ResultPool>& pool) {
   // The library's 0 / 1 bytes are NumPy bools as they are.
-  const pb::ssize_t h = img.height, w = img.width;
-  return ownedArray(std::move(img.data), pb::dtype::of<bool>(), {h, w});
+  return pooledArray<unsigned char, bool>(std::move(img.data), pool, img.height, img.width, 0);
 }
 
-pb::array flowArray(FlowImage&& img) {
-  static_assert(sizeof(Vec2f) == 2 * sizeof(float), "Vec2f is two floats");
-  const pb::ssize_t h = img.height, w = img.width;
-  auto* heap = new std::vector<Vec2f>(std::move(img.data));
-  pb::capsule owner(heap, [](void* p) { delete static_cast<std::vector<Vec2f>*>(p); });
-  return pb::array(pb::dtype::of<float>(), {h, w, pb::ssize_t(2)}, {}, reinterpret_cast<const float*>(heap->data()),
-                   owner);
+pb::array flowArray(FlowImage&& img, const std::shared_ptr<ResultPool>& pool) {
+  return pooledArray<Vec2f, float>(std::move(img.data), pool, img.height, img.width, 2);
 }
 
-pb::array pointArray(Image<Point3f>&& img) {
-  static_assert(sizeof(Point3f) == 3 * sizeof(float), "Point3f is three floats");
-  const pb::ssize_t h = img.height, w = img.width;
-  auto* heap = new std::vector<Point3f>(std::move(img.data));
-  pb::capsule owner(heap, [](void* p) { delete static_cast<std::vector<Point3f>*>(p); });
-  return pb::array(pb::dtype::of<float>(), {h, w, pb::ssize_t(3)}, {}, reinterpret_cast<const float*>(heap->data()),
-                   owner);
+pb::array pointArray(Image<Point3f>&& img, const std::shared_ptr<ResultPool>& pool) {
+  return pooledArray<Point3f, float>(std::move(img.data), pool, img.height, img.width, 3);
 }
 
-Result resultFromDepth(DepthResult&& r) {
+Result resultFromDepth(DepthResult&& r, const std::shared_ptr<ResultPool>& pool) {
   Result out;
-  const bool hasZ = !r.depth.z.empty(), hasPoints = !r.depth.points.empty();
-  const bool hasDisparity = !r.disparity.empty(), hasWarp = !r.warp.empty(), hasConf = !r.confidence.empty();
-  out.depth = floatArray(std::move(r.depth.radial));
-  out.valid = boolArray(std::move(r.valid));
-  out.z = orNone(floatArray(std::move(r.depth.z)), hasZ);
-  out.points = orNone(pointArray(std::move(r.depth.points)), hasPoints);
-  out.disparity = orNone(floatArray(std::move(r.disparity)), hasDisparity);
-  out.warp = orNone(flowArray(std::move(r.warp)), hasWarp);
-  out.confidence = orNone(floatArray(std::move(r.confidence)), hasConf);
+  ResultPool::Present has;
+  has.valid = !r.valid.empty();
+  has.radial = !r.depth.radial.empty();
+  has.z = !r.depth.z.empty();
+  has.points = !r.depth.points.empty();
+  has.disparity = !r.disparity.empty();
+  has.warp = !r.warp.empty();
+  has.confidence = !r.confidence.empty();
+  if (pool) pool->remember(has, r.depth.radial.size());
+  // The images' storage moves into the arrays: no copy.
+  out.depth = floatArray(std::move(r.depth.radial), pool);
+  out.valid = boolArray(std::move(r.valid), pool);
+  out.z = orNone(floatArray(std::move(r.depth.z), pool), has.z);
+  out.points = orNone(pointArray(std::move(r.depth.points), pool), has.points);
+  out.disparity = orNone(floatArray(std::move(r.disparity), pool), has.disparity);
+  out.warp = orNone(flowArray(std::move(r.warp), pool), has.warp);
+  out.confidence = orNone(floatArray(std::move(r.confidence), pool), has.confidence);
   for (const StageTime& s : r.stages) out.stages[pb::str(s.name)] = s.ms;
   out.totalMs = r.totalMs;
   return out;
 }
+
+template std::vector<float> ResultPool::take<float>(size_t);
+template std::vector<unsigned char> ResultPool::take<unsigned char>(size_t);
+template std::vector<Vec2f> ResultPool::take<Vec2f>(size_t);
+template std::vector<Point3f> ResultPool::take<Point3f>(size_t);
 
 // ---------------------------------------------------------------- device arrays
 

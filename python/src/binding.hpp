@@ -6,12 +6,14 @@
 
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "curvestereo/image.hpp"
 #include "curvestereo/params.hpp"
 #include "curvestereo/stereo.hpp"
+#include "pixels.hpp"
 
 namespace cs::py {
 
@@ -19,24 +21,78 @@ namespace pb = pybind11;
 
 // ---------------------------------------------------------------- host arrays
 
-// A 2-D uint8 / uint16 / float32 array (gray) or H x W x 1|3|4 (colour, alpha dropped), any
-// strides, as the float gray image the library takes. Integer pixels are scaled and colour
-// is converted exactly as the PNG reader does (Rec. 601 luma, so an array and the PNG it
-// came from give bit-identical input). Throws cs::Error naming `which` on a bad dtype or shape.
-ImageF imageFromArray(pb::handle obj, const char* which);
-// Non-zero pixels of a 2-D array of any numeric or bool dtype, as a mask.
-ImageU8 maskFromArray(pb::handle obj, const char* which);
-
 // The pixel conversion behind imageFromArray, shared with the CUDA kernels' host mirror:
 // one sample scaled to [0, 1] (uint8: /255, uint16: /65535, float32: as is).
 enum class PixelType { U8, U16, F32 };
 PixelType pixelTypeOf(char kind, int bits, const char* which);  // kind 'u' / 'f', else cs::Error
 
-// Arrays that own the moved storage of the library's images (no copy of the pixels).
-pb::array floatArray(ImageF&& img);
-pb::array boolArray(ImageU8&& img);
-pb::array flowArray(FlowImage&& img);
-pb::array pointArray(Image<Point3f>&& img);
+// A 2-D uint8 / uint16 / float32 array (gray) or H x W x 1|3|4 (colour, alpha dropped), any
+// strides, checked and described (no pixel read yet). Throws cs::Error naming `which` on a
+// bad dtype or shape.
+struct HostImage {
+  pb::array array;  // keeps the pixels alive
+  PixelType type = PixelType::F32;
+  StridedPixels pixels{};
+  int width = 0, height = 0;
+};
+HostImage hostImage(pb::handle obj, const char* which);
+// Its pixels as the library's float gray, packed (width * height floats at dst). Integer
+// pixels are scaled and colour is converted exactly as the PNG reader does (Rec. 601 luma,
+// so an array and the PNG it came from give bit-identical input).
+void convertGray(const HostImage& h, float* dst);
+// The same into a new image, or into `into`, whose storage is kept when its size matches
+// (the per-frame inputs of a Stereo: no allocation and no page faults after the first).
+ImageF imageFromArray(pb::handle obj, const char* which);
+void imageFromArray(pb::handle obj, const char* which, ImageF& into);
+// Non-zero pixels of a 2-D array of any numeric or bool dtype, as a mask.
+ImageU8 maskFromArray(pb::handle obj, const char* which);
+
+// Recycled host storage for result arrays, one per Stereo. Each array handed to Python owns
+// its storage (it stays valid after the next frame and after the Stereo is gone); when the
+// array is dropped, its storage comes back here instead of being freed, and the next frame
+// computes into it. A fresh multi-MB buffer costs a zero fill and a page fault per 4 KiB
+// page on first touch, which is slow under some sandboxes (gVisor); a recycled one costs
+// neither. In a loop `r = stereo.compute(...)` two frames' buffers circulate.
+class ResultPool {
+ public:
+  // Which outputs a frame had (the next frame is lent buffers for those).
+  struct Present {
+    bool valid = false, radial = false, z = false, points = false, disparity = false, warp = false,
+         confidence = false;
+  };
+  // Moves recycled storage into r's images for the outputs the last frame had (the
+  // library's compute() keeps storage of the right size).
+  void lend(DepthResult& r);
+  void remember(const Present& p, size_t pixels) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    last_ = p, lastSize_ = pixels;
+  }
+  // n elements: recycled storage if there is some (contents: an old frame's), else new.
+  template <class T>
+  std::vector<T> take(size_t n);
+  // Called by an array's capsule when the array is dropped (any thread, GIL held).
+  template <class T>
+  void giveBack(std::vector<T>&& v);
+
+ private:
+  template <class T>
+  std::vector<std::vector<T>>& shelfOf();
+  static constexpr size_t kShelfSize = 8;  // per element type: a few frames' worth, no more
+  std::mutex mutex_;
+  std::vector<std::vector<float>> floats_;
+  std::vector<std::vector<unsigned char>> bytes_;
+  std::vector<std::vector<Vec2f>> flows_;
+  std::vector<std::vector<Point3f>> points_;
+  Present last_;
+  size_t lastSize_ = 0;
+};
+
+// Arrays that own the moved storage of the library's images (no copy of the pixels); with a
+// pool, the storage goes back to it when the array is dropped.
+pb::array floatArray(ImageF&& img, const std::shared_ptr<ResultPool>& pool = nullptr);
+pb::array boolArray(ImageU8&& img, const std::shared_ptr<ResultPool>& pool = nullptr);
+pb::array flowArray(FlowImage&& img, const std::shared_ptr<ResultPool>& pool = nullptr);
+pb::array pointArray(Image<Point3f>&& img, const std::shared_ptr<ResultPool>& pool = nullptr);
 
 // The Python-side result: NumPy arrays (host) or DeviceArray objects (CUDA), None for
 // outputs not computed.
@@ -45,7 +101,7 @@ struct Result {
   pb::dict stages;
   double totalMs = 0;
 };
-Result resultFromDepth(DepthResult&& r);
+Result resultFromDepth(DepthResult&& r, const std::shared_ptr<ResultPool>& pool = nullptr);
 
 // ---------------------------------------------------------------- device arrays
 
@@ -94,8 +150,9 @@ using DevicePathPtr = std::unique_ptr<DevicePath, DevicePathDeleter>;
 DevicePathPtr makeDevicePath(const Rig& rig, const Params& params, const std::string& backendSpec);
 void devicePathSetPose(DevicePath& d, const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
 void devicePathSetMask(DevicePath& d, const ImageU8& mask);
+// Host outputs (returnDevice false) are NumPy arrays over `pool`'s recycled storage.
 Result devicePathCompute(DevicePath& d, pb::handle left, pb::handle right, bool returnDevice,
-                         const Stereo::Outputs& outputs);
+                         const Stereo::Outputs& outputs, const std::shared_ptr<ResultPool>& pool);
 #endif
 
 }  // namespace cs::py

@@ -15,6 +15,7 @@
 #include <cuda_runtime_api.h>
 
 #include <chrono>
+#include <cstring>
 #include <exception>
 #include <mutex>
 
@@ -198,6 +199,13 @@ class DevicePath {
     const size_t n = size_t(width_) * size_t(height_);
     inputs_ = std::make_shared<DeviceBuffer>(ctx_, 2 * n * sizeof(float));
     flag_ = std::make_shared<DeviceBuffer>(ctx_, sizeof(unsigned));
+    check(cudaMallocHost(reinterpret_cast<void**>(&pinnedFlag_), sizeof(unsigned)), "cudaMallocHost");
+  }
+  ~DevicePath() {
+    DeviceGuard guard(ctx_->device);
+    cudaStreamSynchronize(ctx_->stream);  // nothing in flight reads or writes the pinned buffers
+    for (void* p : {static_cast<void*>(pinnedFlag_), static_cast<void*>(pinnedIn_), pinnedOut_})
+      if (p) cudaFreeHost(p);
   }
 
   void setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
@@ -209,20 +217,32 @@ class DevicePath {
     stereo_->setMask(mask);
   }
 
-  Result compute(pb::handle left, pb::handle right, bool returnDevice, const Stereo::Outputs& sel) {
+  Result compute(pb::handle left, pb::handle right, bool returnDevice, const Stereo::Outputs& sel,
+                 const std::shared_ptr<ResultPool>& pool) {
     const auto t0 = std::chrono::steady_clock::now();
     const uintptr_t ours = reinterpret_cast<uintptr_t>(ctx_->stream);
-    // With the GIL: the protocols and host conversions are Python calls.
-    Input in[2] = {input(left, "left image", ours), input(right, "right image", ours)};
+    // With the GIL: the protocols and host conversions are Python calls. Host inputs are
+    // converted straight into this path's pinned staging buffer (reused every frame).
+    Input in[2] = {input(left, "left image", ours, 0), input(right, "right image", ours, 1)};
     const long long n = (long long)width_ * height_;
     Result result;
     std::vector<std::shared_ptr<DeviceBuffer>> buffers;  // every output buffer, in FinishArgs order
     FinishArgs fa;
     fa.n = n;
     fa.withDisparity = sel.disparity, fa.withWarp = sel.warp, fa.withPoints = sel.points;
-    auto buffer = [&](size_t bytes) {
-      buffers.push_back(std::make_shared<DeviceBuffer>(ctx_, bytes));
-      return buffers.back()->ptr;
+    // Device results: fresh buffers each frame (the DeviceArray objects own them). Host
+    // results: carved from one device buffer and one pinned buffer kept by this path, so a
+    // frame allocates nothing there and downloads in one copy.
+    size_t hostBytes = 0;
+    std::vector<size_t> offsets;
+    auto buffer = [&](size_t bytes) -> void* {
+      if (returnDevice) {
+        buffers.push_back(std::make_shared<DeviceBuffer>(ctx_, bytes));
+        return buffers.back()->ptr;
+      }
+      offsets.push_back(hostBytes);
+      hostBytes += (bytes + 255) / 256 * 256;
+      return nullptr;  // placed below, once the total is known
     };
     unsigned flag = 0;
     {
@@ -251,7 +271,8 @@ class DevicePath {
           type = int(v.type);
         } else {
           // Host input, already converted: upload, then the same kernel in place for the NaN test.
-          check(cudaMemcpyAsync(dst[k], in[k].host.data.data(), size_t(n) * sizeof(float), cudaMemcpyHostToDevice, s),
+          check(cudaMemcpyAsync(dst[k], pinnedIn_ + size_t(k) * size_t(n), size_t(n) * sizeof(float),
+                                cudaMemcpyHostToDevice, s),
                 "upload");
           src = {reinterpret_cast<const unsigned char*>(dst[k]), (long long)width_ * 4, 4, 0, 1};
         }
@@ -261,29 +282,75 @@ class DevicePath {
       const cuda::DeviceDepth d = stereo_->compute(dst[0], dst[1]);
       fa.radial = d.radial, fa.disparity = d.disparity, fa.warp = d.warp, fa.points = d.points;
       fa.confidence = d.confidence;
-      fa.valid = static_cast<unsigned char*>(buffer(size_t(n)));
-      fa.outRadial = static_cast<float*>(buffer(size_t(n) * 4));
-      if (sel.points) fa.outZ = static_cast<float*>(buffer(size_t(n) * 4));
-      if (sel.points) fa.outPoints = static_cast<float*>(buffer(size_t(n) * 12));
-      if (sel.disparity) fa.outDisparity = static_cast<float*>(buffer(size_t(n) * 4));
-      if (sel.warp) fa.outWarp = static_cast<float*>(buffer(size_t(n) * 8));
-      if (d.confidence) fa.outConfidence = static_cast<float*>(buffer(size_t(n) * 4));
+      // valid, radial, z, points, disparity, warp, confidence: FinishArgs' outputs.
+      const bool want[7] = {true, true, sel.points, sel.points, sel.disparity, sel.warp, d.confidence != nullptr};
+      const size_t bytes[7] = {1, 4, 4, 12, 4, 8, 4};
+      void* out[7] = {};
+      for (int i = 0; i < 7; ++i)
+        if (want[i]) out[i] = buffer(size_t(n) * bytes[i]);
+      if (!returnDevice) {
+        reserveHostOutputs(hostBytes);
+        for (int i = 0, k = 0; i < 7; ++i)
+          if (want[i]) out[i] = static_cast<char*>(hostOutDevice_->ptr) + offsets[size_t(k++)];
+      }
+      fa.valid = static_cast<unsigned char*>(out[0]);
+      fa.outRadial = static_cast<float*>(out[1]);
+      fa.outZ = static_cast<float*>(out[2]);
+      fa.outPoints = static_cast<float*>(out[3]);
+      fa.outDisparity = static_cast<float*>(out[4]);
+      fa.outWarp = static_cast<float*>(out[5]);
+      fa.outConfidence = static_cast<float*>(out[6]);
       check(launchFinish(fa, s), "finish");
-      check(cudaMemcpyAsync(&flag, flag_->ptr, sizeof flag, cudaMemcpyDeviceToHost, s), "flag download");
+      if (!returnDevice)
+        check(cudaMemcpyAsync(pinnedOut_, hostOutDevice_->ptr, hostBytes, cudaMemcpyDeviceToHost, s), "download");
+      check(cudaMemcpyAsync(pinnedFlag_, flag_->ptr, sizeof flag, cudaMemcpyDeviceToHost, s), "flag download");
       check(cudaStreamSynchronize(s), "compute");
+      flag = *pinnedFlag_;
     }
     // As the host API words it (stereo.cpp checkImage).
     if (flag & 1u) throw Error("left image contains NaN or infinite pixels");
     if (flag & 2u) throw Error("right image contains NaN or infinite pixels");
 
     size_t next = 0;
+    const long long h = height_, w = width_;
+    // Host results: one copy out of the pinned buffer into recycled storage (see ResultPool),
+    // which the NumPy array then owns.
+    auto hostArray = [&](std::vector<long long> shape, bool isBool) -> pb::object {
+      const char* src = static_cast<const char*>(pinnedOut_) + offsets[next++];
+      if (isBool) {
+        ImageU8 img;
+        img.width = width_, img.height = height_;
+        img.data = pool->take<unsigned char>(size_t(n));
+        std::memcpy(img.data.data(), src, size_t(n));
+        return boolArray(std::move(img), pool);
+      }
+      const size_t channels = shape.size() == 3 ? size_t(shape[2]) : 1;
+      if (channels == 1) {
+        ImageF img;
+        img.width = width_, img.height = height_;
+        img.data = pool->take<float>(size_t(n));
+        std::memcpy(img.data.data(), src, size_t(n) * 4);
+        return floatArray(std::move(img), pool);
+      }
+      if (channels == 2) {
+        FlowImage img;
+        img.width = width_, img.height = height_;
+        img.data = pool->take<Vec2f>(size_t(n));
+        std::memcpy(static_cast<void*>(img.data.data()), src, size_t(n) * 8);
+        return flowArray(std::move(img), pool);
+      }
+      Image<Point3f> img;
+      img.width = width_, img.height = height_;
+      img.data = pool->take<Point3f>(size_t(n));
+      std::memcpy(static_cast<void*>(img.data.data()), src, size_t(n) * 12);
+      return pointArray(std::move(img), pool);
+    };
     auto take = [&](const void* p, std::vector<long long> shape, bool isBool) -> pb::object {
       if (!p) return pb::none();
+      if (!returnDevice) return hostArray(std::move(shape), isBool);
       const std::shared_ptr<DeviceBuffer>& b = buffers[next++];
-      DeviceArray a{b, std::move(shape), isBool};
-      return returnDevice ? pb::cast(std::move(a)) : pb::object(toHost(a));
+      return pb::cast(DeviceArray{b, std::move(shape), isBool});
     };
-    const long long h = height_, w = width_;
     result.valid = take(fa.valid, {h, w}, true);
     result.depth = take(fa.outRadial, {h, w}, false);
     result.z = take(fa.outZ, {h, w}, false);
@@ -299,10 +366,22 @@ class DevicePath {
   struct Input {
     bool device = false;
     DeviceView view;
-    ImageF host;
   };
 
-  Input input(pb::handle obj, const char* which, uintptr_t ours) {
+  // Device memory and pinned host memory for host results, kept and grown to fit.
+  void reserveHostOutputs(size_t bytes) {
+    if (hostOutDevice_ && hostOutDevice_->bytes >= bytes) return;
+    hostOutDevice_.reset();
+    if (pinnedOut_) {
+      check(cudaStreamSynchronize(ctx_->stream), "compute");
+      cudaFreeHost(pinnedOut_);
+      pinnedOut_ = nullptr;
+    }
+    hostOutDevice_ = std::make_shared<DeviceBuffer>(ctx_, bytes);
+    check(cudaMallocHost(&pinnedOut_, bytes), "cudaMallocHost");
+  }
+
+  Input input(pb::handle obj, const char* which, uintptr_t ours, int slot) {
     Input in;
     const auto sizeText = [](long long w, long long h) { return std::to_string(w) + "x" + std::to_string(h); };
     if (isDeviceArray(obj)) {
@@ -326,10 +405,13 @@ class DevicePath {
         throw Error(std::string(which) + " is on CUDA device " + std::to_string(device) + " but this Stereo runs on " +
                     std::to_string(ctx_->device));
     } else {
-      in.host = imageFromArray(obj, which);
-      if (in.host.width != width_ || in.host.height != height_)
-        throw Error(std::string(which) + " is " + sizeText(in.host.width, in.host.height) +
-                    " but the calibration says " + sizeText(width_, height_));
+      const HostImage host = hostImage(obj, which);
+      if (host.width != width_ || host.height != height_)
+        throw Error(std::string(which) + " is " + sizeText(host.width, host.height) + " but the calibration says " +
+                    sizeText(width_, height_));
+      const size_t n = size_t(width_) * size_t(height_);
+      if (!pinnedIn_) check(cudaMallocHost(reinterpret_cast<void**>(&pinnedIn_), 2 * n * sizeof(float)), "cudaMallocHost");
+      convertGray(host, pinnedIn_ + size_t(slot) * n);  // the last frame's upload is done: compute() synchronised
     }
     return in;
   }
@@ -338,6 +420,10 @@ class DevicePath {
   int width_, height_;
   std::unique_ptr<cuda::DeviceStereo> stereo_;  // after ctx_: destroyed before its stream
   std::shared_ptr<DeviceBuffer> inputs_, flag_;
+  std::shared_ptr<DeviceBuffer> hostOutDevice_;  // host results before their download
+  unsigned* pinnedFlag_ = nullptr;
+  float* pinnedIn_ = nullptr;  // host inputs, converted: 2 x width x height floats
+  void* pinnedOut_ = nullptr;  // host results, downloaded (hostOutDevice_'s layout)
 };
 
 void DevicePathDeleter::operator()(DevicePath* p) const { delete p; }
@@ -348,8 +434,8 @@ DevicePathPtr makeDevicePath(const Rig& rig, const Params& params, const std::st
 void devicePathSetPose(DevicePath& d, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) { d.setPose(R, t); }
 void devicePathSetMask(DevicePath& d, const ImageU8& mask) { d.setMask(mask); }
 Result devicePathCompute(DevicePath& d, pb::handle left, pb::handle right, bool returnDevice,
-                         const Stereo::Outputs& outputs) {
-  return d.compute(left, right, returnDevice, outputs);
+                         const Stereo::Outputs& outputs, const std::shared_ptr<ResultPool>& pool) {
+  return d.compute(left, right, returnDevice, outputs, pool);
 }
 
 void bindDevice(pb::module_& m) {

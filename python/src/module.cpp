@@ -279,8 +279,9 @@ class PyStereo {
   Result compute(pb::handle left, pb::handle right, pb::object progress, bool returnDevice) {
     auto lock = claim();
     if (returnDevice || isDeviceArray(left) || isDeviceArray(right)) return computeOnDevice(left, right, returnDevice);
-    const ImageF l = imageFromArray(left, "left image");
-    const ImageF r = imageFromArray(right, "right image");
+    // Into this object's input images (claimed above): no allocation after the first frame.
+    imageFromArray(left, "left image", left_);
+    imageFromArray(right, "right image", right_);
     if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw Error("progress must be callable");
     // The callback runs on this thread with the GIL taken back. If it raises, the exception
     // is re-raised from compute(); on the CPU backend the frame also stops at once (GPU
@@ -302,11 +303,14 @@ class PyStereo {
       Stereo& s;
       ~Reset() { s.setProgress(nullptr); }
     } reset{*stereo_};
+    // The library computes into recycled storage (what earlier results' arrays gave back when
+    // they were dropped), and the arrays below take it over without a copy.
     DepthResult out;
+    pool_->lend(out);
     {
       pb::gil_scoped_release nogil;
       try {
-        stereo_->compute(l, r, out);
+        stereo_->compute(left_, right_, out);
       } catch (const ProgressAbort&) {
       }
     }
@@ -315,7 +319,7 @@ class PyStereo {
       raised.reset();
       throw e;
     }
-    return resultFromDepth(std::move(out));
+    return resultFromDepth(std::move(out), pool_);
   }
 
   void setPose(pb::handle Robj, pb::handle tobj) {
@@ -364,7 +368,7 @@ class PyStereo {
       device_ = makeDevicePath(stereo_->rig(), params_, backendSpec_);
       if (!mask_.empty()) devicePathSetMask(*device_, mask_);
     }
-    return devicePathCompute(*device_, left, right, returnDevice, outputs_);
+    return devicePathCompute(*device_, left, right, returnDevice, outputs_, pool_);
 #else
     (void)left, (void)right, (void)returnDevice;
     throw Error(
@@ -379,6 +383,8 @@ class PyStereo {
   Stereo::Outputs outputs_;
   std::unique_ptr<Stereo> stereo_;
   ImageU8 mask_;
+  ImageF left_, right_;  // the last frame's converted inputs, reused (compute() holds the claim)
+  std::shared_ptr<ResultPool> pool_ = std::make_shared<ResultPool>();
 #ifdef CS_PY_CUDA
   DevicePathPtr device_;
 #endif

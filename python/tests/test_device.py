@@ -225,3 +225,25 @@ def test_quality_confidence_on_device(cp, pair):
     r = stereo.compute(cp.asarray(left), cp.asarray(right), return_device=True)
     assert isinstance(r.confidence, cs.DeviceArray)
     assert_same(r, stereo.compute(left, right))
+
+
+def test_host_results_of_device_inputs_stay_valid(cp, pair):
+    # Device inputs, NumPy outputs: downloaded through the path's pinned buffer into recycled
+    # host storage; a result kept must not change when later frames reuse storage.
+    rig, left, right = pair
+    stereo = cs.Stereo(rig, "realtime", "cuda")
+    ref = cs.Stereo(rig, "realtime", "cuda").compute(left, right)
+    other = (right[:, ::-1].copy(), left[:, ::-1].copy())
+    r1 = stereo.compute(cp.asarray(left), cp.asarray(right))
+    assert isinstance(r1.depth, np.ndarray)
+    assert_same(r1, ref)
+    keep = {n: getattr(r1, n).copy() for n in OUTPUTS if getattr(r1, n) is not None}
+    for i in range(4):
+        r = stereo.compute(cp.asarray(other[0]), cp.asarray(other[1])) if i % 2 == 0 else \
+            stereo.compute(cp.asarray(left), cp.asarray(right))
+        if i % 2:
+            assert_same(r, ref)
+        for n, v in keep.items():
+            assert same_bits(getattr(r1, n), v), n
+    # NumPy inputs through the device path (return_device=True): pinned upload, same results.
+    assert_same(stereo.compute(left, right, return_device=True), ref)
