@@ -10,7 +10,7 @@ it, else an 800x800 pair rendered by `curvestereo synth`):
   C++  curvestereo_cuda_bench   device API: pinned pair up, solve (graph replay), depth down
   C++  curvestereo bench        host API (Stereo::compute), depth only
   Py   device in, device out    CuPy/PyTorch pair on the GPU -> compute(return_device=True)
-  Py   host in, device path     NumPy pair -> compute(..., return_device=False) via DeviceStereo
+  Py   host in, device out      NumPy pair -> compute(..., return_device=True) via DeviceStereo
   Py   host API                 NumPy pair -> compute() through cs::Stereo (outputs=[])
 
 and prints the medians and the binding's overhead per frame (Python minus the matching
@@ -121,7 +121,9 @@ def main():
     print(f"device: {dev.device}")
     gl, gr, sync = gpu_arrays(kind, left, right)
     py["py_device"] = median_ms(lambda: dev.compute(gl, gr, return_device=True), args.runs)
-    py["py_host_via_device"] = median_ms(lambda: dev.compute(left, right, return_device=False), args.runs)
+    # NumPy in with return_device=True is what reaches DeviceStereo with host inputs (NumPy in
+    # and out goes through cs::Stereo, the last row).
+    py["py_host_via_device"] = median_ms(lambda: dev.compute(left, right, return_device=True), args.runs)
     # All outputs left on the GPU (what a PyTorch pipeline would take).
     full = cs.Stereo(rig, args.preset, "cuda")
     py["py_device_all_outputs"] = median_ms(lambda: full.compute(gl, gr, return_device=True), args.runs)
@@ -142,7 +144,7 @@ def main():
     print("\n| Python path (median ms, min..max) | per frame | binding overhead |\n|---|---|---|")
     row("GPU arrays in, GPU arrays out (depth, valid)", "py_device", "cpp_device_solve", "C++ device API solve")
     row("GPU arrays in, all outputs on the GPU", "py_device_all_outputs", "cpp_device_solve", "C++ device API solve")
-    row("NumPy in/out through the device path", "py_host_via_device", "cpp_device_frame", "C++ device API frame")
+    row("NumPy in, GPU arrays out (device path)", "py_host_via_device", "cpp_device_frame", "C++ device API frame")
     row("NumPy in/out through cs::Stereo", "py_host_api", "cpp_host_frame", "C++ Stereo::compute")
 
 
