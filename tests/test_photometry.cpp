@@ -301,7 +301,7 @@ TEST_CASE("photometry: bad values are refused with the option's name") {
   CHECK_THROWS_WITH_AS(applyPhotometry(photometryProfile("t265"), black), doctest::Contains("black image"), Error);
 }
 
-TEST_CASE("photometry: a T265-like pair still solves (CPU, preset default)") {
+TEST_CASE("photometry: a T265-like pair still solves (CPU, preset variational)") {
   SynthPair pair = test::smallSynthPair(160, "binocular", 0.12, 3);
   CameraPhotometry m = photometryProfile("t265");
   m.seed = 3;
@@ -318,7 +318,7 @@ TEST_CASE("photometry: a T265-like pair still solves (CPU, preset default)") {
   CHECK(valid > 10000);
   CHECK(bad == 0);
   const Metrics metrics = evaluate(pair.rig, r.warp, r.depth.radial, pair.depthLeft, &pair.depthRight);
-  MESSAGE("t265 model, 160 px, default preset: tau>1 " << metrics.tau1 << " %, tau>3 " << metrics.tau3 << " %, EPE "
+  MESSAGE("t265 model, 160 px, variational preset: tau>1 " << metrics.tau1 << " %, tau>3 " << metrics.tau3 << " %, EPE "
                                                        << metrics.epe << " px");
   CHECK(metrics.evaluated > 10000);
   // How the bounds were chosen (CPU oracle, this 160 px pair, 2026-11): with the model,
