@@ -125,9 +125,8 @@ void convertRows(const StridedPixels& s, int width, int height, float* dst) {
     // Colour: grayAt's luma, with the samples from the tables.
     for (long long x = 0; x < width; ++x) {
       const unsigned char* p = row + x * s.colStride;
-      const double luma = 0.299 * sampleOf<T>(p, table) + 0.587 * sampleOf<T>(p + s.chanStride, table) +
-                          0.114 * sampleOf<T>(p + 2 * s.chanStride, table);
-      out[x] = !(luma - luma == 0.0) ? float(luma) : float(luma < 1.0 ? luma : 1.0);
+      out[x] =
+          lumaOf(sampleOf<T>(p, table), sampleOf<T>(p + s.chanStride, table), sampleOf<T>(p + 2 * s.chanStride, table));
     }
   }
 }

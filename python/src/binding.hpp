@@ -57,8 +57,7 @@ class ResultPool {
  public:
   // Which outputs a frame had (the next frame is lent buffers for those).
   struct Present {
-    bool valid = false, radial = false, z = false, points = false, disparity = false, warp = false,
-         confidence = false;
+    bool valid = false, radial = false, z = false, points = false, disparity = false, warp = false, confidence = false;
   };
   // Moves recycled storage into r's images for the outputs the last frame had (the
   // library's compute() keeps storage of the right size).

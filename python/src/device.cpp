@@ -188,6 +188,16 @@ int deviceIndex(const std::string& spec) {
   return std::stoi(d);
 }
 
+// A width x height image over storage from `pool`, filled from the downloaded bytes at src.
+template <class T>
+Image<T> pooledCopy(ResultPool& pool, const char* src, int width, int height) {
+  Image<T> img;
+  img.width = width, img.height = height;
+  img.data = pool.take<T>(size_t(width) * size_t(height));
+  std::memcpy(static_cast<void*>(img.data.data()), src, img.data.size() * sizeof(T));
+  return img;
+}
+
 }  // namespace
 
 class DevicePath {
@@ -317,33 +327,15 @@ class DevicePath {
     // which the NumPy array then owns.
     auto hostArray = [&](std::vector<long long> shape, bool isBool) -> pb::object {
       const char* src = static_cast<const char*>(pinnedOut_) + offsets[next++];
-      if (isBool) {
-        ImageU8 img;
-        img.width = width_, img.height = height_;
-        img.data = pool->take<unsigned char>(size_t(n));
-        std::memcpy(img.data.data(), src, size_t(n));
-        return boolArray(std::move(img), pool);
+      if (isBool) return boolArray(pooledCopy<unsigned char>(*pool, src, width_, height_), pool);
+      switch (shape.size() == 3 ? shape[2] : 1) {
+        case 1:
+          return floatArray(pooledCopy<float>(*pool, src, width_, height_), pool);
+        case 2:
+          return flowArray(pooledCopy<Vec2f>(*pool, src, width_, height_), pool);
+        default:
+          return pointArray(pooledCopy<Point3f>(*pool, src, width_, height_), pool);
       }
-      const size_t channels = shape.size() == 3 ? size_t(shape[2]) : 1;
-      if (channels == 1) {
-        ImageF img;
-        img.width = width_, img.height = height_;
-        img.data = pool->take<float>(size_t(n));
-        std::memcpy(img.data.data(), src, size_t(n) * 4);
-        return floatArray(std::move(img), pool);
-      }
-      if (channels == 2) {
-        FlowImage img;
-        img.width = width_, img.height = height_;
-        img.data = pool->take<Vec2f>(size_t(n));
-        std::memcpy(static_cast<void*>(img.data.data()), src, size_t(n) * 8);
-        return flowArray(std::move(img), pool);
-      }
-      Image<Point3f> img;
-      img.width = width_, img.height = height_;
-      img.data = pool->take<Point3f>(size_t(n));
-      std::memcpy(static_cast<void*>(img.data.data()), src, size_t(n) * 12);
-      return pointArray(std::move(img), pool);
     };
     auto take = [&](const void* p, std::vector<long long> shape, bool isBool) -> pb::object {
       if (!p) return pb::none();
@@ -410,7 +402,8 @@ class DevicePath {
         throw Error(std::string(which) + " is " + sizeText(host.width, host.height) + " but the calibration says " +
                     sizeText(width_, height_));
       const size_t n = size_t(width_) * size_t(height_);
-      if (!pinnedIn_) check(cudaMallocHost(reinterpret_cast<void**>(&pinnedIn_), 2 * n * sizeof(float)), "cudaMallocHost");
+      if (!pinnedIn_)
+        check(cudaMallocHost(reinterpret_cast<void**>(&pinnedIn_), 2 * n * sizeof(float)), "cudaMallocHost");
       convertGray(host, pinnedIn_ + size_t(slot) * n);  // the last frame's upload is done: compute() synchronised
     }
     return in;

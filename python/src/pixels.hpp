@@ -36,16 +36,20 @@ CS_HD inline float sampleAt(const unsigned char* p, int type) {
   return v;
 }
 
+// Rec. 601 luma of three samples in double, clamped at 1 as the reader has it
+// (std::min(1.0, luma)); NaN or +inf (only possible from float input) stays as it is so
+// that compute() refuses it instead of seeing white.
+CS_HD inline float lumaOf(float r, float g, float b) {
+  const double luma = 0.299 * r + 0.587 * g + 0.114 * b;
+  if (!(luma - luma == 0.0)) return float(luma);
+  return float(luma < 1.0 ? luma : 1.0);
+}
+
 // type: 0 uint8, 1 uint16, 2 float32 (PixelType's order).
 CS_HD inline float grayAt(const StridedPixels& s, int type, long long y, long long x) {
   const unsigned char* p = s.data + y * s.rowStride + x * s.colStride;
   if (s.channels < 3) return sampleAt(p, type);
-  const double luma = 0.299 * sampleAt(p, type) + 0.587 * sampleAt(p + s.chanStride, type) +
-                      0.114 * sampleAt(p + 2 * s.chanStride, type);
-  // std::min(1.0, luma) as the reader has it; NaN or +inf (only possible from float input)
-  // stays as it is so that compute() refuses it instead of seeing white.
-  if (!(luma - luma == 0.0)) return float(luma);
-  return float(luma < 1.0 ? luma : 1.0);
+  return lumaOf(sampleAt(p, type), sampleAt(p + s.chanStride, type), sampleAt(p + 2 * s.chanStride, type));
 }
 
 }  // namespace cs::py
