@@ -410,11 +410,7 @@ void VulkanBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& 
   if (endsSpare) {  // six independent copies behind one barrier
     VkCommandBuffer cb = recorder();
     barrier(cb, Cmd::Transfer);
-    for (int i = 0; i < 6; ++i) {
-      const Alloc &d = alloc(own[i]), &s = alloc(spare[i]);
-      VkBufferCopy region{s.offset, d.offset, own[i].count() * sizeof(float)};
-      inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(s.arena)].buffer, arenas_[size_t(d.arena)].buffer, 1, &region);
-    }
+    for (int i = 0; i < 6; ++i) recordCopy(cb, own[i], spare[i]);
   }
 }
 

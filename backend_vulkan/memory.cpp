@@ -130,12 +130,22 @@ Addr VulkanBackend::paramBlock(const void* data, size_t bytes) {
 
 // ---- transfers ----
 
-// At least `bytes` of staging (16 MiB at least: two 848x800 images' uploads share it).
-// Only when no submitted command reads it.
-void VulkanBackend::growStaging(VkDeviceSize bytes) {
-  if (staging_.size >= bytes) return;
-  destroyBuffer(staging_);
-  staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(16) << 20), Memory::Staging);
+// Room for `bytes` in the persistently mapped staging buffer, after what the immediate
+// command buffer's copies already use: their offset (256-aligned). Where the room is not
+// there, or a frame is being recorded, the queued work runs first and the buffer starts
+// over (grown if needed, 16 MiB at least: two 848x800 images' uploads share it).
+VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
+  VkDeviceSize offset = (stagingUsed_ + 255) & ~VkDeviceSize(255);
+  if (recordingFrame() || offset + bytes > staging_.size) {
+    flush();  // the frame being recorded runs first; no submitted copy reads the staging buffer
+    offset = 0;
+  }
+  if (staging_.size < bytes) {
+    destroyBuffer(staging_);
+    staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(16) << 20), Memory::Staging);
+  }
+  stagingUsed_ = offset + bytes;
+  return offset;
 }
 
 // The copy joins the immediate command buffer, its data in the persistently mapped
@@ -146,18 +156,12 @@ void VulkanBackend::growStaging(VkDeviceSize bytes) {
 void VulkanBackend::doUpload(const Buffer& dst, const float* host) {
   const Alloc& a = alloc(dst);
   const VkDeviceSize bytes = dst.count() * sizeof(float);
-  VkDeviceSize offset = (stagingUsed_ + 255) & ~VkDeviceSize(255);
-  if (recordingFrame() || offset + bytes > staging_.size) {
-    flush();  // no submitted copy reads the staging buffer any more
-    offset = 0;
-  }
-  growStaging(bytes);
+  const VkDeviceSize offset = claimStaging(bytes);
   std::memcpy(static_cast<char*>(staging_.mapped) + offset, host, bytes);
   VkCommandBuffer cb = recorder();
   barrier(cb, Cmd::Transfer);
   VkBufferCopy region{offset, a.offset, bytes};
   inst_.fn.vkCmdCopyBuffer(cb, staging_.buffer, arenas_[size_t(a.arena)].buffer, 1, &region);
-  stagingUsed_ = offset + bytes;
 }
 
 // One submission and one wait: the copy joins the immediate command buffer (after any
@@ -166,12 +170,7 @@ void VulkanBackend::doUpload(const Buffer& dst, const float* host) {
 void VulkanBackend::doDownload(const Buffer& src, float* host) {
   const Alloc& a = alloc(src);
   const VkDeviceSize bytes = src.count() * sizeof(float);
-  VkDeviceSize offset = (stagingUsed_ + 255) & ~VkDeviceSize(255);
-  if (recordingFrame() || offset + bytes > staging_.size) {
-    flush();  // the frame being recorded runs first; no submitted copy reads the staging buffer
-    offset = 0;
-  }
-  growStaging(bytes);
+  const VkDeviceSize offset = claimStaging(bytes);
   VkCommandBuffer cb = recorder();
   barrier(cb, Cmd::Transfer);
   VkBufferCopy region{a.offset, offset, bytes};
@@ -181,7 +180,6 @@ void VulkanBackend::doDownload(const Buffer& src, float* host) {
   mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
   inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr,
                                 0, nullptr);
-  stagingUsed_ = offset + bytes;
   flush();
   std::memcpy(host, static_cast<const char*>(staging_.mapped) + offset, bytes);
 }
@@ -196,10 +194,14 @@ void VulkanBackend::doFill(const Buffer& dst, float value) {
 }
 
 void VulkanBackend::doCopy(const Buffer& dst, const Buffer& src) {
-  const Alloc& d = alloc(dst);
-  const Alloc& s = alloc(src);
   VkCommandBuffer cb = recorder();
   barrier(cb, Cmd::Transfer);
+  recordCopy(cb, dst, src);
+}
+
+void VulkanBackend::recordCopy(VkCommandBuffer cb, const Buffer& dst, const Buffer& src) {
+  const Alloc& d = alloc(dst);
+  const Alloc& s = alloc(src);
   VkBufferCopy region{s.offset, d.offset, src.count() * sizeof(float)};
   if (d.arena == s.arena && region.srcOffset == region.dstOffset) return;
   inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(s.arena)].buffer, arenas_[size_t(d.arena)].buffer, 1, &region);

@@ -112,7 +112,7 @@ class VulkanBackend final : public Backend {
   const Alloc& alloc(const Buffer& b) const;
   Addr addr(const Buffer& b) const;
   Addr paramBlock(const void* data, size_t bytes);
-  void growStaging(VkDeviceSize bytes);
+  VkDeviceSize claimStaging(VkDeviceSize bytes);
   Addr sweepParamBlock(const SweepParams& p);
   // primalDual (barsFromPrimals false) and warpIterations (true: the first iteration reads
   // u, v as uBar, vBar) in primal_dual.comp's fused dispatches.
@@ -124,6 +124,8 @@ class VulkanBackend final : public Backend {
   // What a command buffer holds last, for the barrier before the next command.
   enum class Cmd { None, Dispatch, Transfer };
   void barrier(VkCommandBuffer cb, Cmd next);
+  // src's floats into dst, recorded into cb without a barrier (the caller places one).
+  void recordCopy(VkCommandBuffer cb, const Buffer& dst, const Buffer& src);
   void flush();
   void waitFence(VkFence fence, const char* what);
   void abortFrameRecording();
