@@ -65,23 +65,22 @@ std::string fovName(double fov) {
   return buf;
 }
 
+double tauPercent(const ImageF& error, double k, Missing missing) {
+  long long n = 0, bad = 0;
+  for (float e : error.data) {
+    if (std::isnan(e) || (missing == Missing::Skipped && std::isinf(e))) continue;
+    ++n;
+    bad += e > k;
+  }
+  return n ? 100.0 * double(bad) / double(n) : 0.0;
+}
+
 }  // namespace eval
 
 namespace {
 
 using namespace eval;
 using baselines::MethodResult;
-
-// tau>k over the evaluated pixels that have an estimate (error map finite).
-double tauEstimated(const ImageF& error, double k) {
-  long long n = 0, bad = 0;
-  for (float e : error.data) {
-    if (!std::isfinite(e)) continue;
-    ++n;
-    bad += e > k;
-  }
-  return n ? 100.0 * double(bad) / double(n) : 0.0;
-}
 
 // The methods of one run, in table order.
 struct Plan {
@@ -177,8 +176,8 @@ std::vector<Row> evaluatePair(const Pair& p, const Plan& plan, const Args& args,
     const MethodResult& r = results[m];
     ImageF error;
     rows.push_back({p.name, m, evaluate(p.rig, r.warp, r.depth, p.depthLeft, dr, &error), r.ms});
-    rows.back().tau1Est = tauEstimated(error, 1.0);
-    rows.back().tau3Est = tauEstimated(error, 3.0);
+    rows.back().tau1Est = tauPercent(error, 1.0, Missing::Skipped);
+    rows.back().tau3Est = tauPercent(error, 3.0, Missing::Skipped);
     errors[m] = std::move(error);
   }
 

@@ -36,6 +36,12 @@ std::vector<std::string> splitList(const std::string& s);
 std::vector<double> numberList(const std::string& s, const char* option);
 std::string fovName(double fov);
 
+// tau>k in percent over an error map (NaN: not evaluated). An infinite error is an evaluated
+// pixel without an estimate: a bad pixel (Missing::Bad), or left out (Missing::Skipped, the
+// paper's convention for planesweep-valid).
+enum class Missing { Bad, Skipped };
+double tauPercent(const ImageF& error, double k, Missing missing);
+
 void writeCsv(const std::string& path, const std::vector<Row>& rows);
 std::string markdown(const std::vector<Row>& rows, const Params& params, const Args& args);
 

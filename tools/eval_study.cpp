@@ -25,16 +25,6 @@ struct SweepPoint {
   double tau5, ms;
 };
 
-double tauFromError(const ImageF& error, double k) {
-  long long n = 0, bad = 0;
-  for (float e : error.data) {
-    if (std::isnan(e)) continue;
-    ++n;
-    if (e > k) ++bad;
-  }
-  return n ? 100.0 * double(bad) / double(n) : 0.0;
-}
-
 }  // namespace
 
 int runStudy(const Args& args, const Params& base, const std::string& backend) {
@@ -107,7 +97,7 @@ int runStudy(const Args& args, const Params& base, const std::string& backend) {
         ImageF error;
         Metrics m = evaluate(pr.rig, r.warp, r.depth.radial, pr.depthLeft,
                              pr.depthRight.empty() ? nullptr : &pr.depthRight, &error);
-        points.push_back({n, du, pr.name, m, tauFromError(error, 5.0), r.totalMs});
+        points.push_back({n, du, pr.name, m, tauPercent(error, 5.0, Missing::Bad), r.totalMs});
         std::printf("%s N=%d du_max=%.2f  tau>1 %.2f %%  tau>3 %.2f %%  tau>5 %.2f %%  %.0f ms\n", pr.name.c_str(), n,
                     du, m.tau1, m.tau3, points.back().tau5, r.totalMs);
         std::fflush(stdout);
