@@ -137,6 +137,8 @@ std::vector<ParamInfo> buildTable() {
                              "data-term weight floor of low-confidence pixels", Shown::PlaneSweep),
                   intParam("init_warps", &Params::initWarps, closed(0, 1000),
                            "warps per level from the sweep's (0: warps)", Shown::PlaneSweep),
+                  intParam("fine_warps", &Params::fineWarps, closed(0, 1000),
+                           "warps per level below the sweep's (0: init_warps)", Shown::PlaneSweep),
               });
   std::vector<ParamInfo> view =
       grouped("field of view",

@@ -242,7 +242,9 @@ PrimalDualParams Pipeline::primalDualParams() const {
 // With the initialiser, the levels from the sweep's down may warp a different number of
 // times (Params::initWarps).
 int Pipeline::warpsAt(size_t l) const {
-  return initialising() && l <= sweep_.level && params_.initWarps > 0 ? params_.initWarps : params_.warps;
+  if (!initialising() || l > sweep_.level) return params_.warps;
+  if (l < sweep_.level && params_.fineWarps > 0) return params_.fineWarps;
+  return params_.initWarps > 0 ? params_.initWarps : params_.warps;
 }
 
 // `warps` (at least one: Params::validate) in the coarse kernels backends may fuse

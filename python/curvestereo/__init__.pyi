@@ -150,6 +150,7 @@ class Stereo:
         init_accept: float = ...,
         occlusion_weight: float = ...,
         init_warps: int = ...,
+        fine_warps: int = ...,
         max_fov_deg: float = ...,
         epipole_deg: float = ...,
         **more: Any,

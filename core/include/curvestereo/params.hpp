@@ -96,6 +96,8 @@ struct Params {
   // check rejects start at infinity rather than at the coarse estimate) was worse still
   // on T265-like pairs (15.3 %) and is not offered.
   int initWarps = 0;
+  // Warps per level at the levels finer than the sweep's (0 = initWarps).
+  int fineWarps = 0;
 
   // Field of view used: rays farther than maxFovDeg/2 from the optical axis are masked
   // (0 = everything the camera model represents, which for an undistorted equidistant
