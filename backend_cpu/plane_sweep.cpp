@@ -25,19 +25,26 @@ bool projectHypothesis(const BuiltCamera& cam, const Vec3<double>& ray, const do
   return cam.project(moved, px) && cam.inImage(px);
 }
 
-// 1 - ZNCC over the masked window samples whose hypothesis could be sampled.
+// 1 - ZNCC over the masked window samples whose hypothesis could be sampled. The sums are
+// taken column by column (dx outer; each column's partials summed over dy, then added into
+// the window's sums in dx order): GPUs walk x keeping the last 2r+1 column partials in
+// registers, so each output needs one new column instead of a whole window, and every
+// backend sums in this order to match bit for bit.
 float windowCost(const View& reference, const View& volume, const View& mask, int x, int y, int k, int radius,
                  float flatVariance) {
   float n = 0, s0 = 0, s1 = 0, s00 = 0, s11 = 0, s01 = 0;
-  for (int dy = -radius; dy <= radius; ++dy)
-    for (int dx = -radius; dx <= radius; ++dx) {
+  for (int dx = -radius; dx <= radius; ++dx) {
+    float cn = 0, c0 = 0, c1 = 0, c00 = 0, c11 = 0, c01 = 0;
+    for (int dy = -radius; dy <= radius; ++dy) {
       const int sx = x + dx, sy = y + dy;
       if (!masked(mask, sx, sy)) continue;
       const float b = volume.at(sx, sy, k);
       if (b < 0.f) continue;
       const float a = reference.at(sx, sy);
-      n += 1.f, s0 += a, s1 += b, s00 += a * a, s11 += b * b, s01 += a * b;
+      cn += 1.f, c0 += a, c1 += b, c00 += a * a, c11 += b * b, c01 += a * b;
     }
+    n += cn, s0 += c0, s1 += c1, s00 += c00, s11 += c11, s01 += c01;
+  }
   const int side = 2 * radius + 1;
   if (2.f * n < float(side * side)) return kNoCost;
   const float m0 = s0 / n, m1 = s1 / n;
