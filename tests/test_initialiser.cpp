@@ -489,12 +489,29 @@ TEST_CASE("confidence: in [0, 1] where valid, NaN where not, empty without the i
   CHECK(occluded < visible - 0.4);
 }
 
+TEST_CASE("warp schedule: the taper from the coarsest level, the sweep's levels apart") {
+  Params p = preset("variational");
+  CHECK(warpSchedule(p, 5) == std::vector<int>{30, 30, 30, 30, 30});
+  p.warpsTaper = 10;
+  CHECK(warpSchedule(p, 5) == std::vector<int>{1, 1, 10, 20, 30});  // never fewer than one
+  CHECK(warpSchedule(p, 2) == std::vector<int>{20, 30});            // counted from the coarsest there is
+  p.initWarps = 2;
+  CHECK(warpSchedule(p, 5) == std::vector<int>{1, 1, 10, 20, 30});  // initWarps needs the initialiser
+  p.init = Params::Init::PlaneSweep;
+  p.initLevel = 1;
+  CHECK(warpSchedule(p, 5) == std::vector<int>{2, 2, 10, 20, 30});
+  CHECK(warpSchedule(preset("realtime"), 5) == std::vector<int>{2, 2, 10, 20, 30});
+  CHECK(warpSchedule(preset("quality"), 5) == std::vector<int>{30, 30, 30, 30, 30});
+  p.initLevel = 7;  // clamped to the coarsest level, as the sweep is
+  CHECK(warpSchedule(p, 3) == std::vector<int>{2, 2, 2});
+}
+
 TEST_CASE("init parameters: validation, parseInit / initName, preset quality") {
   const Params good = preset("quality");
   CHECK(good.init == Params::Init::PlaneSweep);
   CHECK(preset("variational").init == Params::Init::None);
   CHECK(preset("realtime").init == Params::Init::PlaneSweep);
-  CHECK(preset("realtime").initLevel == 2);
+  CHECK(preset("realtime").initLevel == 1);
   CHECK(preset("paper").init == Params::Init::None);
   CHECK(preset("paper").dataTerm == Params::DataTerm::Brightness);
   const auto names = presetNames();

@@ -95,6 +95,8 @@ std::vector<ParamInfo> buildTable() {
           doubleParam("scale", &Params::scale, {1, 4, true, false}, "size ratio of neighbouring pyramid levels"),
           intParam("min_width", &Params::minWidth, atLeast(8), "smallest level width and height, px", Shown::Never),
           intParam("warps", &Params::warps, closed(1, 1000), "warps (outer iterations) per level"),
+          intParam("warps_taper", &Params::warpsTaper, closed(0, 1000),
+                   "each finer level warps this many times fewer (at least once)", Shown::Always),
           intParam("iterations", &Params::iterations, closed(1, 1000), "primal-dual iterations per warp"),
           floatParam("du_max", &Params::duMax, above(0), "largest disparity step per warp, px of the level"),
           dataTerm,
@@ -136,9 +138,7 @@ std::vector<ParamInfo> buildTable() {
                   floatParam("occlusion_weight", &Params::occlusionWeight, closed(0, 1),
                              "data-term weight floor of low-confidence pixels", Shown::PlaneSweep),
                   intParam("init_warps", &Params::initWarps, closed(0, 1000),
-                           "warps per level from the sweep's (0: warps)", Shown::PlaneSweep),
-                  intParam("fine_warps", &Params::fineWarps, closed(0, 1000),
-                           "warps per level below the sweep's (0: init_warps)", Shown::PlaneSweep),
+                           "warps per level from the sweep's down (0: as the levels above)", Shown::PlaneSweep),
               });
   std::vector<ParamInfo> view =
       grouped("field of view",

@@ -35,19 +35,22 @@ Params preset(const std::string& name) {
   Params p;
   if (name == "variational") return p;
   if (name == "realtime") {
-    // A plane sweep at level 2 (a quarter of the resolution), then N = 5 warps a level. The
-    // largest step per warp is chosen so that a level can still travel about as far in
-    // total as the N = 30 presets do (5 x 1.0 px against 30 x 0.2): the sweep's estimate,
-    // upsampled, is several level px off at edges, and 5 x 0.2 px could not reach it.
-    // Measured on the 12 development pairs (CPU oracle), mean tau>1 of clean binocular /
-    // T265-like binocular / clean and T265-like forward non-occluded pairs: 6.4 / 9.5 /
-    // 12.0 / 20.1 % (du_max 0.2: 7.7 / 11.4 / 14.0 / 22.8; without the sweep 24.6 / 26.1 /
-    // 49.7 / 51.8), for ~1.6 ms more per 848x800 frame than without the sweep. The same
-    // step hurts the N = 30 presets (variational: 8.0 -> 13.4 % on clean binocular pairs).
-    p.warps = 5;
-    p.duMax = 1.f;
+    // The sweep at level 1 (half resolution), warps where they are needed: the coarse
+    // levels travel from zero for the pixels the sweep's left-right check rejects (30, 20,
+    // 10 warps at levels 4, 3, 2: the coarsest does the travelling, each finer one only
+    // corrects its neighbour), the sweep's level and the full resolution only refine (2
+    // each). Measured on the 12 development pairs (CUDA, H100; the CPU oracle agrees), mean
+    // tau>1 / tau>3 % of clean binocular, T265-like binocular pairs and tau>1 of clean
+    // forward non-occluded pairs: 5.8 / 2.9, 6.9 / 3.1, 9.8 (quality: 4.6 / 3.0, 6.0 / 3.2,
+    // 8.1; the former realtime, a level-2 sweep and 5 warps everywhere: 6.4 / 4.5, 9.5 /
+    // 6.0, 12.0). The coarse levels are cheap in pixels but not in launches: 30 warps at
+    // all three measured 0.9 ms more per 848x800 frame, 20 / 20 / 20 lost 1 point on the
+    // T265-like pairs, and dropping levels 3 and 4 lost 4 to 6.
     p.init = Params::Init::PlaneSweep;
-    p.initLevel = 2;
+    p.initLevel = 1;
+    p.warps = 30;
+    p.warpsTaper = 10;
+    p.initWarps = 2;
     return p;
   }
   if (name == "paper") {
@@ -120,6 +123,18 @@ std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p) {
     plan.push_back({w, h, s});
   }
   return plan;
+}
+
+std::vector<int> warpSchedule(const Params& p, int levels) {
+  std::vector<int> warps(size_t(std::max(0, levels)));
+  const int sweepLevel = std::min(levels - 1, p.initLevel);
+  for (int l = 0; l < levels; ++l) {
+    if (p.init == Params::Init::PlaneSweep && l <= sweepLevel && p.initWarps > 0)
+      warps[size_t(l)] = p.initWarps;
+    else
+      warps[size_t(l)] = std::max(1, p.warps - p.warpsTaper * (levels - 1 - l));
+  }
+  return warps;
 }
 
 std::string describe(const Params& p) {

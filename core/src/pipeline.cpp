@@ -239,14 +239,6 @@ PrimalDualParams Pipeline::primalDualParams() const {
   return p;
 }
 
-// With the initialiser, the levels from the sweep's down may warp a different number of
-// times (Params::initWarps).
-int Pipeline::warpsAt(size_t l) const {
-  if (!initialising() || l > sweep_.level) return params_.warps;
-  if (l < sweep_.level && params_.fineWarps > 0) return params_.fineWarps;
-  return params_.initWarps > 0 ? params_.initWarps : params_.warps;
-}
-
 // `warps` (at least one: Params::validate) in the coarse kernels backends may fuse
 // (backend.hpp): a warp's iterations, then its tail, which also makes the next warp's data
 // term. Timing stages separately, the tail is issued as its fine kernels with a stage
@@ -293,7 +285,8 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress) {
   const double sweepWork =
       initialising() ? pixels(levels_[sweep_.level]) * sweep_.params.planes * kSweepWarpsPerPlane : 0.0;
   double total = sweepWork, done = 0;
-  for (size_t l = 0; l < levels_.size(); ++l) total += pixels(levels_[l]) * warpsAt(l);
+  const std::vector<int> warps = warpSchedule(params_, int(levels_.size()));
+  for (size_t l = 0; l < levels_.size(); ++l) total += pixels(levels_[l]) * warps[l];
   auto advance = [&](double work) {
     done += work;
     if (progress) progress(std::min(1.0, done / total));
@@ -302,7 +295,7 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress) {
   for (size_t l = levels_.size(); l-- > 0;) {
     initialiseLevel(l);
     if (initialising() && l == sweep_.level) advance(sweepWork);
-    solveLevel(levels_[l], warpsAt(l), [&](int) { advance(pixels(levels_[l])); });
+    solveLevel(levels_[l], warps[l], [&](int) { advance(pixels(levels_[l])); });
   }
   stage("triangulate");
   const double tp[3] = {tPrime_.x(), tPrime_.y(), tPrime_.z()};

@@ -101,7 +101,6 @@ class Pipeline {
   void stage(const char* name);
   void initialiseLevel(size_t l);
   void solveLevel(Level& level, int warps, const std::function<void(int)>& warpDone);
-  int warpsAt(size_t l) const;
   PrimalDualParams primalDualParams() const;
   void download(DepthResult& out);
 

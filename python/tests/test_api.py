@@ -14,7 +14,7 @@ def test_module_basics():
     info = cs.build_info()
     assert info["version"] == cs.__version__
     assert "warps" in info["parameters"] and "lambda" in info["parameters"]
-    assert cs.preset_params("realtime")["warps"] == 5
+    assert cs.preset_params("realtime")["warps_taper"] == 10
 
 
 def test_rig(tiny):

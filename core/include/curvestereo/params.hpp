@@ -14,6 +14,11 @@ struct Params {
 
   // Warping (outer) and primal-dual (inner) iterations per level.
   int warps = 30;
+  // Coarse-to-fine travel: the coarsest level starts from nothing and must move the
+  // estimate all the way, each finer level only corrects its coarser neighbour's
+  // (upsampled) error. Each level warps warpsTaper times fewer than the next coarser one
+  // (at least once): `warps` at the coarsest level. 0: every level warps `warps` times.
+  int warpsTaper = 0;
   int iterations = 10;
   float duMax = 0.2f;        // clamp of the disparity increment per warp (px of that level)
   bool medianFilter = true;  // 3x3 median of u after each warp's iterations
@@ -88,16 +93,17 @@ struct Params {
   // occlusions was no better than their own data (bino02 tau>1 5.9 / 6.2 / 6.5 % at 1 /
   // 0.5 / 0.1; temp02 non-occluded 15.8 / 17.3 % at 1 / 0.3).
   float occlusionWeight = 1.0f;
-  // Warps per level from the sweep's level down (0 = `warps`). Measured (CUDA, the 12
-  // development pairs, mean tau>1 of clean / T265-like binocular pairs): sweeping at level
-  // 1 with warps 30, initWarps 10 gave 5.5 / 7.1 % against 4.6 / 6.0 % with 30 throughout,
-  // for 40 % less solver time: fewer warps after the sweep trade accuracy, they do not
-  // keep it. Skipping the levels above the sweep's (so that the pixels the left-right
-  // check rejects start at infinity rather than at the coarse estimate) was worse still
-  // on T265-like pairs (15.3 %) and is not offered.
+  // Warps per level from the sweep's level down (0 = as the levels above). Once the
+  // sweep has placed the surfaces, these levels only refine, and the coarse levels above
+  // are what the pixels the check rejects depend on. Measured (CUDA, H100, the 12
+  // development pairs, mean tau>1 of clean / T265-like binocular pairs, sweeping at level
+  // 1 with 30 warps above): 30 / 10 / 5 / 3 / 2 / 1 warps from the sweep down gave 4.6 /
+  // 6.0, 5.8 / 7.0, 5.6 / 6.9, 5.6 / 6.6, 5.5 / 6.4, 5.7 / 6.6 %: a few warps keep nearly
+  // all of it; the last point on clean renders (sub-pixel refinement at full resolution)
+  // costs ~0.3 ms per 848x800 warp. Skipping the levels above the sweep's instead (the
+  // rejected pixels then start at zero) lost 4 to 6 points on the T265-like pairs and is
+  // not offered.
   int initWarps = 0;
-  // Warps per level at the levels finer than the sweep's (0 = initWarps).
-  int fineWarps = 0;
 
   // Field of view used: rays farther than maxFovDeg/2 from the optical axis are masked
   // (0 = everything the camera model represents, which for an undistorted equidistant
@@ -127,9 +133,10 @@ std::string initName(Params::Init init);
 Params::Init parseInit(const std::string& name);
 
 // Named presets: "realtime" (the default of the library, the command line and Python: a
-// plane sweep at level 2, then N = 5 warps a level), "quality" (the sweep at level 1, then
-// N = 30), "variational" (the solver alone, N = 30, no initialiser: the struct's defaults)
-// and "paper" (the paper's configuration: brightness data term, lambda 20, N = 5).
+// plane sweep at level 1, 30 / 20 / 10 warps at the levels above it, 2 from it down),
+// "quality" (the sweep at level 1, then N = 30 at every level), "variational" (the solver
+// alone, N = 30, no initialiser: the struct's defaults) and "paper" (the paper's
+// configuration: brightness data term, lambda 20, N = 5).
 // Throws cs::Error listing the known names for an unknown one.
 Params preset(const std::string& name);
 std::vector<std::string> presetNames();
@@ -141,6 +148,10 @@ struct LevelSize {
 
 // Level 0 first (full resolution).
 std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p);
+
+// Warps at each of `levels` pyramid levels (level 0 first): warps at the coarsest, warpsTaper
+// fewer at each finer one (at least 1), initWarps from the sweep's level down when set.
+std::vector<int> warpSchedule(const Params& p, int levels);
 
 // "levels=5 scale=2 warps=30 ..." for logs and bench reports.
 std::string describe(const Params& p);
