@@ -150,6 +150,7 @@ struct PcSweepCost {
   Addr costs, reference, volume, mask;
   int32_t width, height, planes, radius;
   float flatVariance;
+  int32_t run;
 };
 struct PcSweepAggregate {
   Addr aggregated, spare, costs, mask;
@@ -451,13 +452,18 @@ void VulkanBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const
 
 void VulkanBackend::doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
                                 const SweepParams& p) {
-  // One invocation per (pixel, plane), a row's (x * planes + k) in runs of kGroup^2: the
-  // interleaved volume is read and the costs written in consecutive floats.
-  const uint64_t rowItems = uint64_t(costs.width) * uint64_t(p.planes);
-  const uint64_t groupItems = uint64_t(kGroup) * kGroup;
-  PcSweepCost pc{addr(costs),  addr(reference), addr(volume), addr(mask),    costs.width,
-                 costs.height, p.planes,        p.radius,     p.flatVariance};
-  dispatchGroups(kSweepCost, pc, uint32_t((rowItems + groupItems - 1) / groupItems), uint32_t(costs.height));
+  // One invocation per plane of a run of `run` pixels of a row, walking the run
+  // (sweep_cost.comp): long runs spend less on each run's first 2r columns, short ones
+  // give more invocations. The longest runs that still give about 2^18 invocations (enough
+  // to fill a large GPU), but at least two windows wide.
+  const int64_t w = costs.width, h = costs.height, planes = p.planes;
+  const int64_t runsWanted = std::clamp<int64_t>(((int64_t(1) << 18) + h * planes - 1) / (h * planes), 1, w);
+  const int64_t side = 2 * int64_t(p.radius) + 1;
+  const int64_t run = std::min(w, std::max((w + runsWanted - 1) / runsWanted, 2 * side));
+  const int64_t rowItems = (w + run - 1) / run * planes;
+  PcSweepCost pc{addr(costs), addr(reference), addr(volume), addr(mask),     int32_t(w),
+                 int32_t(h),  p.planes,        p.radius,     p.flatVariance, int32_t(run)};
+  dispatchGroups(kSweepCost, pc, uint32_t((rowItems + 255) / 256), uint32_t(h));
 }
 
 void VulkanBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
