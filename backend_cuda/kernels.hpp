@@ -42,7 +42,7 @@ struct SweepDev {
   float p1, p2;
   float flatVariance;
 };
-constexpr int kMaxSweepPlanes = 512;  // launchSweepAggregate: one thread per plane (= cs::kMaxSweepPlanes)
+constexpr int kMaxSweepPlanes = 512;  // launchSweepAggregate: 16 planes a lane (= cs::kMaxSweepPlanes)
 // The left-right check (ConsistencyParams).
 struct ConsistencyDev {
   float tolerancePx, acceptConfidence;

@@ -26,14 +26,22 @@ constexpr int kWarpThreads = 256;
 // keeping the last 2r+1 column partials in registers: one new column per output instead
 // of a whole window (hence the oracle's column-by-column sums). Measured (H100 80GB HBM3,
 // T265 pair, both views): 0.79 / 0.14 ms at levels 1 / 2 (131 / 66 planes) against 2.11 /
-// 0.28 for a thread per (pixel, plane) summing its whole window.
+// 0.28 for a thread per (pixel, plane) summing its whole window; issuing the next
+// column's loads before an output's arithmetic measured the same (0.78 / 0.14).
 constexpr int kCostThreads = 128;
 constexpr int kCostRun = 32;
 constexpr int kMaxRingRadius = 4;  // radii with a register ring; wider windows sum afresh
 
-// sweepAggregate: one block per scanline, one thread per plane (planes rounded up to a
-// warp, at most kMaxSweepPlanes); the line is walked step by step with one barrier a step.
-// A cost above 1 (anticorrelated windows) says no more than "no match": capped (oracle's kCostCap).
+// sweepAggregate: one warp per direction of a scanline, lane l holding planes l, l + 32,
+// ... in registers (J = planes / 32 rounded up, templated), neighbours by shuffles, the
+// previous step's minimum by a butterfly, the costs loaded up to 11 steps ahead: no
+// barrier in a step. The four directions walk at once into their own buffers and a
+// second launch adds them in the oracle's order. Measured (same pair, both views): 1.11 /
+// 0.18 ms at levels 1 / 2, against 2.14 / 0.33 for a block per line (a thread per plane,
+// a barrier a step) and 1.18 / 0.28 for two warps per line meeting in the middle (rows,
+// then columns adding into the rows' sum: less memory traffic, twice the chain of
+// dependent steps). A cost above 1 (anticorrelated windows) says no more than "no
+// match": capped (oracle's kCostCap).
 constexpr float kCostCap = 1.f;
 
 // sweepSelect: one warp per pixel, lanes over the planes, so the reads of a pixel's
@@ -199,114 +207,164 @@ __global__ void __launch_bounds__(kCostThreads)
   }
 }
 
-// The scanline a block walks: the pixel index of its first pixel and the index step
-// between neighbours along it.
-struct Line {
+// --- sweepAggregate ---
+
+// One walk along a scanline: step i's pixel is start + i * stride, from the line's far
+// end when walking backward; its path costs L go to `out`.
+struct Walk {
+  const float* costs;
+  const float* mask;
+  float* out;
   size_t start, stride;
-  int length;
+  int length, planes, maskChannels;
+  bool forward;
+  float p1, p2;
+  __device__ size_t pixel(int step) const { return start + size_t(forward ? step : length - 1 - step) * stride; }
 };
 
-struct AggregateShared {
-  float previous[2][kMaxSweepPlanes];  // the last two steps' L_r, alternating: neighbours' values
-  float warpMin[2][kMaxSweepPlanes / 32];
+// One step's inputs, loaded Ring::kSlots - 1 steps ahead.
+template <int J>
+struct StepIn {
+  float cost[J];
+  float mask;  // compared when the step runs: a compare at load time would wait for the load
 };
 
-// What a step reads, loaded one step ahead (unconditionally, so the loads do not wait for
-// the mask) to overlap the previous step's barrier.
-struct AggregateInput {
-  bool inside;
-  float cost;
+// A walk's path costs: lane l holds planes l, l + 32, ... (J chunks of 32).
+template <int J>
+struct PathState {
+  float previous[J];
+  float previousMin;
+  bool havePrevious;
 };
 
-__device__ AggregateInput loadStep(const Img& costs, const Img& mask, size_t pixel, int k) {
-  return {__ldg(&mask.data[pixel * mask.channels]) != 0.f, __ldg(&costs.data[pixel * costs.channels + k])};
-}
+// Steps loaded ahead + 1: a step is a few shuffles long, a load from memory about a
+// microsecond under this load; the ring's registers (J + 1 per slot) bound it.
+template <int J>
+struct Ring {
+  static constexpr int kSlots = 60 / J < 2 ? 2 : 60 / J > 12 ? 12 : 60 / J;
+};
 
-// The minimum of v over the block; every thread gets it. One barrier, and the per-warp
-// minima alternate between two buffers so the next call cannot overwrite them early.
-__device__ float blockMin(float v, float (&warpMin)[kMaxSweepPlanes / 32]) {
-  for (int offset = 16; offset > 0; offset /= 2) v = fminf(v, __shfl_xor_sync(0xffffffffu, v, offset));
-  if ((threadIdx.x & 31) == 0) warpMin[threadIdx.x / 32] = v;
-  __syncthreads();
-  float m = warpMin[0];
-  for (int w = 1; w < int(blockDim.x / 32); ++w) m = fminf(m, warpMin[w]);
-  return m;
-}
-
-// One direction along the block's line (the oracle's aggregateDirection for one line):
-// thread k keeps L_r(., k) in a register and publishes it in shared memory for planes
-// k -+ 1; the previous step's minimum m comes from blockMin. `out` receives 0 + L (the
-// oracle's aggregated += l from a cleared buffer) and 0 outside the mask.
-__device__ void aggregatePass(const Img& out, const Img& costs, const Img& mask, const SweepDev& p, const Line& line,
-                              bool forward, AggregateShared& s) {
-  int buffer = 0;
-  const int k = threadIdx.x;
-  const bool plane = k < p.planes;
-  const int kLoad = plane ? k : p.planes - 1;  // spare threads load a valid address
-  auto pixelAt = [&](int step) { return line.start + size_t(forward ? step : line.length - 1 - step) * line.stride; };
-  bool havePrevious = false;
-  float own = 0.f, previousMin = 0.f;
-  AggregateInput next = loadStep(costs, mask, pixelAt(0), kLoad);
-  for (int step = 0; step < line.length; ++step) {
-    const size_t pixel = pixelAt(step);
-    const AggregateInput in = next;
-    if (step + 1 < line.length) next = loadStep(costs, mask, pixelAt(step + 1), kLoad);
-    float& written = out.data[pixel * out.channels + kLoad];
-    if (!in.inside) {  // the same for the whole block: no barrier is skipped by some threads only
-      if (plane) written = 0.f;
-      havePrevious = false;
-      continue;
-    }
-    float l = kNoCost;
-    if (plane) {
-      const float c = stdMin(in.cost, kCostCap);
-      l = c;
-      if (havePrevious) {
-        const float* previous = s.previous[buffer ^ 1];
-        float v = stdMin(own, previousMin + p.p2);
-        if (k > 0) v = stdMin(v, previous[k - 1] + p.p1);
-        if (k + 1 < p.planes) v = stdMin(v, previous[k + 1] + p.p1);
-        l = c + v - previousMin;
-      }
-      s.previous[buffer][k] = l;
-      written = 0.f + l;
-    }
-    own = l;
-    previousMin = blockMin(plane ? l : INFINITY, s.warpMin[buffer]);  // its barrier also publishes `previous`
-    havePrevious = true;
-    buffer ^= 1;
+template <int J>
+__device__ __forceinline__ void loadStep(StepIn<J>& in, const Walk& w, size_t pixel) {
+  const int lane = threadIdx.x & 31;
+  in.mask = __ldg(&w.mask[pixel * w.maskChannels]);
+  const size_t row = pixel * w.planes;
+#pragma unroll
+  for (int j = 0; j < J; ++j) {
+    // Spare lanes read a plane they never use: a select here would wait for the load.
+    in.cost[j] = __ldg(&w.costs[row + min(lane + 32 * j, w.planes - 1)]);
   }
 }
 
-// One direction of one line per block, the four directions at once (blockIdx.y: +x, -x,
-// +y, -y), each into its own buffer: `aggregated` for +x, slices of `spare` for the rest.
-// A walk is a chain of dependent steps bound by memory latency; four side by side keep
-// the GPU four times as busy as two walks after two. sweepCombineKernel then adds them in
-// the oracle's order.
+// The oracle's step for the lane's planes, l = min(C, cap) + min(L(k), L(k -+ 1) + p1,
+// minL + p2) - minL; the neighbours by shuffles (lane 0's k - 1 is the previous chunk's
+// lane 31, lane 31's k + 1 the next chunk's lane 0). Returns the step's minimum over the
+// planes (a butterfly of minima: exact in any order).
+template <int J>
+__device__ __forceinline__ float pathStep(const PathState<J>& s, const float (&cost)[J], float (&l)[J], const Walk& w) {
+  const int lane = threadIdx.x & 31;
+  float left[J], right[J];
+#pragma unroll
+  for (int j = 0; j < J; ++j) {
+    left[j] = __shfl_up_sync(0xffffffffu, s.previous[j], 1);
+    right[j] = __shfl_down_sync(0xffffffffu, s.previous[j], 1);
+  }
+#pragma unroll
+  for (int j = 0; j + 1 < J; ++j) {
+    const float last = __shfl_sync(0xffffffffu, s.previous[j], 31), first = __shfl_sync(0xffffffffu, s.previous[j + 1], 0);
+    if (lane == 0) left[j + 1] = last;
+    if (lane == 31) right[j] = first;
+  }
+  float lowest = INFINITY;
+#pragma unroll
+  for (int j = 0; j < J; ++j) {
+    const int k = lane + 32 * j;
+    const float c = stdMin(cost[j], kCostCap);
+    float v = stdMin(s.previous[j], s.previousMin + w.p2);
+    if (k > 0) v = stdMin(v, left[j] + w.p1);
+    if (k + 1 < w.planes) v = stdMin(v, right[j] + w.p1);
+    l[j] = s.havePrevious ? c + v - s.previousMin : c;
+    if (k < w.planes) lowest = fminf(lowest, l[j]);
+  }
+  for (int offset = 16; offset > 0; offset /= 2) lowest = fminf(lowest, __shfl_xor_sync(0xffffffffu, lowest, offset));
+  return lowest;
+}
+
+// One step of a walk (its branches are the whole warp's). Outside the mask the oracle adds
+// nothing to its 0 and restarts the path: L = 0 there.
+template <int J>
+__device__ __forceinline__ void walkStep(PathState<J>& s, const StepIn<J>& in, const Walk& w, size_t pixel) {
+  const int lane = threadIdx.x & 31;
+  float* const out = w.out + pixel * w.planes;
+  if (in.mask == 0.f) {
+    s.havePrevious = false;
+#pragma unroll
+    for (int j = 0; j < J; ++j)
+      if (lane + 32 * j < w.planes) out[lane + 32 * j] = 0.f;
+    return;
+  }
+  float l[J];
+  const float lowest = pathStep(s, in.cost, l, w);
+#pragma unroll
+  for (int j = 0; j < J; ++j) {
+    if (lane + 32 * j < w.planes) out[lane + 32 * j] = l[j];
+    s.previous[j] = l[j];
+  }
+  s.previousMin = lowest;
+  s.havePrevious = true;
+}
+
+// A whole walk. The ring's slot for step + slots - 1 is the one the previous step
+// consumed, so no slot is read and refilled in the same step and each load stays in
+// flight in its own registers (no register moves waiting on it).
+template <int J>
+__device__ void walkLine(const Walk& w) {
+  constexpr int kSlots = Ring<J>::kSlots;
+  PathState<J> s{};
+  StepIn<J> ring[kSlots];
+#pragma unroll
+  for (int d = 0; d + 1 < kSlots; ++d)
+    if (d < w.length) loadStep<J>(ring[d], w, w.pixel(d));
+  for (int step0 = 0; step0 < w.length; step0 += kSlots) {
+#pragma unroll
+    for (int d = 0; d < kSlots; ++d) {
+      const int step = step0 + d;
+      if (step >= w.length) break;
+      if (step + kSlots - 1 < w.length) loadStep<J>(ring[(d + kSlots - 1) % kSlots], w, w.pixel(step + kSlots - 1));
+      walkStep<J>(s, ring[d], w, w.pixel(step));
+    }
+  }
+}
+
+// One warp per direction of a line, every line and direction at once (blockIdx.y: +x,
+// -x, +y, -y), each into its own buffer: `aggregated` for +x, slices of `spare` for the
+// rest; sweepCombineKernel then adds them in the oracle's order.
 __device__ Img directionBuffer(const Img& aggregated, const Img& spare, int direction) {
   if (direction == 0) return aggregated;
   const size_t size = size_t(aggregated.width) * aggregated.height * aggregated.channels;
   return Img{spare.data + size * size_t(direction - 1), aggregated.width, aggregated.height, aggregated.channels};
 }
 
-__global__ void __launch_bounds__(kMaxSweepPlanes)
-    sweepDirectionKernel(Img aggregated, Img spare, Img costs, Img mask, SweepDev p) {
+template <int J>
+__global__ void __launch_bounds__(32) sweepDirectionKernel(Img aggregated, Img spare, Img costs, Img mask, SweepDev p) {
   beginKernel();
-  __shared__ AggregateShared s;
-  const int direction = blockIdx.y, width = costs.width;
+  const int direction = blockIdx.y, line = blockIdx.x, width = costs.width;
   const bool rows = direction < 2;
-  if (int(blockIdx.x) >= (rows ? costs.height : width)) return;  // the whole block
-  const Line line = rows ? Line{size_t(blockIdx.x) * width, 1, width} : Line{blockIdx.x, size_t(width), costs.height};
-  aggregatePass(directionBuffer(aggregated, spare, direction), costs, mask, p, line, direction % 2 == 0, s);
+  if (line >= (rows ? costs.height : width)) return;
+  Walk w{costs.data, mask.data, directionBuffer(aggregated, spare, direction).data, 0, 0, 0, p.planes,
+         mask.channels, direction % 2 == 0, p.p1, p.p2};
+  w.start = rows ? size_t(line) * width : size_t(line);
+  w.stride = rows ? 1 : size_t(width);
+  w.length = rows ? width : costs.height;
+  walkLine<J>(w);
 }
 
-// aggregated = ((L+x + L-x) + L+y) + L-y, the oracle's sum (0 outside the mask, where
-// every direction wrote 0).
+// aggregated = (((0 + L+x) + L-x) + L+y) + L-y, the oracle's sum (0 outside the mask).
 __global__ void sweepCombineKernel(Img aggregated, Img spare) {
   beginKernel();
   const size_t n = size_t(aggregated.width) * aggregated.height * aggregated.channels;
   for (size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x; i < n; i += size_t(gridDim.x) * blockDim.x)
-    aggregated.data[i] = ((aggregated.data[i] + spare.data[i]) + spare.data[i + n]) + spare.data[i + 2 * n];
+    aggregated.data[i] = (((0.f + aggregated.data[i]) + spare.data[i]) + spare.data[i + n]) + spare.data[i + 2 * n];
 }
 
 // The first minimum of (value, k) over a warp; k = -1 (nothing scored) loses to everything.
@@ -478,16 +536,37 @@ cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume
   return cudaGetLastError();
 }
 
-// Two launches: the four directions side by side, then their sum.
-cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p) {
-  if (p.planes > kMaxSweepPlanes) return cudaErrorInvalidValue;
-  const int threads = (p.planes + 31) / 32 * 32;
+namespace {
+
+// The aggregation for J chunks of 32 planes: the four directions' walks, then their sum.
+template <int J>
+cudaError_t launchAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p) {
   const dim3 grid(unsigned(max(costs.width, costs.height)), 4);
-  CS_LAUNCH(sweepDirectionKernel, grid, dim3(threads), 0, s, aggregated, spare, costs, mask, p);
+  CS_LAUNCH(sweepDirectionKernel<J>, grid, dim3(32), 0, s, aggregated, spare, costs, mask, p);
   const size_t n = size_t(aggregated.width) * aggregated.height * aggregated.channels;
   const unsigned blocks = unsigned(std::min<size_t>((n + 255) / 256, 4096));
   CS_LAUNCH(sweepCombineKernel, dim3(blocks), dim3(256), 0, s, aggregated, spare);
   return cudaGetLastError();
+}
+
+}  // namespace
+
+// Planes rounded up to a chunk count with a kernel (every count up to 6, then 8 and 16).
+cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p) {
+  static_assert(kMaxSweepPlanes == 16 * 32, "the largest chunk count");
+  switch ((p.planes + 31) / 32) {
+    case 1: return launchAggregate<1>(s, aggregated, spare, costs, mask, p);
+    case 2: return launchAggregate<2>(s, aggregated, spare, costs, mask, p);
+    case 3: return launchAggregate<3>(s, aggregated, spare, costs, mask, p);
+    case 4: return launchAggregate<4>(s, aggregated, spare, costs, mask, p);
+    case 5: return launchAggregate<5>(s, aggregated, spare, costs, mask, p);
+    case 6: return launchAggregate<6>(s, aggregated, spare, costs, mask, p);
+    case 7:
+    case 8: return launchAggregate<8>(s, aggregated, spare, costs, mask, p);
+    case 9: case 10: case 11: case 12: case 13: case 14: case 15:
+    case 16: return launchAggregate<16>(s, aggregated, spare, costs, mask, p);
+    default: return cudaErrorInvalidValue;
+  }
 }
 
 cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img mask, const SweepDev& p) {

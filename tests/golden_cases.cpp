@@ -440,12 +440,13 @@ std::vector<Output> sweepCostCase(Backend& b) {
 // Costs with a valley at a hypothesis that ramps across the image and jumps by three
 // planes along a slanted edge (so paths take both p1 and p2 steps), noise, unscored
 // hypotheses (2, capped to 1 by the aggregation) and an unmasked patch inside the disc
-// (paths restart after it).
+// (paths restart after it). The valley's position scales with planes / 9 (exactly 1 at 9).
 Host aggregationCosts(const SweepParams& p, Host& mask) {
   Host costs(kW, kH, p.planes);
+  const float scale = float(p.planes - 1) / 8.f;
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
-      const float valley = 2.f + 0.05f * float(x) + (x + y / 2 > 30 ? 3.f : 0.f);
+      const float valley = scale * (2.f + 0.05f * float(x) + (x + y / 2 > 30 ? 3.f : 0.f));
       for (int k = 0; k < p.planes; ++k) {
         const uint32_t i = uint32_t((y * kW + x) * p.planes + k);
         const float d = float(k) - valley;
@@ -472,6 +473,18 @@ std::vector<Output> sweepAggregateCase(Backend& b) {
   Host costs = aggregationCosts(p, mask);
   b.sweepAggregate(aggregated, s.put(costs), s.put(mask), p);
   return {s.get("sweepaggregate_volume", aggregated)};
+}
+
+// The same at 40 planes: a GPU holding planes in 32-wide chunks (CUDA: a warp's lanes)
+// passes neighbours across the chunks' seam and leaves most of the last chunk unused.
+std::vector<Output> sweepAggregateChunksCase(Backend& b) {
+  Session s{b};
+  const SweepParams p = sweepParams(2.0, 40, 2);
+  Host mask = holedDisc();
+  Buffer aggregated = s.make(kW, kH, p.planes);
+  Host costs = aggregationCosts(p, mask);
+  b.sweepAggregate(aggregated, s.put(costs), s.put(mask), p);
+  return {s.get("sweepaggregate_chunks", aggregated)};
 }
 
 // Aggregated costs with a clear parabola around a ramping hypothesis (curvature >= 0.5
@@ -577,6 +590,7 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"sweepWarp", sweepWarpCase},
                                                 {"sweepCost", sweepCostCase},
                                                 {"sweepAggregate", sweepAggregateCase},
+                                                {"sweepAggregate, 40 planes", sweepAggregateChunksCase},
                                                 {"sweepSelect", sweepSelectCase},
                                                 {"sweepInitialise", sweepInitialiseCase}};
   return cases;
