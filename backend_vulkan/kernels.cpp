@@ -428,7 +428,7 @@ void VulkanBackend::doAccumulate(const Buffer& u, const Buffer& w, const Buffer&
 // ---- plane sweep ----
 
 // Mirrors kMaxPlanes in sweep_aggregate.comp (the path costs of two steps in shared memory).
-static_assert(kMaxSweepPlanes <= 1024, "sweep_aggregate.comp holds at most 1024 planes");
+static_assert(kMaxSweepPlanes <= 512, "sweep_aggregate.comp holds at most 512 planes");
 
 // The camera, translation and nearest sphere, in the precision of the geometry shaders.
 Addr VulkanBackend::sweepParamBlock(const SweepParams& p) {
@@ -468,9 +468,11 @@ void VulkanBackend::doSweepCost(const Buffer& costs, const Buffer& reference, co
 
 void VulkanBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                                      const SweepParams& p) {
-  // The four directions at once, one work group per scanline and direction (+x into
-  // `aggregated`, -x, +y, -y into a scratch of three volumes), then their sum in the
-  // oracle's order. dispatchGroups puts a full barrier before each dispatch.
+  // The four directions at once (+x into `aggregated`, -x, +y, -y into a scratch of
+  // three volumes), then their sum in the oracle's order. A scanline per subgroup where
+  // the device has subgroup arithmetic (a work group per scanline and direction covers
+  // every line whatever the subgroup size; the groups past the last line return at once),
+  // else a work group per scanline. dispatchGroups puts a full barrier before each dispatch.
   const int w = aggregated.width, h = aggregated.height;
   const Buffer spare = scratch(2, w, h, 3 * p.planes);
   PcSweepAggregate pc{addr(aggregated), addr(spare), addr(costs), addr(mask), w, h, p.planes, p.p1, p.p2};

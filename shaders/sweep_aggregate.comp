@@ -1,5 +1,10 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
+#ifdef CS_SUBGROUP
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#endif
 // One scanline direction of the semi-global aggregation of the plane-sweep costs
 // (backend_cpu/plane_sweep.cpp aggregateDirection / sweepAggregate). All four directions
 // run in one dispatch, gl_WorkGroupID.y = 0..3 = +x, -x, +y, -y, each writing its own path
@@ -10,30 +15,73 @@
 //
 // Along a line each pixel's path costs depend on the previous pixel's, so a line is
 // walked step by step; within a step the planes are independent except for m, the
-// minimum of the previous step's path costs. Hence one work group per line (work groups:
-// (lines, 1)), its 256 invocations over the planes (plane k on invocation k % 256, so
-// neighbouring invocations touch neighbouring floats of the interleaved buffers), the
-// previous step's path costs in shared memory and m from a shared-memory reduction.
-// With -DCS_SUBGROUP (devices with subgroup arithmetic in compute shaders) m is each
-// subgroup's subgroupMin, then the minimum of those few: one barrier a step instead of
-// one per halving of the tree.
+// minimum of the previous step's path costs. Work groups: (max(width, height), 4).
+//
+// With -DCS_SUBGROUP (devices with subgroup arithmetic in compute shaders) a line is one
+// subgroup's (walkSubgroup): each invocation holds J consecutive planes in registers, m is
+// a subgroupMin, the neighbours across invocations pass through shared memory with a
+// subgroup barrier: no work-group barrier in the step loop, and the next step's costs
+// load while this one's minimum is taken. Work group x takes lines x * subgroups ..; the
+// groups past the last line return at once. Planes beyond kMaxJ per invocation (a
+// small subgroup) and the build without subgroups walk a line with the whole work group
+// (walkGroup): plane k on invocation k % kGroupSize, the previous step's path costs in
+// shared memory, m from a reduction (subgroupMin of each subgroup, then the few minima;
+// a shared-memory tree without subgroups), barriers at every step.
+#define CS_OWN_WORK_GROUP
 #include "common.glsl"
-#ifdef CS_SUBGROUP
-#extension GL_KHR_shader_subgroup_basic : require
-#extension GL_KHR_shader_subgroup_arithmetic : require
-#endif
 
 // A cost above 1 (anticorrelated windows) says no more than "no match" (the oracle's
 // kCostCap).
 const float kCostCap = 1.0;
-const int kGroupSize = 256;   // the 16 x 16 work group of common.glsl, as a line
-const int kMaxPlanes = 1024;  // the backend refuses more (shared memory: 2 x 4 KiB)
+#ifdef CS_SUBGROUP
+const int kGroupSize = 64;  // a few lines per group: the few walks spread over more SMs
+#else
+const int kGroupSize = 256;
+#endif
+layout(local_size_x = kGroupSize, local_size_y = 1, local_size_z = 1) in;
+const int kMaxPlanes = 512;  // kMaxSweepPlanes (backend_vulkan/kernels.cpp checks)
+const int kMaxJ = 16;        // planes per invocation in walkSubgroup (512 at subgroup size 32)
 
 layout(push_constant) uniform PC {
   FBuf aggregated, spare, costs, mask;  // aggregated, costs: `planes` channels; spare: 3 volumes
   int width, height, planes;
   float p1, p2;  // penalty of a step to a neighbouring plane, of any larger jump
 } pc;
+
+// A line of a direction: pixel start + step * stride (y * width + x) at each step, and
+// where its path costs go (paths.v[offset + pixel * planes + k]).
+struct Line {
+  int start, stride, steps, offset;
+  FBuf paths;
+};
+
+// Line `line` of `direction` (0: +x, 1: -x, 2: +y, 3: -y); false past the last line.
+bool lineOf(int direction, int line, out Line l) {
+  const int w = pc.width, h = pc.height;
+  const bool alongRows = direction < 2;
+  if (line >= (alongRows ? h : w)) return false;
+  l.steps = alongRows ? w : h;
+  const int along = alongRows ? 1 : w;  // one step forward, in pixels
+  const int first = alongRows ? line * w : line;
+  const bool forward = direction == 0 || direction == 2;
+  l.start = forward ? first : first + (l.steps - 1) * along;
+  l.stride = forward ? along : -along;
+  l.offset = direction == 0 ? 0 : (direction - 1) * w * h * pc.planes;
+  l.paths = direction == 0 ? pc.aggregated : pc.spare;
+  return true;
+}
+
+// One path cost in the oracle's operations and order (precise: no fused or reassociated
+// adds). c: the capped cost; same, below, above: the previous step's L at k, k - 1, k + 1.
+float pathCost(float c, float same, float below, float above, bool hasBelow, bool hasAbove, float previousMin) {
+  precise float v = min(same, previousMin + pc.p2);
+  if (hasBelow) v = min(v, below + pc.p1);
+  if (hasAbove) v = min(v, above + pc.p1);
+  precise float l = (c + v) - previousMin;
+  return l;
+}
+
+// ---- a line per work group ----
 
 // The path costs of the last two masked steps (ping-pong: step j writes path[j & 1] and
 // reads path[(j - 1) & 1]), and the per-invocation minima of the reduction, likewise
@@ -42,19 +90,8 @@ layout(push_constant) uniform PC {
 shared float path[2][kMaxPlanes];
 shared float lowest[2][kGroupSize];
 
-void main() {
+void walkGroup(Line ln) {
   const int lid = int(gl_LocalInvocationIndex);
-  const int line = int(gl_WorkGroupID.x);
-  const int direction = int(gl_WorkGroupID.y);  // 0: +x, 1: -x, 2: +y, 3: -y
-  const bool alongRows = direction < 2;
-  const bool forward = direction == 0 || direction == 2;
-  FBuf paths = direction == 0 ? pc.aggregated : pc.spare;
-  const int volume = pc.width * pc.height * pc.planes;
-  const int offset = direction == 0 ? 0 : (direction - 1) * volume;
-  const int lines = alongRows ? pc.height : pc.width;
-  const int length = alongRows ? pc.width : pc.height;
-  if (line >= lines) return;  // the whole group: barriers stay in uniform control flow
-
 #ifndef CS_SUBGROUP
   // The reduction's first stride: half the smallest power of two covering the invocations
   // that hold a plane (those beyond hold +inf), so few planes take few rounds.
@@ -62,35 +99,28 @@ void main() {
   int firstStride = 1;
   while (2 * firstStride < holding) firstStride *= 2;
 #endif
-
   bool havePrevious = false;  // uniform: every invocation walks the same pixels
   float previousMin = 0.0;
   int j = 0;  // masked steps so far since the start: selects the ping-pong halves
-  for (int step = 0; step < length; ++step) {
-    const int along = forward ? step : length - 1 - step;
-    const int x = alongRows ? along : line, y = alongRows ? line : along;
-    const int base = idx(pc.width, pc.planes, x, y, 0);
-    if (!masked(pc.mask, pc.width, pc.height, x, y)) {
+  for (int step = 0; step < ln.steps; ++step) {
+    const int pixel = ln.start + step * ln.stride, base = pixel * pc.planes;
+    if (pc.mask.v[pixel] == 0.0) {
       // The path restarts after an unmasked pixel; aggregated is 0 there.
       havePrevious = false;
-      for (int k = lid; k < pc.planes; k += kGroupSize) paths.v[offset + base + k] = 0.0;
+      for (int k = lid; k < pc.planes; k += kGroupSize) ln.paths.v[ln.offset + base + k] = 0.0;
       continue;
     }
     const int cur = j & 1, prev = cur ^ 1;
     float localMin = posInf();
     for (int k = lid; k < pc.planes; k += kGroupSize) {
       const float c = min(pc.costs.v[base + k], kCostCap);
-      // The oracle's operations in its order: no fused or reassociated adds.
-      precise float l = c;
-      if (havePrevious) {
-        precise float v = min(path[prev][k], previousMin + pc.p2);
-        if (k > 0) v = min(v, path[prev][k - 1] + pc.p1);
-        if (k + 1 < pc.planes) v = min(v, path[prev][k + 1] + pc.p1);
-        l = (c + v) - previousMin;
-      }
+      float l = c;
+      if (havePrevious)
+        l = pathCost(c, path[prev][k], path[prev][max(k - 1, 0)], path[prev][min(k + 1, pc.planes - 1)], k > 0,
+                     k + 1 < pc.planes, previousMin);
       path[cur][k] = l;
       localMin = min(localMin, l);
-      paths.v[offset + base + k] = l;
+      ln.paths.v[ln.offset + base + k] = l;
     }
     // m = the minimum of this step's path costs (order-free: min is exact). The first
     // barrier also publishes path[cur] for the next step's neighbours k -+ 1.
@@ -112,4 +142,86 @@ void main() {
     havePrevious = true;
     ++j;
   }
+}
+
+#ifdef CS_SUBGROUP
+// ---- a line per subgroup ----
+
+// Each invocation's first and last path cost of the last two masked steps (ping-pong as
+// path[]), for the neighbouring invocations' planes k -+ 1 across the seam.
+shared float edges[2][2][kGroupSize];  // [step parity][0: first, 1: last][invocation]
+
+void walkSubgroup(Line ln, int J) {
+  const int lane = int(gl_SubgroupInvocationID), S = int(gl_SubgroupSize);
+  const int e = int(gl_SubgroupID) * S + lane;  // this invocation's edges[][][e]
+  const int k0 = lane * J;                      // planes k0 .. k0 + J - 1 (those < planes)
+  float held[kMaxJ];                            // the last masked step's path costs
+  float next[kMaxJ];                            // the coming step's costs, loaded a step early
+  float nextMask = pc.mask.v[ln.start];
+  [[unroll]] for (int j = 0; j < kMaxJ; ++j)
+    if (j < J && k0 + j < pc.planes) next[j] = pc.costs.v[ln.start * pc.planes + k0 + j];
+  bool havePrevious = false;
+  float previousMin = 0.0;
+  int parity = 0;
+  for (int step = 0; step < ln.steps; ++step) {
+    const int pixel = ln.start + step * ln.stride, base = pixel * pc.planes;
+    float c[kMaxJ];
+    [[unroll]] for (int j = 0; j < kMaxJ; ++j) c[j] = next[j];
+    const bool inside = nextMask != 0.0;
+    if (step + 1 < ln.steps) {
+      const int nextPixel = pixel + ln.stride;
+      nextMask = pc.mask.v[nextPixel];
+      [[unroll]] for (int j = 0; j < kMaxJ; ++j)
+        if (j < J && k0 + j < pc.planes) next[j] = pc.costs.v[nextPixel * pc.planes + k0 + j];
+    }
+    if (!inside) {
+      // The path restarts after an unmasked pixel; aggregated is 0 there.
+      havePrevious = false;
+      [[unroll]] for (int j = 0; j < kMaxJ; ++j)
+        if (j < J && k0 + j < pc.planes) ln.paths.v[ln.offset + base + k0 + j] = 0.0;
+      continue;
+    }
+    // The neighbours' seam values from the last masked step (read only when they exist).
+    const float below = havePrevious && k0 > 0 ? edges[parity ^ 1][1][e - 1] : 0.0;
+    const float above = havePrevious && k0 + J < pc.planes ? edges[parity ^ 1][0][e + 1] : 0.0;
+    float localMin = posInf(), belowHeld = below;  // belowHeld: held[j - 1] before this step
+    [[unroll]] for (int j = 0; j < kMaxJ; ++j) {
+      const int k = k0 + j;
+      if (j < J && k < pc.planes) {
+        const float cc = min(c[j], kCostCap);
+        float l = cc;
+        if (havePrevious) {
+          const float up = j + 1 < J ? held[min(j + 1, kMaxJ - 1)] : above;
+          l = pathCost(cc, held[j], belowHeld, up, k > 0, k + 1 < pc.planes, previousMin);
+        }
+        belowHeld = held[j];
+        held[j] = l;
+        localMin = min(localMin, l);
+        ln.paths.v[ln.offset + base + k] = l;
+        if (j == 0) edges[parity][0][e] = l;
+        if (j == J - 1) edges[parity][1][e] = l;
+      }
+    }
+    previousMin = subgroupMin(localMin);  // exact, as the oracle's running minimum
+    subgroupMemoryBarrierShared();        // publishes edges[parity] to the subgroup
+    subgroupBarrier();
+    havePrevious = true;
+    parity ^= 1;
+  }
+}
+#endif
+
+void main() {
+  const int direction = int(gl_WorkGroupID.y);
+  Line ln;
+#ifdef CS_SUBGROUP
+  const int J = (pc.planes + int(gl_SubgroupSize) - 1) / int(gl_SubgroupSize);
+  if (J <= kMaxJ) {
+    const int line = int(gl_WorkGroupID.x * gl_NumSubgroups + gl_SubgroupID);
+    if (lineOf(direction, line, ln)) walkSubgroup(ln, J);
+    return;
+  }
+#endif
+  // The whole group returns together: barriers stay in uniform control flow.
+  if (lineOf(direction, int(gl_WorkGroupID.x), ln)) walkGroup(ln);
 }
