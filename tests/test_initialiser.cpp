@@ -512,6 +512,8 @@ TEST_CASE("init parameters: validation, parseInit / initName, preset quality") {
   CHECK(preset("variational").init == Params::Init::None);
   CHECK(preset("realtime").init == Params::Init::PlaneSweep);
   CHECK(preset("realtime").initLevel == 1);
+  CHECK(preset("fast").init == Params::Init::PlaneSweep);
+  CHECK(preset("fast").initLevel == 2);
   CHECK(preset("paper").init == Params::Init::None);
   CHECK(preset("paper").dataTerm == Params::DataTerm::Brightness);
   const auto names = presetNames();

@@ -27,10 +27,12 @@ std::set<std::string> solverOptions() {
 const std::set<std::string> kSolverOptions = solverOptions();
 
 std::string solverUsage() {
+  std::string presets;
+  for (const std::string& name : presetNames()) presets += (presets.empty() ? "" : "|") + name;
   std::string s =
       "solver options (run, demo, eval, bench):\n"
       "  --backend auto|cpu|...  --device INDEX|NAME  --mask PNG (run)\n"
-      "  --preset realtime|quality|variational|paper (default: realtime)\n"
+      "  --preset " + presets + " (default: realtime)\n"
       "  --min-confidence C (run, demo: points.ply; needs the plane-sweep initialiser)\n";
   const char* group = "";
   for (const ParamInfo& info : paramTable()) {

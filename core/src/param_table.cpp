@@ -117,7 +117,7 @@ std::vector<ParamInfo> buildTable() {
           floatParam("gamma", &Params::gamma, atLeast(0), "accelerated primal-dual (0: constant steps)"),
       });
   std::vector<ParamInfo> sweep =
-      grouped("plane-sweep initialiser (on in --preset realtime and quality)",
+      grouped("plane-sweep initialiser (on in --preset realtime, fast and quality)",
               {
                   init,
                   intParam("init_level", &Params::initLevel, {0, 12, false, true},

@@ -8,7 +8,7 @@ from conftest import same_bits
 
 def test_module_basics():
     assert issubclass(cs.Error, RuntimeError)
-    assert {"realtime", "variational", "quality", "paper"} <= set(cs.presets())
+    assert {"realtime", "fast", "variational", "quality", "paper"} <= set(cs.presets())
     assert "cpu" in cs.available_backends()
     assert cs.available_backends(usable=True)[-1] == "cpu"
     info = cs.build_info()
