@@ -453,13 +453,10 @@ void VulkanBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const
 void VulkanBackend::doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
                                 const SweepParams& p) {
   // One invocation per plane of a run of `run` pixels of a row, walking the run
-  // (sweep_cost.comp): long runs spend less on each run's first 2r columns, short ones
-  // give more invocations. The longest runs that still give about 2^18 invocations (enough
-  // to fill a large GPU), but at least two windows wide.
+  // (sweep_cost.comp): 32 pixels (as backend_cuda) spend 2r / 32 on each run's first
+  // columns and still give ~7 x 10^5 invocations at the sweep's level 1; at least two windows.
   const int64_t w = costs.width, h = costs.height, planes = p.planes;
-  const int64_t runsWanted = std::clamp<int64_t>(((int64_t(1) << 18) + h * planes - 1) / (h * planes), 1, w);
-  const int64_t side = 2 * int64_t(p.radius) + 1;
-  const int64_t run = std::min(w, std::max((w + runsWanted - 1) / runsWanted, 2 * side));
+  const int64_t run = std::min(w, std::max<int64_t>(32, 2 * (2 * int64_t(p.radius) + 1)));
   const int64_t rowItems = (w + run - 1) / run * planes;
   PcSweepCost pc{addr(costs), addr(reference), addr(volume), addr(mask),     int32_t(w),
                  int32_t(h),  p.planes,        p.radius,     p.flatVariance, int32_t(run)};

@@ -20,8 +20,8 @@
 // With -DCS_SUBGROUP (devices with subgroup arithmetic in compute shaders) a line is one
 // subgroup's (walkSubgroup): each invocation holds J consecutive planes in registers, m is
 // a subgroupMin, the neighbours across invocations pass through shared memory with a
-// subgroup barrier: no work-group barrier in the step loop, and the next step's costs
-// load while this one's minimum is taken. Work group x takes lines x * subgroups ..; the
+// subgroup barrier: no work-group barrier in the step loop, and each step's costs load
+// kSlots - 1 steps ahead. Work group x takes lines x * subgroups ..; the
 // groups past the last line return at once. Planes beyond kMaxJ per invocation (a
 // small subgroup) and the build without subgroups walk a line with the whole work group
 // (walkGroup): plane k on invocation k % kGroupSize, the previous step's path costs in
@@ -40,7 +40,7 @@ const int kGroupSize = 256;
 #endif
 layout(local_size_x = kGroupSize, local_size_y = 1, local_size_z = 1) in;
 const int kMaxPlanes = 512;  // kMaxSweepPlanes (backend_vulkan/kernels.cpp checks)
-const int kMaxJ = 16;        // planes per invocation in walkSubgroup (512 at subgroup size 32)
+const int kMaxJ = 8;         // planes per invocation in walkSubgroup (256 at subgroup size 32)
 
 layout(push_constant) uniform PC {
   FBuf aggregated, spare, costs, mask;  // aggregated, costs: `planes` channels; spare: 3 volumes
@@ -151,62 +151,83 @@ void walkGroup(Line ln) {
 // path[]), for the neighbouring invocations' planes k -+ 1 across the seam.
 shared float edges[2][2][kGroupSize];  // [step parity][0: first, 1: last][invocation]
 
+// One masked or unmasked step of a line with its costs c and mask value in hand.
+void subgroupStep(Line ln, int J, int k0, int e, int step, float c[kMaxJ], float inMask, inout float held[kMaxJ],
+                  inout bool havePrevious, inout float previousMin, inout int parity) {
+  const int base = (ln.start + step * ln.stride) * pc.planes;
+  if (inMask == 0.0) {
+    // The path restarts after an unmasked pixel; aggregated is 0 there.
+    havePrevious = false;
+    [[unroll]] for (int j = 0; j < kMaxJ; ++j)
+      if (j < J && k0 + j < pc.planes) ln.paths.v[ln.offset + base + k0 + j] = 0.0;
+    return;
+  }
+  // The neighbours' seam values from the last masked step (read only when they exist).
+  const float below = havePrevious && k0 > 0 ? edges[parity ^ 1][1][e - 1] : 0.0;
+  const float above = havePrevious && k0 + J < pc.planes ? edges[parity ^ 1][0][e + 1] : 0.0;
+  float localMin = posInf(), belowHeld = below;  // belowHeld: held[j - 1] before this step
+  [[unroll]] for (int j = 0; j < kMaxJ; ++j) {
+    const int k = k0 + j;
+    if (j < J && k < pc.planes) {
+      const float cc = min(c[j], kCostCap);
+      float l = cc;
+      if (havePrevious) {
+        const float up = j + 1 < J ? held[min(j + 1, kMaxJ - 1)] : above;
+        l = pathCost(cc, held[j], belowHeld, up, k > 0, k + 1 < pc.planes, previousMin);
+      }
+      belowHeld = held[j];
+      held[j] = l;
+      localMin = min(localMin, l);
+      ln.paths.v[ln.offset + base + k] = l;
+      if (j == 0) edges[parity][0][e] = l;
+      if (j == J - 1) edges[parity][1][e] = l;
+    }
+  }
+  previousMin = subgroupMin(localMin);  // exact, as the oracle's running minimum
+  subgroupMemoryBarrierShared();        // publishes edges[parity] to the subgroup
+  subgroupBarrier();
+  havePrevious = true;
+  parity ^= 1;
+}
+
+// A step takes a few hundred cycles, a load from memory under this traffic about a
+// microsecond: each step's costs and mask are loaded kSlots - 1 steps ahead into a ring
+// of registers. The step loop is unrolled by kSlots so that every slot index is a
+// constant; the slot refilled at step s is the one step s - 1 consumed, so no register
+// waits on a load before its step (the mask is compared only when its step runs).
+const int kSlots = 6;
+
 void walkSubgroup(Line ln, int J) {
   const int lane = int(gl_SubgroupInvocationID), S = int(gl_SubgroupSize);
   const int e = int(gl_SubgroupID) * S + lane;  // this invocation's edges[][][e]
   const int k0 = lane * J;                      // planes k0 .. k0 + J - 1 (those < planes)
+  const int kLoad = min(k0, pc.planes - 1);     // spare invocations load a valid address
   float held[kMaxJ];                            // the last masked step's path costs
-  float next[kMaxJ];                            // the coming step's costs, loaded a step early
-  float nextMask = pc.mask.v[ln.start];
-  [[unroll]] for (int j = 0; j < kMaxJ; ++j)
-    if (j < J && k0 + j < pc.planes) next[j] = pc.costs.v[ln.start * pc.planes + k0 + j];
+  float ringCost[kSlots][kMaxJ], ringMask[kSlots];
+  [[unroll]] for (int d = 0; d + 1 < kSlots; ++d) {
+    if (d < ln.steps) {
+      const int pixel = ln.start + d * ln.stride;
+      ringMask[d] = pc.mask.v[pixel];
+      [[unroll]] for (int j = 0; j < kMaxJ; ++j)
+        if (j < J) ringCost[d][j] = pc.costs.v[pixel * pc.planes + min(kLoad + j, pc.planes - 1)];
+    }
+  }
   bool havePrevious = false;
   float previousMin = 0.0;
   int parity = 0;
-  for (int step = 0; step < ln.steps; ++step) {
-    const int pixel = ln.start + step * ln.stride, base = pixel * pc.planes;
-    float c[kMaxJ];
-    [[unroll]] for (int j = 0; j < kMaxJ; ++j) c[j] = next[j];
-    const bool inside = nextMask != 0.0;
-    if (step + 1 < ln.steps) {
-      const int nextPixel = pixel + ln.stride;
-      nextMask = pc.mask.v[nextPixel];
-      [[unroll]] for (int j = 0; j < kMaxJ; ++j)
-        if (j < J && k0 + j < pc.planes) next[j] = pc.costs.v[nextPixel * pc.planes + k0 + j];
-    }
-    if (!inside) {
-      // The path restarts after an unmasked pixel; aggregated is 0 there.
-      havePrevious = false;
-      [[unroll]] for (int j = 0; j < kMaxJ; ++j)
-        if (j < J && k0 + j < pc.planes) ln.paths.v[ln.offset + base + k0 + j] = 0.0;
-      continue;
-    }
-    // The neighbours' seam values from the last masked step (read only when they exist).
-    const float below = havePrevious && k0 > 0 ? edges[parity ^ 1][1][e - 1] : 0.0;
-    const float above = havePrevious && k0 + J < pc.planes ? edges[parity ^ 1][0][e + 1] : 0.0;
-    float localMin = posInf(), belowHeld = below;  // belowHeld: held[j - 1] before this step
-    [[unroll]] for (int j = 0; j < kMaxJ; ++j) {
-      const int k = k0 + j;
-      if (j < J && k < pc.planes) {
-        const float cc = min(c[j], kCostCap);
-        float l = cc;
-        if (havePrevious) {
-          const float up = j + 1 < J ? held[min(j + 1, kMaxJ - 1)] : above;
-          l = pathCost(cc, held[j], belowHeld, up, k > 0, k + 1 < pc.planes, previousMin);
-        }
-        belowHeld = held[j];
-        held[j] = l;
-        localMin = min(localMin, l);
-        ln.paths.v[ln.offset + base + k] = l;
-        if (j == 0) edges[parity][0][e] = l;
-        if (j == J - 1) edges[parity][1][e] = l;
+  for (int step0 = 0; step0 < ln.steps; step0 += kSlots) {
+    [[unroll]] for (int d = 0; d < kSlots; ++d) {
+      const int step = step0 + d;
+      if (step >= ln.steps) break;
+      const int ahead = step + kSlots - 1, slot = (d + kSlots - 1) % kSlots;
+      if (ahead < ln.steps) {
+        const int pixel = ln.start + ahead * ln.stride;
+        ringMask[slot] = pc.mask.v[pixel];
+        [[unroll]] for (int j = 0; j < kMaxJ; ++j)
+          if (j < J) ringCost[slot][j] = pc.costs.v[pixel * pc.planes + min(kLoad + j, pc.planes - 1)];
       }
+      subgroupStep(ln, J, k0, e, step, ringCost[d], ringMask[d], held, havePrevious, previousMin, parity);
     }
-    previousMin = subgroupMin(localMin);  // exact, as the oracle's running minimum
-    subgroupMemoryBarrierShared();        // publishes edges[parity] to the subgroup
-    subgroupBarrier();
-    havePrevious = true;
-    parity ^= 1;
   }
 }
 #endif

@@ -22,8 +22,7 @@
 layout(local_size_x = 256, local_size_y = 1, local_size_z = 1) in;
 
 const float kNoCost = 2.0;  // cost where nothing scored (the worst 1 - ZNCC)
-const int kMaxRadius = 7;   // Params::initRadius is at most 7; larger radii: direct()
-const int kMaxSide = 2 * kMaxRadius + 1;
+const int kMaxRadius = 4;   // the largest radius walked with the window in registers
 
 layout(push_constant) uniform PC {
   FBuf costs, reference, volume, mask;  // costs, volume: `planes` channels
@@ -70,37 +69,44 @@ float zncc(float n, float s0, float s1, float s00, float s11, float s01, int sid
   return cost;
 }
 
-// The run's pixels x0 .. at plane k for window radius r. Called with a literal r (main's
-// switch): once inlined, the loops over the window have constant trips and, unrolled,
-// constant indices, so the window's columns stay in registers (win[m] = column x - r + m,
-// shifted down one per output: register moves, cheaper than a ring's dynamic index).
-void walk(const int r, int x0, int y, int k) {
-  const int side = 2 * r + 1;
-  Column win[kMaxSide];
-  // The first 2r steps only fill the window (one column-sum site keeps the code small).
-  for (int x = x0 - 2 * r; x < min(x0 + pc.run, pc.width); ++x) {
-    [[unroll]] for (int m = 0; m + 1 < side; ++m) win[m] = win[m + 1];
-    win[side - 1] = column(x + r, y, k, r);
-    if (x < x0) continue;
-    float cost = kNoCost;
-    if (masked(pc.mask, pc.width, pc.height, x, y)) {
-      // The window's sums: 0, then the columns' partials in dx order.
-      precise float n = 0.0, s0 = 0.0, s1 = 0.0, s00 = 0.0, s11 = 0.0, s01 = 0.0;
-      [[unroll]] for (int m = 0; m < side; ++m) {
-        n += win[m].n;
-        s0 += win[m].s0;
-        s1 += win[m].s1;
-        s00 += win[m].s00;
-        s11 += win[m].s11;
-        s01 += win[m].s01;
-      }
-      cost = zncc(n, s0, s1, s00, s11, s01, side);
-    }
-    pc.costs.v[idx(pc.width, pc.planes, x, y, k)] = cost;
+// walk##R: the run's pixels x0 .. at plane k for window radius R, one function per
+// radius (a macro, GLSL having no templates) so that the window's array has its exact
+// size and every loop over it a constant trip: unrolled, every index is a constant and
+// the window stays in registers (win[m] = column x - R + m, shifted down one per output:
+// register moves). The first 2R steps only fill the window (one column-sum site keeps
+// the code small).
+#define WALK(R)                                                                         \
+  void walk##R(int x0, int y, int k) {                                                  \
+    Column win[2 * R + 1];                                                              \
+    for (int x = x0 - 2 * R; x < min(x0 + pc.run, pc.width); ++x) {                     \
+      [[unroll]] for (int m = 0; m < 2 * R; ++m) win[m] = win[m + 1];                   \
+      win[2 * R] = column(x + R, y, k, R);                                              \
+      if (x < x0) continue;                                                             \
+      float cost = kNoCost;                                                             \
+      if (masked(pc.mask, pc.width, pc.height, x, y)) {                                 \
+        precise float n = 0.0, s0 = 0.0, s1 = 0.0, s00 = 0.0, s11 = 0.0, s01 = 0.0;     \
+        [[unroll]] for (int m = 0; m < 2 * R + 1; ++m) {                                \
+          n += win[m].n;                                                                \
+          s0 += win[m].s0;                                                              \
+          s1 += win[m].s1;                                                              \
+          s00 += win[m].s00;                                                            \
+          s11 += win[m].s11;                                                            \
+          s01 += win[m].s01;                                                            \
+        }                                                                               \
+        cost = zncc(n, s0, s1, s00, s11, s01, 2 * R + 1);                               \
+      }                                                                                 \
+      pc.costs.v[idx(pc.width, pc.planes, x, y, k)] = cost;                             \
+    }                                                                                   \
   }
-}
+WALK(0)
+WALK(1)
+WALK(2)
+WALK(3)
+WALK(4)
 
-// Radii beyond the ring (the pipeline never asks for them): every window from its columns.
+// Radii beyond walk's (kMaxRadius): every window from its columns afresh, in the same
+// order. A wider register window would cost every radius registers (one allocation for
+// the whole shader) and with them occupancy.
 void direct(int r, int x0, int y, int k) {
   for (int x = x0; x < min(x0 + pc.run, pc.width); ++x) {
     float cost = kNoCost;
@@ -127,16 +133,12 @@ void main() {
   if (i >= runs * pc.planes || y >= pc.height) return;
   const int run = i / pc.planes, k = i - run * pc.planes;
   const int x0 = run * pc.run;
-  // A literal radius per case (see walk).
   switch (pc.radius) {
-    case 0: walk(0, x0, y, k); break;
-    case 1: walk(1, x0, y, k); break;
-    case 2: walk(2, x0, y, k); break;
-    case 3: walk(3, x0, y, k); break;
-    case 4: walk(4, x0, y, k); break;
-    case 5: walk(5, x0, y, k); break;
-    case 6: walk(6, x0, y, k); break;
-    case 7: walk(7, x0, y, k); break;
+    case 0: walk0(x0, y, k); break;
+    case 1: walk1(x0, y, k); break;
+    case 2: walk2(x0, y, k); break;
+    case 3: walk3(x0, y, k); break;
+    case 4: walk4(x0, y, k); break;
     default: direct(pc.radius, x0, y, k); break;
   }
 }
