@@ -4,6 +4,7 @@
 #ifdef CS_SUBGROUP
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_memory_scope_semantics : require
 #endif
 // One scanline direction of the semi-global aggregation of the plane-sweep costs
 // (backend_cpu/plane_sweep.cpp aggregateDirection / sweepAggregate). All four directions
@@ -184,8 +185,7 @@ void subgroupStep(Line ln, int J, int k0, int e, int step, float c[kMaxJ], float
     }
   }
   previousMin = subgroupMin(localMin);  // exact, as the oracle's running minimum
-  subgroupMemoryBarrierShared();        // publishes edges[parity] to the subgroup
-  subgroupBarrier();
+  controlBarrier(gl_ScopeSubgroup, gl_ScopeSubgroup, gl_StorageSemanticsShared, gl_SemanticsAcquireRelease);
   havePrevious = true;
   parity ^= 1;
 }

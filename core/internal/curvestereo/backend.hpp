@@ -108,8 +108,9 @@ struct PrimalDualParams {
 };
 
 // The most hypotheses a plane sweep may have (SweepParams::planes): the pipeline never asks
-// for more, and every backend's sweep kernels take this many (CUDA's aggregation runs one
-// thread per plane; Vulkan's sweep_aggregate.comp holds 1024 in shared memory).
+// for more, and every backend's sweep kernels take this many (the GPU aggregations hold a
+// scanline's planes in registers, at most kMaxSweepPlanes / 32 per lane; Vulkan's fallback
+// holds them in shared memory).
 constexpr int kMaxSweepPlanes = 512;
 // The structure tensor's Gaussian pre-smoothing: radius ceil(3 sigma) at most this (sigma up
 // to 42 px).
