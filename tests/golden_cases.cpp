@@ -465,27 +465,22 @@ Host holedDisc() {
   return mask;
 }
 
-std::vector<Output> sweepAggregateCase(Backend& b) {
+// The aggregation of aggregationCosts over a disc with a hole, at `planes` hypotheses.
+std::vector<Output> aggregateAt(Backend& b, int planes, const char* name) {
   Session s{b};
-  const SweepParams p = sweepParams(2.0, 9, 2);
+  const SweepParams p = sweepParams(2.0, planes, 2);
   Host mask = holedDisc();
   Buffer aggregated = s.make(kW, kH, p.planes);
   Host costs = aggregationCosts(p, mask);
   b.sweepAggregate(aggregated, s.put(costs), s.put(mask), p);
-  return {s.get("sweepaggregate_volume", aggregated)};
+  return {s.get(name, aggregated)};
 }
+
+std::vector<Output> sweepAggregateCase(Backend& b) { return aggregateAt(b, 9, "sweepaggregate_volume"); }
 
 // The same at 40 planes: a GPU holding planes in 32-wide chunks (CUDA: a warp's lanes)
 // passes neighbours across the chunks' seam and leaves most of the last chunk unused.
-std::vector<Output> sweepAggregateChunksCase(Backend& b) {
-  Session s{b};
-  const SweepParams p = sweepParams(2.0, 40, 2);
-  Host mask = holedDisc();
-  Buffer aggregated = s.make(kW, kH, p.planes);
-  Host costs = aggregationCosts(p, mask);
-  b.sweepAggregate(aggregated, s.put(costs), s.put(mask), p);
-  return {s.get("sweepaggregate_chunks", aggregated)};
-}
+std::vector<Output> sweepAggregateChunksCase(Backend& b) { return aggregateAt(b, 40, "sweepaggregate_chunks"); }
 
 // Aggregated costs with a clear parabola around a ramping hypothesis (curvature >= 0.5
 // per path, so the vertex is well conditioned), costs with unscored hypotheses: the

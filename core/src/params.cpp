@@ -59,7 +59,7 @@ Params preset(const std::string& name) {
     // the step per warp is chosen so that a level can still travel about as far as the N =
     // 30 presets (5 x 1.0 px against 30 x 0.2): the sweep's upsampled estimate is several
     // level px off at edges. Measured as realtime's above: 6.4 / 4.5, 9.5 / 6.0, 12.0 %,
-    // about 2.8 ms less per 848x800 frame on the H100. (The tapered schedule after a
+    // about 2.5 ms less per 848x800 frame on the H100. (The tapered schedule after a
     // level-2 sweep measured worse, 8.4 / 9.9 % tau>1: a coarse sweep leaves the fine
     // levels more to travel.)
     p.warps = 5;
