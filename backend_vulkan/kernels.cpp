@@ -469,15 +469,11 @@ void VulkanBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& cos
   // three volumes), then their sum in the oracle's order. A scanline per subgroup where
   // the device has subgroup arithmetic (a work group per scanline and direction covers
   // every line whatever the subgroup size; the groups past the last line return at once),
-  // its neighbouring planes by shuffles where the device has them, else a work group per
-  // scanline. dispatchGroups puts a full barrier before each dispatch.
+  // else a work group per scanline. dispatchGroups puts a full barrier before each dispatch.
   const int w = aggregated.width, h = aggregated.height;
   const Buffer spare = scratch(2, w, h, 3 * p.planes);
   PcSweepAggregate pc{addr(aggregated), addr(spare), addr(costs), addr(mask), w, h, p.planes, p.p1, p.p2};
-  const Shader walk = subgroupShuffle_     ? kSweepAggregateShuffle
-                      : subgroupArithmetic_ ? kSweepAggregateSubgroup
-                                            : kSweepAggregate;
-  dispatchGroups(walk, pc, uint32_t(std::max(w, h)), 4);
+  dispatchGroups(subgroupArithmetic_ ? kSweepAggregateSubgroup : kSweepAggregate, pc, uint32_t(std::max(w, h)), 4);
   const int64_t count = int64_t(w) * h * p.planes;
   PcSweepCombine sum{addr(aggregated), addr(spare), int32_t(count)};
   dispatchGroups(kSweepCombine, sum, uint32_t((count + 255) / 256), 1);

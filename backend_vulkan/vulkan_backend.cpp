@@ -65,10 +65,6 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
                         (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
                         (subgroup.supportedOperations & needed) == needed && subgroup.subgroupSize >= 1 &&
                         !(useSubgroups && std::string(useSubgroups) == "0");
-  // And subgroup shuffles (CURVESTEREO_VULKAN_SUBGROUPS=arithmetic turns them off alone,
-  // for tests of the walk without them).
-  subgroupShuffle_ = subgroupArithmetic_ && (subgroup.supportedOperations & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
-                     !(useSubgroups && std::string(useSubgroups) == "arithmetic");
   description_ = std::string(props_.deviceName) + " (" + typeName(props_.deviceType) + ", Vulkan " +
                  std::to_string(VK_API_VERSION_MAJOR(props_.apiVersion)) + "." +
                  std::to_string(VK_API_VERSION_MINOR(props_.apiVersion)) + "." +

@@ -147,7 +147,6 @@ class VulkanBackend final : public Backend {
   bool float64_ = false;
   PdTile pdTile_ = PdTile::Narrow;   // the largest tile of primal_dual.comp the device holds
   bool subgroupArithmetic_ = false;  // subgroup arithmetic in compute shaders
-  bool subgroupShuffle_ = false;     // and shuffles (only with subgroupArithmetic_)
   VkDevice dev_ = VK_NULL_HANDLE;
   VkQueue queue_ = VK_NULL_HANDLE;
   uint32_t queueFamily_ = 0;

@@ -1,10 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
-#ifdef CS_SHUFFLE
-#define CS_SUBGROUP  // the subgroup walk, the neighbours by shuffles
-#extension GL_KHR_shader_subgroup_shuffle : require
-#endif
 #ifdef CS_SUBGROUP
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -32,14 +28,6 @@
 // (walkGroup): plane k on invocation k % kGroupSize, the previous step's path costs in
 // shared memory, m from a reduction (subgroupMin of each subgroup, then the few minima;
 // a shared-memory tree without subgroups), barriers at every step.
-//
-// With -DCS_SHUFFLE (subgroup arithmetic and shuffles: the build the backend takes where
-// the device has both) the subgroup walk interleaves the planes instead: plane k is on
-// invocation k % S, chunk k / S (as backend_cuda's sweepDirectionKernel), so each load and
-// store of a chunk is one contiguous run of S floats, and the neighbours k -+ 1 come from
-// a rotation of the chunk by one invocation (subgroupShuffle), invocation 0 / S - 1 taking
-// the rotated previous / next chunk: no shared memory, no barrier. The costs load
-// kSlots - 1 = 11 steps ahead (backend_cuda's depth).
 #define CS_OWN_WORK_GROUP
 #include "common.glsl"
 
@@ -160,61 +148,6 @@ void walkGroup(Line ln) {
 #ifdef CS_SUBGROUP
 // ---- a line per subgroup ----
 
-#ifdef CS_SHUFFLE
-// One masked or unmasked step of a line with its costs c and mask value in hand; planes
-// k = lane + S * j (those < planes) in held[j].
-void subgroupStep(Line ln, int J, int lane, int S, int step, float c[kMaxJ], float inMask, inout float held[kMaxJ],
-                  inout bool havePrevious, inout float previousMin) {
-  const int base = (ln.start + step * ln.stride) * pc.planes;
-  if (inMask == 0.0) {
-    // The path restarts after an unmasked pixel; aggregated is 0 there.
-    havePrevious = false;
-    [[unroll]] for (int j = 0; j < kMaxJ; ++j)
-      if (j < J && lane + j * S < pc.planes) ln.paths.v[ln.offset + base + lane + j * S] = 0.0;
-    return;
-  }
-  float localMin = posInf();
-  if (havePrevious) {  // uniform: the shuffles run on the whole subgroup
-    // fromBelow[j]: held[j] of invocation lane - 1 (of S - 1 at invocation 0), fromAbove[j]:
-    // of lane + 1 (of 0 at S - 1); the previous step's values, all read before any is replaced.
-    const uint down = uint((lane + S - 1) % S), up = uint((lane + 1) % S);
-    float fromBelow[kMaxJ], fromAbove[kMaxJ];
-    [[unroll]] for (int j = 0; j < kMaxJ; ++j) {
-      if (j < J) {
-        fromBelow[j] = subgroupShuffle(held[j], down);
-        fromAbove[j] = subgroupShuffle(held[j], up);
-      }
-    }
-    [[unroll]] for (int j = 0; j < kMaxJ; ++j) {
-      const int k = lane + j * S;
-      if (j < J && k < pc.planes) {
-        // Plane k - 1: chunk j of lane - 1, or chunk j - 1 of S - 1 at invocation 0; plane
-        // k + 1: chunk j of lane + 1, or chunk j + 1 of 0 at S - 1 (read only when they exist).
-        const float below = lane > 0 ? fromBelow[j] : fromBelow[max(j - 1, 0)];
-        const float above = lane + 1 < S ? fromAbove[j] : fromAbove[min(j + 1, kMaxJ - 1)];
-        const float l = pathCost(min(c[j], kCostCap), held[j], below, above, k > 0, k + 1 < pc.planes, previousMin);
-        held[j] = l;
-        localMin = min(localMin, l);
-        ln.paths.v[ln.offset + base + k] = l;
-      }
-    }
-  } else {
-    [[unroll]] for (int j = 0; j < kMaxJ; ++j) {
-      const int k = lane + j * S;
-      if (j < J && k < pc.planes) {
-        const float l = min(c[j], kCostCap);
-        held[j] = l;
-        localMin = min(localMin, l);
-        ln.paths.v[ln.offset + base + k] = l;
-      }
-    }
-  }
-  previousMin = subgroupMin(localMin);  // exact, as the oracle's running minimum
-  havePrevious = true;
-}
-
-const int kSlots = 12;
-#else
 // Each invocation's first and last path cost of the last two masked steps (ping-pong as
 // path[]), for the neighbouring invocations' planes k -+ 1 across the seam.
 shared float edges[2][2][kGroupSize];  // [step parity][0: first, 1: last][invocation]
@@ -263,24 +196,12 @@ void subgroupStep(Line ln, int J, int k0, int e, int step, float c[kMaxJ], float
 // constant; the slot refilled at step s is the one step s - 1 consumed, so no register
 // waits on a load before its step (the mask is compared only when its step runs).
 const int kSlots = 6;
-#endif
-
-// Plane j of this invocation's (clamped to a valid address for the spare ones).
-int loadPlane(int lane, int S, int J, int j) {
-#ifdef CS_SHUFFLE
-  return min(lane + j * S, pc.planes - 1);
-#else
-  return min(lane * J + j, pc.planes - 1);
-#endif
-}
 
 void walkSubgroup(Line ln, int J) {
   const int lane = int(gl_SubgroupInvocationID), S = int(gl_SubgroupSize);
-#ifndef CS_SHUFFLE
   const int e = int(gl_SubgroupID) * S + lane;  // this invocation's edges[][][e]
   const int k0 = lane * J;                      // planes k0 .. k0 + J - 1 (those < planes)
-  int parity = 0;
-#endif
+  const int kLoad = min(k0, pc.planes - 1);     // spare invocations load a valid address
   float held[kMaxJ];                            // the last masked step's path costs
   float ringCost[kSlots][kMaxJ], ringMask[kSlots];
   [[unroll]] for (int d = 0; d + 1 < kSlots; ++d) {
@@ -288,11 +209,12 @@ void walkSubgroup(Line ln, int J) {
       const int pixel = ln.start + d * ln.stride;
       ringMask[d] = pc.mask.v[pixel];
       [[unroll]] for (int j = 0; j < kMaxJ; ++j)
-        if (j < J) ringCost[d][j] = pc.costs.v[pixel * pc.planes + loadPlane(lane, S, J, j)];
+        if (j < J) ringCost[d][j] = pc.costs.v[pixel * pc.planes + min(kLoad + j, pc.planes - 1)];
     }
   }
   bool havePrevious = false;
   float previousMin = 0.0;
+  int parity = 0;
   for (int step0 = 0; step0 < ln.steps; step0 += kSlots) {
     [[unroll]] for (int d = 0; d < kSlots; ++d) {
       const int step = step0 + d;
@@ -302,13 +224,9 @@ void walkSubgroup(Line ln, int J) {
         const int pixel = ln.start + ahead * ln.stride;
         ringMask[slot] = pc.mask.v[pixel];
         [[unroll]] for (int j = 0; j < kMaxJ; ++j)
-          if (j < J) ringCost[slot][j] = pc.costs.v[pixel * pc.planes + loadPlane(lane, S, J, j)];
+          if (j < J) ringCost[slot][j] = pc.costs.v[pixel * pc.planes + min(kLoad + j, pc.planes - 1)];
       }
-#ifdef CS_SHUFFLE
-      subgroupStep(ln, J, lane, S, step, ringCost[d], ringMask[d], held, havePrevious, previousMin);
-#else
       subgroupStep(ln, J, k0, e, step, ringCost[d], ringMask[d], held, havePrevious, previousMin, parity);
-#endif
     }
   }
 }
