@@ -7,6 +7,8 @@
 #include <string>
 
 #include "cpu_backend.hpp"
+#include "forwarding_backend.hpp"
+#include "pipeline.hpp"
 #include "curvestereo/params.hpp"
 #include "curvestereo/stereo.hpp"
 #include "stereo_core.hpp"
@@ -38,7 +40,38 @@ std::string refusal(const Rig& rig, const Params& params, int& made) {
   return "";
 }
 
+// A CPU backend that adds up the bytes of every buffer the pipeline creates.
+class CountingBackend final : public test::ForwardingBackend {
+ public:
+  CountingBackend(std::unique_ptr<Backend> inner, unsigned long long& bytes)
+      : ForwardingBackend(*inner), inner_(std::move(inner)), bytes_(bytes) {}
+
+ protected:
+  Buffer doCreate(int w, int h, int c) override {
+    bytes_ += 4ull * (unsigned long long)w * h * c;
+    return ForwardingBackend::doCreate(w, h, c);
+  }
+
+ private:
+  std::unique_ptr<Backend> inner_;
+  unsigned long long& bytes_;
+};
+
 }  // namespace
+
+TEST_CASE("bufferBytes: what the pipeline allocates, with and without the sweep") {
+  for (const std::string& name : presetNames()) {
+    CAPTURE(name);
+    unsigned long long created = 0;
+    detail::StereoCore core(smallRig(), preset(name), [&] {
+      return std::make_unique<CountingBackend>(std::make_unique<cpu::CpuBackend>(), created);
+    });
+    CHECK(created == Pipeline::bufferBytes(smallRig(), preset(name)));
+  }
+  Stereo realtime(smallRig(), preset("realtime"), "cpu"), variational(smallRig(), preset("variational"), "cpu");
+  CHECK(realtime.bufferBytes() == Pipeline::bufferBytes(smallRig(), preset("realtime")));
+  CHECK(realtime.bufferBytes() > variational.bufferBytes());  // the sweep's volumes
+}
 
 TEST_CASE("StereoCore refuses a bad rig or parameters before making the backend, as Stereo does") {
   const Params params = preset("realtime");

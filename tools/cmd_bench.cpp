@@ -78,6 +78,7 @@ int cmdBench(const Args& args) {
   std::printf("settings: %s\n", describe(params).c_str());
   std::printf("outputs:  %s\n",
               outputs == "depth" ? "radial depth + valid mask" : "all (depth, disparity, warp, points, confidence)");
+  std::printf("buffers:  %.0f MB per frame\n", double(stereo.bufferBytes()) / 1e6);
   std::printf("runs:     %d after 1 warm-up frame\n", runs);
   // Frames as a real-time application runs them: into the same DepthResult every frame,
   // so its images are allocated once (here, by the warm-up frame: first-touch allocation,

@@ -125,6 +125,7 @@ void Stereo::setProgress(std::function<void(double)> progress) { progress_ = std
 
 const std::string& Stereo::backendName() const { return core_->backendName(); }
 std::string Stereo::deviceName() const { return core_->backend().device(); }
+unsigned long long Stereo::bufferBytes() const { return Pipeline::bufferBytes(rig(), params()); }
 const Rig& Stereo::rig() const { return core_->rig(); }
 const Params& Stereo::params() const { return core_->params(); }
 

@@ -97,6 +97,10 @@ class Stereo {
   const std::string& backendChoice() const { return backendWhy_; }
   const Rig& rig() const;
   const Params& params() const;
+  // Bytes of the frame's buffers on the backend (every level's images, the sweep's volumes;
+  // what the constructor checks against the device's memory). GPU backends hold the sweep
+  // aggregation's three direction volumes besides (backend.hpp sweepAggregate).
+  unsigned long long bufferBytes() const;
 
  private:
   std::string backendWhy_;
