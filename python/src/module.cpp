@@ -546,6 +546,9 @@ empty. The GIL is released while the frame is solved.)doc")
           "backend_choice", [](const PyStereo& s) { return s.stereo().backendChoice(); },
           "Which backend 'auto' took, and why.")
       .def_property_readonly(
+          "buffer_bytes", [](const PyStereo& s) { return s.stereo().bufferBytes(); },
+          "Bytes of the frame's buffers on the backend (the levels' images, the sweep's volumes).")
+      .def_property_readonly(
           "rig", [](const PyStereo& s) { return s.stereo().rig(); }, "The rig, with the pose of the latest set_pose().")
       .def_property_readonly(
           "params", [](const PyStereo& s) { return paramsToDict(s.params()); },

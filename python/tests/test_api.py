@@ -42,6 +42,8 @@ def test_compute_outputs(small):
     calib, left, right = small
     stereo = cs.Stereo(cs.load_calibration(calib), "realtime", "cpu", device=0)  # the CPU takes any device
     assert stereo.backend == "cpu" and stereo.device and "cpu" in stereo.backend_choice
+    # the sweep's volumes: realtime holds more than the solver alone
+    assert stereo.buffer_bytes > cs.Stereo(cs.load_calibration(calib), "variational", "cpu").buffer_bytes > 0
     r = stereo.compute(left, right)
     h, w = left.shape
     assert r.depth.dtype == np.float32 and r.depth.shape == (h, w)
