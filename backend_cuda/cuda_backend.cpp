@@ -61,7 +61,8 @@ cudak::SweepDev sweepDev(const SweepParams& p) {
 }
 
 // The contracts' limits (backend.hpp) are the kernels' limits.
-static_assert(cudak::kMaxSweepPlanes == kMaxSweepPlanes, "launchSweepAggregate's lanes hold kMaxSweepPlanes / 32 planes each");
+static_assert(cudak::kMaxSweepPlanes == kMaxSweepPlanes,
+              "launchSweepAggregate's lanes hold kMaxSweepPlanes / 32 planes each");
 static_assert(cudak::kMaxTaps == 2 * kMaxTensorRadius + 1, "structure tensor taps");
 static_assert(cudak::kMaxNormaliseTaps == 2 * kMaxNormaliseRadius + 1, "normalise taps");
 

@@ -7,10 +7,10 @@
 #include <string>
 
 #include "cpu_backend.hpp"
-#include "forwarding_backend.hpp"
-#include "pipeline.hpp"
 #include "curvestereo/params.hpp"
 #include "curvestereo/stereo.hpp"
+#include "forwarding_backend.hpp"
+#include "pipeline.hpp"
 #include "stereo_core.hpp"
 #include "synth/scene.hpp"
 #include "test_util.hpp"

@@ -31,9 +31,9 @@ std::string solverUsage() {
   for (const std::string& name : presetNames()) presets += (presets.empty() ? "" : "|") + name;
   std::string s =
       "solver options (run, demo, eval, bench):\n"
-      "  --backend auto|cpu|...  --device INDEX|NAME  --mask PNG (run)\n"
-      "  --preset " + presets + " (default: realtime)\n"
-      "  --min-confidence C (run, demo: points.ply; needs the plane-sweep initialiser)\n";
+      "  --backend auto|cpu|...  --device INDEX|NAME  --mask PNG (run)\n";
+  s += "  --preset " + presets + " (default: realtime)\n";
+  s += "  --min-confidence C (run, demo: points.ply; needs the plane-sweep initialiser)\n";
   const char* group = "";
   for (const ParamInfo& info : paramTable()) {
     if (std::string(info.group) != group) s += std::string(info.group) + ":\n";

@@ -134,9 +134,10 @@ Params::Init parseInit(const std::string& name);
 
 // Named presets: "realtime" (the default of the library, the command line and Python: a
 // plane sweep at level 1, 30 / 20 / 10 warps at the levels above it, 2 from it down),
-// "fast" (for slower GPUs: the sweep at level 2, then N = 5 warps a level), "quality" (the sweep at level 1, then N = 30 at every level), "variational" (the solver
-// alone, N = 30, no initialiser: the struct's defaults) and "paper" (the paper's
-// configuration: brightness data term, lambda 20, N = 5).
+// "fast" (for slower GPUs: the sweep at level 2, then N = 5 warps a level), "quality"
+// (the sweep at level 1, then N = 30 at every level), "variational" (the solver alone,
+// N = 30, no initialiser: the struct's defaults) and "paper" (the paper's configuration:
+// brightness data term, lambda 20, N = 5).
 // Throws cs::Error listing the known names for an unknown one.
 Params preset(const std::string& name);
 std::vector<std::string> presetNames();
