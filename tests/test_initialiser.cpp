@@ -503,6 +503,7 @@ TEST_CASE("warp schedule: the taper from the coarsest level, the sweep's levels 
   CHECK(warpSchedule(preset("realtime"), 5) == std::vector<int>{2, 2, 10, 20, 30});
   CHECK(warpSchedule(preset("quality"), 5) == std::vector<int>{30, 30, 30, 30, 30});
   p.initLevel = 7;  // clamped to the coarsest level, as the sweep is
+  CHECK(sweepLevel(p, 3) == 2);
   CHECK(warpSchedule(p, 3) == std::vector<int>{2, 2, 2});
 }
 

@@ -140,11 +140,13 @@ std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p) {
   return plan;
 }
 
+int sweepLevel(const Params& p, int levels) { return std::min(levels - 1, p.initLevel); }
+
 std::vector<int> warpSchedule(const Params& p, int levels) {
   std::vector<int> warps(size_t(std::max(0, levels)));
-  const int sweepLevel = std::min(levels - 1, p.initLevel);
+  const int sweep = sweepLevel(p, levels);
   for (int l = 0; l < levels; ++l) {
-    if (p.init == Params::Init::PlaneSweep && l <= sweepLevel && p.initWarps > 0)
+    if (p.init == Params::Init::PlaneSweep && l <= sweep && p.initWarps > 0)
       warps[size_t(l)] = p.initWarps;
     else
       warps[size_t(l)] = std::max(1, p.warps - p.warpsTaper * (levels - 1 - l));

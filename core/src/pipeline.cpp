@@ -44,7 +44,7 @@ unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
   const unsigned long long perPixel = params.dataTerm == Params::DataTerm::Normalised ? 39 : 34;
   for (const LevelSize& size : plan) floats += perPixel * pixels(size);
   if (params.init == Params::Init::PlaneSweep) {
-    const size_t level = sweepLevel(plan.size(), params);
+    const size_t level = size_t(sweepLevel(params, int(plan.size())));
     for (size_t l = 0; l <= level; ++l) floats += pixels(plan[l]);
     const int planes = sweepPlanes(levelCamera(rig.cam0, plan[level]), rig.R.transpose() * rig.t, params);
     floats += (unsigned long long)(2 * planes + 4) * pixels(plan[level]);
@@ -100,7 +100,7 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
     levels_.push_back(L);
   }
   if (initialising()) {
-    sweep_.level = sweepLevel(levels_.size(), params_);
+    sweep_.level = size_t(sweepLevel(params_, int(levels_.size())));
     for (size_t l = 0; l <= sweep_.level; ++l)
       levels_[l].confidence = backend_.create(levels_[l].size.width, levels_[l].size.height, 1);
     const Level& S = levels_[sweep_.level];

@@ -1,6 +1,5 @@
 // The per-frame algorithm (DESIGN.md "Per frame"), written once against Backend.
 #pragma once
-#include <algorithm>
 #include <functional>
 #include <vector>
 
@@ -88,9 +87,6 @@ class Pipeline {
   };
   static double sweepQMax(const Eigen::Vector3d& tPrime, const Params& params);
   static int sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params);
-  static size_t sweepLevel(size_t levels, const Params& params) {
-    return std::min(levels - 1, size_t(params.initLevel));
-  }
   void runSweep();
   bool normalising() const { return params_.dataTerm == Params::DataTerm::Normalised; }
   bool initialising() const { return params_.init == Params::Init::PlaneSweep; }

@@ -150,6 +150,10 @@ struct LevelSize {
 // Level 0 first (full resolution).
 std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p);
 
+// The level the plane sweep runs at among `levels` pyramid levels: initLevel, clamped to
+// the coarsest.
+int sweepLevel(const Params& p, int levels);
+
 // Warps at each of `levels` pyramid levels (level 0 first): warps at the coarsest, warpsTaper
 // fewer at each finer one (at least 1), initWarps from the sweep's level down when set.
 std::vector<int> warpSchedule(const Params& p, int levels);
