@@ -229,4 +229,25 @@ void CpuBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Buffe
   cpu::sweepInitialise(view(u), view(w), view(confidence), view(best), view(other), view(mask), p, c);
 }
 
+void CpuBackend::doSweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image,
+                                 const Buffer& coarseBest, const Buffer& mask, const SweepParams& p,
+                                 float coarseScale) {
+  cpu::sweepBandWarp(view(volume), view(first), view(image), view(coarseBest), view(mask), p, coarseScale);
+}
+
+void CpuBackend::doSweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume,
+                                 const Buffer& first, const Buffer& mask, const SweepParams& p) {
+  cpu::sweepBandCost(view(costs), view(reference), view(volume), view(first), view(mask), p);
+}
+
+void CpuBackend::doSweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first,
+                                      const Buffer& mask, const SweepParams& p) {
+  cpu::sweepBandAggregate(view(aggregated), view(costs), view(first), view(mask), p);
+}
+
+void CpuBackend::doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs,
+                                   const Buffer& first, const Buffer& mask, const SweepParams& p) {
+  cpu::sweepBandSelect(view(best), view(aggregated), view(costs), view(first), view(mask), p);
+}
+
 }  // namespace cs::cpu

@@ -34,6 +34,14 @@ void sweepAggregate(const View& aggregated, const View& costs, const View& mask,
 void sweepSelect(const View& best, const View& aggregated, const View& costs, const View& mask, const SweepParams& p);
 void sweepInitialise(const View& u, const View& w, const View& confidence, const View& best, const View& other,
                      const View& mask, const SweepParams& p, const ConsistencyParams& c);
+void sweepBandWarp(const View& volume, const View& first, const View& image, const View& coarseBest, const View& mask,
+                   const SweepParams& p, float coarseScale);
+void sweepBandCost(const View& costs, const View& reference, const View& volume, const View& first, const View& mask,
+                   const SweepParams& p);
+void sweepBandAggregate(const View& aggregated, const View& costs, const View& first, const View& mask,
+                        const SweepParams& p);
+void sweepBandSelect(const View& best, const View& aggregated, const View& costs, const View& first, const View& mask,
+                     const SweepParams& p);
 
 // Physical memory, or the container's memory limit when lower (0 if unknown): create()
 // refuses buffers beyond it with a cs::Error naming the size instead of being OOM-killed.
@@ -76,6 +84,14 @@ class CpuBackend final : public Backend {
                         const SweepParams& p) override;
   void doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                      const SweepParams& p) override;
+  void doSweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image, const Buffer& coarseBest,
+                       const Buffer& mask, const SweepParams& p, float coarseScale) override;
+  void doSweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& first,
+                       const Buffer& mask, const SweepParams& p) override;
+  void doSweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first, const Buffer& mask,
+                            const SweepParams& p) override;
+  void doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& first,
+                         const Buffer& mask, const SweepParams& p) override;
   void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
                          const Buffer& other, const Buffer& mask, const SweepParams& p,
                          const ConsistencyParams& c) override;

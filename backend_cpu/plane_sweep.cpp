@@ -25,20 +25,21 @@ bool projectHypothesis(const BuiltCamera& cam, const Vec3<double>& ray, const do
   return cam.project(moved, px) && cam.inImage(px);
 }
 
-// 1 - ZNCC over the masked window samples whose hypothesis could be sampled. The sums are
-// taken column by column (dx outer; each column's partials summed over dy, then added into
-// the window's sums in dx order): GPUs walk x keeping the last 2r+1 column partials in
-// registers, so each output needs one new column instead of a whole window, and every
-// backend sums in this order to match bit for bit.
-float windowCost(const View& reference, const View& volume, const View& mask, int x, int y, int k, int radius,
-                 float flatVariance) {
+// 1 - ZNCC over the masked window samples whose hypothesis could be sampled (sample(sx, sy)
+// >= 0). The sums are taken column by column (dx outer; each column's partials summed over
+// dy, then added into the window's sums in dx order): GPUs walk x keeping the last 2r+1
+// column partials in registers, so each output needs one new column instead of a whole
+// window, and every backend sums in this order to match bit for bit.
+template <class Sample>
+float windowCost(const View& reference, const View& mask, int x, int y, int radius, float flatVariance,
+                 const Sample& sample) {
   float n = 0, s0 = 0, s1 = 0, s00 = 0, s11 = 0, s01 = 0;
   for (int dx = -radius; dx <= radius; ++dx) {
     float cn = 0, c0 = 0, c1 = 0, c00 = 0, c11 = 0, c01 = 0;
     for (int dy = -radius; dy <= radius; ++dy) {
       const int sx = x + dx, sy = y + dy;
       if (!masked(mask, sx, sy)) continue;
-      const float b = volume.at(sx, sy, k);
+      const float b = sample(sx, sy);
       if (b < 0.f) continue;
       const float a = reference.at(sx, sy);
       cn += 1.f, c0 += a, c1 += b, c00 += a * a, c11 += b * b, c01 += a * b;
@@ -84,7 +85,9 @@ void sweepCost(const View& costs, const View& reference, const View& volume, con
     for (int x = 0; x < costs.width; ++x) {
       const bool inside = masked(mask, x, y);
       for (int k = 0; k < p.planes; ++k)
-        costs.at(x, y, k) = inside ? windowCost(reference, volume, mask, x, y, k, p.radius, p.flatVariance) : kNoCost;
+        costs.at(x, y, k) = inside ? windowCost(reference, mask, x, y, p.radius, p.flatVariance,
+                                                [&](int sx, int sy) { return volume.at(sx, sy, k); })
+                                   : kNoCost;
     }
   });
 }
@@ -95,41 +98,91 @@ namespace {
 // one bad window from outweighing the paths' agreement.
 constexpr float kCostCap = 1.f;
 
+// The hypotheses a pixel holds: channel k is hypothesis first(x, y) + k; a full sweep's
+// pixels all start at 0, a band sweep's where `first` says (-1: none).
+struct Bands {
+  const View* first = nullptr;  // none: the full sweep
+  int at(int x, int y) const { return first ? int(first->at(x, y)) : 0; }
+};
+
 // One scanline direction (dx, dy) of the aggregation, added into `aggregated`: the lines
 // along it are independent, each walked from its first pixel with the previous pixel's
-// path costs in `previous`.
-void aggregateDirection(const View& aggregated, const View& costs, const View& mask, const SweepParams& p, int dx,
-                        int dy) {
+// path costs in `previous`, shifted by the difference of the two pixels' bands.
+void aggregateDirection(const View& aggregated, const View& costs, const View& mask, const Bands& bands, float p1,
+                        float p2, int dx, int dy) {
   const bool alongRows = dy == 0;
   const int lines = alongRows ? costs.height : costs.width, length = alongRows ? costs.width : costs.height;
+  const int n = costs.channels;
   parallelRows(lines, [&](int line) {
-    std::vector<float> previous(p.planes), current(p.planes);
+    std::vector<float> previous(static_cast<size_t>(n)), current(static_cast<size_t>(n));
     bool havePrevious = false;
     float previousMin = 0.f;
+    int previousFirst = 0;
     for (int step = 0; step < length; ++step) {
       const int along = (dx + dy) > 0 ? step : length - 1 - step;
       const int x = alongRows ? along : line, y = alongRows ? line : along;
-      if (!masked(mask, x, y)) {
+      const int first = bands.at(x, y);
+      if (!masked(mask, x, y) || first < 0) {
         havePrevious = false;
         continue;
       }
+      const int shift = first - previousFirst;  // channel k here is channel k + shift there
+      auto held = [&](int j) { return j >= 0 && j < n; };
       float lowest = 0.f;
-      for (int k = 0; k < p.planes; ++k) {
+      for (int k = 0; k < n; ++k) {
         const float c = std::min(costs.at(x, y, k), kCostCap);
         float l = c;
         if (havePrevious) {
-          float v = std::min(previous[k], previousMin + p.p2);
-          if (k > 0) v = std::min(v, previous[k - 1] + p.p1);
-          if (k + 1 < p.planes) v = std::min(v, previous[k + 1] + p.p1);
+          const int j = k + shift;
+          float v = previousMin + p2;
+          if (held(j)) v = std::min(previous[size_t(j)], v);
+          if (held(j - 1)) v = std::min(v, previous[size_t(j - 1)] + p1);
+          if (held(j + 1)) v = std::min(v, previous[size_t(j + 1)] + p1);
           l = c + v - previousMin;
         }
-        current[k] = l;
+        current[size_t(k)] = l;
         lowest = k == 0 ? l : std::min(lowest, l);
         aggregated.at(x, y, k) += l;
       }
       std::swap(previous, current);
       previousMin = lowest;
+      previousFirst = first;
       havePrevious = true;
+    }
+  });
+}
+
+void aggregate(const View& aggregated, const View& costs, const View& mask, const Bands& bands, const SweepParams& p) {
+  std::fill(aggregated.data, aggregated.data + size_t(aggregated.width) * aggregated.height * aggregated.channels, 0.f);
+  const int directions[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  for (const auto& d : directions) aggregateDirection(aggregated, costs, mask, bands, p.p1, p.p2, d[0], d[1]);
+}
+
+// Winner-take-all over each pixel's hypotheses, refined by a parabola. In a band sweep a
+// winner on an inner edge of the band (one the full range continues past) is refused.
+void select(const View& best, const View& aggregated, const View& costs, const View& mask, const Bands& bands,
+            const SweepParams& p) {
+  constexpr float kPaths = 4.f;
+  const int n = costs.channels;
+  parallelRows(best.height, [&](int y) {
+    for (int x = 0; x < best.width; ++x) {
+      best.at(x, y, 0) = -1.f;
+      best.at(x, y, 1) = kNoCost;
+      const int first = bands.at(x, y);
+      if (!masked(mask, x, y) || first < 0) continue;
+      int winner = -1;
+      for (int k = 0; k < n; ++k)
+        if (costs.at(x, y, k) < kNoCost && (winner < 0 || aggregated.at(x, y, k) < aggregated.at(x, y, winner)))
+          winner = k;
+      if (winner < 0) continue;
+      if ((winner == 0 && first > 0) || (winner == n - 1 && first + n < p.planes)) continue;
+      // The parabola sees the aggregated cost per path, on the scale of one window's cost.
+      auto score = [&](int k) {
+        return k < 0 || k >= n || costs.at(x, y, k) >= kNoCost ? kNoCost : aggregated.at(x, y, k) / kPaths;
+      };
+      const double k = first + winner + parabolaOffset(score(winner - 1), score(winner), score(winner + 1));
+      best.at(x, y, 0) = float(std::max(0.0, planeInverseDepth(p, k)));
+      best.at(x, y, 1) = costs.at(x, y, winner);
     }
   });
 }
@@ -137,32 +190,65 @@ void aggregateDirection(const View& aggregated, const View& costs, const View& m
 }  // namespace
 
 void sweepAggregate(const View& aggregated, const View& costs, const View& mask, const SweepParams& p) {
-  std::fill(aggregated.data, aggregated.data + size_t(aggregated.width) * aggregated.height * aggregated.channels, 0.f);
-  const int directions[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
-  for (const auto& d : directions) aggregateDirection(aggregated, costs, mask, p, d[0], d[1]);
+  aggregate(aggregated, costs, mask, Bands{}, p);
 }
 
 void sweepSelect(const View& best, const View& aggregated, const View& costs, const View& mask, const SweepParams& p) {
-  constexpr float kPaths = 4.f;
-  parallelRows(best.height, [&](int y) {
-    for (int x = 0; x < best.width; ++x) {
-      best.at(x, y, 0) = -1.f;
-      best.at(x, y, 1) = kNoCost;
-      if (!masked(mask, x, y)) continue;
-      int winner = -1;
-      for (int k = 0; k < p.planes; ++k)
-        if (costs.at(x, y, k) < kNoCost && (winner < 0 || aggregated.at(x, y, k) < aggregated.at(x, y, winner)))
-          winner = k;
-      if (winner < 0) continue;
-      // The parabola sees the aggregated cost per path, on the scale of one window's cost.
-      auto score = [&](int k) {
-        return k < 0 || k >= p.planes || costs.at(x, y, k) >= kNoCost ? kNoCost : aggregated.at(x, y, k) / kPaths;
-      };
-      const double k = winner + parabolaOffset(score(winner - 1), score(winner), score(winner + 1));
-      best.at(x, y, 0) = float(std::max(0.0, planeInverseDepth(p, k)));
-      best.at(x, y, 1) = costs.at(x, y, winner);
+  select(best, aggregated, costs, mask, Bands{}, p);
+}
+
+// --- the band sweep ---
+
+void sweepBandWarp(const View& volume, const View& first, const View& image, const View& coarseBest, const View& mask,
+                   const SweepParams& p, float coarseScale) {
+  const BuiltCamera cam(toCamera(p.cam));
+  parallelRows(volume.height, [&](int y) {
+    const int cy = std::min(coarseBest.height - 1, int((float(y) + 0.5f) * coarseScale));
+    for (int x = 0; x < volume.width; ++x) {
+      for (int k = 0; k < p.band; ++k) volume.at(x, y, k) = kNoSample;
+      first.at(x, y) = -1.f;
+      const int cx = std::min(coarseBest.width - 1, int((float(x) + 0.5f) * coarseScale));
+      const float q = coarseBest.at(cx, cy, 0);
+      if (!masked(mask, x, y) || q < 0.f) continue;
+      const int centre = int(std::floor(double(q) * double(p.planes - 1) / p.qMax + 0.5));
+      const int start = std::min(std::max(centre - p.band / 2, 0), p.planes - p.band);
+      first.at(x, y) = float(start);
+      Vec3<double> ray;
+      if (!cam.unproject(Vec2<double>(x, y), ray)) continue;
+      for (int k = 0; k < p.band; ++k) {
+        Vec2<double> px;
+        if (!projectHypothesis(cam, ray, p.t, planeInverseDepth(p, start + k), px)) continue;
+        volume.at(x, y, k) = sampleBilinear(image, float(px.x()), float(px.y()));
+      }
     }
   });
+}
+
+void sweepBandCost(const View& costs, const View& reference, const View& volume, const View& first, const View& mask,
+                   const SweepParams& p) {
+  parallelRows(costs.height, [&](int y) {
+    for (int x = 0; x < costs.width; ++x) {
+      const int start = int(first.at(x, y));
+      const bool inside = masked(mask, x, y) && start >= 0;
+      for (int k = 0; k < p.band; ++k) {
+        auto sample = [&](int sx, int sy) {
+          const int there = int(first.at(sx, sy)), j = start + k - there;
+          return there >= 0 && j >= 0 && j < p.band ? volume.at(sx, sy, j) : kNoSample;
+        };
+        costs.at(x, y, k) = inside ? windowCost(reference, mask, x, y, p.radius, p.flatVariance, sample) : kNoCost;
+      }
+    }
+  });
+}
+
+void sweepBandAggregate(const View& aggregated, const View& costs, const View& first, const View& mask,
+                        const SweepParams& p) {
+  aggregate(aggregated, costs, mask, Bands{&first}, p);
+}
+
+void sweepBandSelect(const View& best, const View& aggregated, const View& costs, const View& first, const View& mask,
+                     const SweepParams& p) {
+  select(best, aggregated, costs, mask, Bands{&first}, p);
 }
 
 namespace {

@@ -57,12 +57,14 @@ cudak::SweepDev sweepDev(const SweepParams& p) {
   d.p1 = p.p1;
   d.p2 = p.p2;
   d.flatVariance = p.flatVariance;
+  d.band = p.band;
   return d;
 }
 
 // The contracts' limits (backend.hpp) are the kernels' limits.
 static_assert(cudak::kMaxSweepPlanes == kMaxSweepPlanes,
               "launchSweepAggregate's lanes hold kMaxSweepPlanes / 32 planes each");
+static_assert(cudak::kMaxSweepBand == kMaxSweepBand, "launchSweepBandAggregate's lanes hold one hypothesis each");
 static_assert(cudak::kMaxTaps == 2 * kMaxTensorRadius + 1, "structure tensor taps");
 static_assert(cudak::kMaxNormaliseTaps == 2 * kMaxNormaliseRadius + 1, "normalise taps");
 
@@ -361,6 +363,50 @@ void CudaBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Buff
                                      img(slot(other).dev, other), img(slot(mask).dev, mask), d,
                                      cudak::ConsistencyDev{c.tolerancePx, c.acceptConfidence}),
         "sweepInitialise");
+}
+
+void CudaBackend::doSweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image,
+                                  const Buffer& coarseBest, const Buffer& mask, const SweepParams& p,
+                                  float coarseScale) {
+  flush();
+  const cudak::SweepDev d = sweepDev(p);
+  check(cudak::launchSweepBandWarp(stream_, img(slot(volume).dev, volume), img(slot(first).dev, first),
+                                   img(slot(image).dev, image), img(slot(coarseBest).dev, coarseBest),
+                                   img(slot(mask).dev, mask), d, coarseScale),
+        "sweepBandWarp");
+}
+
+void CudaBackend::doSweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume,
+                                  const Buffer& first, const Buffer& mask, const SweepParams& p) {
+  flush();
+  const cudak::SweepDev d = sweepDev(p);
+  check(cudak::launchSweepBandCost(stream_, img(slot(costs).dev, costs), img(slot(reference).dev, reference),
+                                   img(slot(volume).dev, volume), img(slot(first).dev, first),
+                                   img(slot(mask).dev, mask), d),
+        "sweepBandCost");
+}
+
+void CudaBackend::doSweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first,
+                                       const Buffer& mask, const SweepParams& p) {
+  flush();
+  const cudak::SweepDev d = sweepDev(p);
+  // As sweepAggregate: the three directions walked beside +x need a buffer each (the same
+  // scratch role: the two aggregations never run at once).
+  const cudak::Img spare{scratch(3 * aggregated.count(), 3), aggregated.width, aggregated.height, aggregated.channels};
+  check(cudak::launchSweepBandAggregate(stream_, img(slot(aggregated).dev, aggregated), spare,
+                                        img(slot(costs).dev, costs), img(slot(first).dev, first),
+                                        img(slot(mask).dev, mask), d),
+        "sweepBandAggregate");
+}
+
+void CudaBackend::doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs,
+                                    const Buffer& first, const Buffer& mask, const SweepParams& p) {
+  flush();
+  const cudak::SweepDev d = sweepDev(p);
+  check(cudak::launchSweepBandSelect(stream_, img(slot(best).dev, best), img(slot(aggregated).dev, aggregated),
+                                     img(slot(costs).dev, costs), img(slot(first).dev, first),
+                                     img(slot(mask).dev, mask), d),
+        "sweepBandSelect");
 }
 
 void CudaBackend::doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) {

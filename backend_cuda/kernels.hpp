@@ -41,8 +41,10 @@ struct SweepDev {
   int planes, radius;
   float p1, p2;
   float flatVariance;
+  int band;  // the band sweep's hypotheses a pixel (SweepParams::band)
 };
 constexpr int kMaxSweepPlanes = 512;  // launchSweepAggregate: 16 planes a lane (= cs::kMaxSweepPlanes)
+constexpr int kMaxSweepBand = 32;     // the band aggregation: one lane a hypothesis (= cs::kMaxSweepBand)
 // The left-right check (ConsistencyParams).
 struct ConsistencyDev {
   float tolerancePx, acceptConfidence;
@@ -167,5 +169,19 @@ cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img 
 cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img mask, const SweepDev& p);
 cudaError_t launchSweepInitialise(cudaStream_t s, Img u, Img w, Img confidence, Img best, Img other, Img mask,
                                   const SweepDev& p, const ConsistencyDev& c);
+
+// The band sweep (sweep_band.cu): volume, costs and aggregated have p.band channels
+// (2 <= p.band <= kMaxSweepBand, else cudaErrorInvalidValue), channel k hypothesis
+// first + k; first: 1 ch, written by launchSweepBandWarp from coarseBest (2 ch, the
+// coarser level's sweepSelect) and the fine-per-coarse pixel scale. launchSweepBandAggregate:
+// aggregated and costs must not alias; spare: scratch of three times aggregated's size.
+cudaError_t launchSweepBandWarp(cudaStream_t s, Img volume, Img first, Img image, Img coarseBest, Img mask,
+                                const SweepDev& p, float coarseScale);
+cudaError_t launchSweepBandCost(cudaStream_t s, Img costs, Img reference, Img volume, Img first, Img mask,
+                                const SweepDev& p);
+cudaError_t launchSweepBandAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img first, Img mask,
+                                     const SweepDev& p);
+cudaError_t launchSweepBandSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img first, Img mask,
+                                  const SweepDev& p);
 
 }  // namespace cs::cudak

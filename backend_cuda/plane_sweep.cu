@@ -5,14 +5,11 @@
 // oracle's order (the kernels are built with --fmad=false, so floats match bit for bit).
 #include <algorithm>
 
-#include "camera_models.cuh"
+#include "plane_sweep.cuh"
 
 namespace cs::cudak {
 
 namespace {
-
-constexpr float kNoSample = -1.f;  // volume value where the hypothesis cannot be sampled
-constexpr float kNoCost = 2.f;     // cost where nothing scored (the worst 1 - ZNCC)
 
 // sweepWarp: pixels of one row per block. Their rays are unprojected once (the iterative
 // inverse models are the expensive part) and the block's threads then walk the
@@ -40,31 +37,12 @@ constexpr int kMaxRingRadius = 4;  // radii with a register ring; wider windows 
 // 0.18 ms at levels 1 / 2, against 2.14 / 0.33 for a block per line (a thread per plane,
 // a barrier a step) and 1.18 / 0.28 for two warps per line meeting in the middle (rows,
 // then columns adding into the rows' sum: less memory traffic, twice the chain of
-// dependent steps). A cost above 1 (anticorrelated windows) says no more than "no
-// match": capped (oracle's kCostCap).
-constexpr float kCostCap = 1.f;
+// dependent steps). Costs capped at kCostCap (plane_sweep.cuh).
 
 // sweepSelect: one warp per pixel, lanes over the planes, so the reads of a pixel's
 // planes coalesce.
 constexpr int kSelectThreads = 256;
 constexpr int kSelectPixels = kSelectThreads / 32;
-constexpr float kPaths = 4.f;  // the aggregation's directions
-
-// std::min(a, b) exactly (b < a ? b : a), including which operand a NaN leaves.
-__device__ __forceinline__ float stdMin(float a, float b) { return b < a ? b : a; }
-
-__device__ __forceinline__ double planeInverseDepth(const SweepDev& p, double k) {
-  return p.qMax * k / double(p.planes - 1);
-}
-
-// Where the reference ray, on the sphere of inverse depth q, lands in the other view
-// (BuiltCamera::project && inImage).
-__device__ __forceinline__ bool projectHypothesis(const CamDev& cam, const V3& ray, const double t[3], double q,
-                                                  V2& px) {
-  const V3 moved{ray.x + q * t[0], ray.y + q * t[1], ray.z + q * t[2]};
-  return cameraProject(cam, moved, px) && px.x >= -0.5 && px.y >= -0.5 && px.x <= cam.width - 0.5 &&
-         px.y <= cam.height - 0.5;
-}
 
 __global__ void __launch_bounds__(kWarpThreads) sweepWarpKernel(Img volume, Img image, Img mask, SweepDev p) {
   beginKernel();
@@ -89,34 +67,6 @@ __global__ void __launch_bounds__(kWarpThreads) sweepWarpKernel(Img volume, Img 
       value = sampleBilinear(image, float(px.x), float(px.y));
     run[i] = value;
   }
-}
-
-// Vertex of the parabola through (-1, before), (0, best), (1, after), within half a plane.
-__device__ float parabolaOffset(float before, float best, float after) {
-  if (before >= kNoCost || after >= kNoCost) return 0.f;
-  const float curvature = before - 2.f * best + after;
-  if (!(curvature > 1e-6f)) return 0.f;
-  const float v = 0.5f * (before - after) / curvature;
-  const float low = -0.5f < v ? v : -0.5f;  // std::max(-0.5f, v)
-  return low < 0.5f ? low : 0.5f;           // std::min(0.5f, low)
-}
-
-// 1 - ZNCC of one window from its sums (the oracle's windowCost after the sums).
-struct WindowSums {
-  float n, s0, s1, s00, s11, s01;
-};
-
-__device__ __forceinline__ void addColumn(WindowSums& s, const WindowSums& c) {
-  s.n += c.n, s.s0 += c.s0, s.s1 += c.s1, s.s00 += c.s00, s.s11 += c.s11, s.s01 += c.s01;
-}
-
-__device__ __forceinline__ float windowCost(const WindowSums& s, int side, float flatVariance) {
-  if (2.f * s.n < float(side * side)) return kNoCost;
-  const float m0 = s.s0 / s.n, m1 = s.s1 / s.n;
-  const float d0 = s.s00 / s.n - m0 * m0, d1 = s.s11 / s.n - m1 * m1;
-  const float v0 = 0.f < d0 ? d0 : 0.f, v1 = 0.f < d1 ? d1 : 0.f;  // std::max(0.f, d)
-  const float cov = s.s01 / s.n - m0 * m1;
-  return 1.f - cov / sqrtf((v0 + flatVariance) * (v1 + flatVariance));
 }
 
 // What a thread reads: the row-major mask and reference, and the volume at its plane.
@@ -365,16 +315,6 @@ __global__ void sweepCombineKernel(Img aggregated, Img spare) {
   const size_t n = size_t(aggregated.width) * aggregated.height * aggregated.channels;
   for (size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x; i < n; i += size_t(gridDim.x) * blockDim.x)
     aggregated.data[i] = (((0.f + aggregated.data[i]) + spare.data[i]) + spare.data[i + n]) + spare.data[i + 2 * n];
-}
-
-// The first minimum of (value, k) over a warp; k = -1 (nothing scored) loses to everything.
-__device__ void warpFirstMin(float& value, int& k) {
-  for (int offset = 16; offset > 0; offset /= 2) {
-    const float otherValue = __shfl_xor_sync(0xffffffffu, value, offset);
-    const int otherK = __shfl_xor_sync(0xffffffffu, k, offset);
-    if (otherK >= 0 && (k < 0 || otherValue < value || (otherValue == value && otherK < k)))
-      value = otherValue, k = otherK;
-  }
 }
 
 __global__ void __launch_bounds__(kSelectThreads)

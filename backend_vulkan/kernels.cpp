@@ -171,7 +171,27 @@ struct PcSweepInitialise {
   float tolerancePx, acceptConfidence;
   int32_t pass, planes;
 };
+struct PcSweepBandWarp {
+  Addr volume, first, image, coarseBest, mask, params;
+  int32_t width, height, planes, band, coarseWidth, coarseHeight;
+  float coarseScale;
+};
+struct PcSweepBandCost {
+  Addr costs, reference, volume, first, mask;
+  int32_t width, height, band, radius;
+  float flatVariance;
+};
+struct PcSweepBandAggregate {
+  Addr aggregated, spare, costs, first, mask;
+  int32_t width, height, band;
+  float p1, p2;
+};
+struct PcSweepBandSelect {
+  Addr best, aggregated, costs, first, mask, params;
+  int32_t width, height, planes, band;
+};
 static_assert(sizeof(PcPrimalDual) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
+static_assert(sizeof(PcSweepBandWarp) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 
 }  // namespace
 
@@ -501,6 +521,58 @@ void VulkanBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Bu
                          u.width, u.height, c.tolerancePx,    c.acceptConfidence, pass,        p.planes};
     dispatch(shader, pc, u.width, u.height);
   }
+}
+
+// ---- the band sweep ----
+
+// Mirrors kMaxBand in sweep_band_aggregate.comp (a band's hypotheses on one invocation each).
+static_assert(kMaxSweepBand <= 32, "sweep_band_aggregate.comp walks a band with 32 invocations");
+
+void VulkanBackend::doSweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image,
+                                    const Buffer& coarseBest, const Buffer& mask, const SweepParams& p,
+                                    float coarseScale) {
+  // As doSweepWarp: a work group per kSweepBandWarpPixels pixels of a row, its invocations
+  // over their band channels.
+  constexpr int kSweepBandWarpPixels = 32;  // mirrors kPixels in sweep_band_warp.comp
+  PcSweepBandWarp pc{addr(volume),       addr(first),       addr(image),   addr(coarseBest), addr(mask),
+                     sweepParamBlock(p), volume.width,      volume.height, p.planes,         p.band,
+                     coarseBest.width,   coarseBest.height, coarseScale};
+  dispatchGroups(float64_ ? kSweepBandWarpF64 : kSweepBandWarpF32, pc,
+                 uint32_t((volume.width + kSweepBandWarpPixels - 1) / kSweepBandWarpPixels), uint32_t(volume.height));
+}
+
+void VulkanBackend::doSweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume,
+                                    const Buffer& first, const Buffer& mask, const SweepParams& p) {
+  // One invocation per channel of a pixel, each summing its window (sweep_band_cost.comp).
+  const int64_t rowItems = int64_t(costs.width) * p.band;
+  PcSweepBandCost pc{addr(costs), addr(reference), addr(volume), addr(first), addr(mask),
+                     costs.width, costs.height,    p.band,       p.radius,    p.flatVariance};
+  dispatchGroups(kSweepBandCost, pc, uint32_t((rowItems + 255) / 256), uint32_t(costs.height));
+}
+
+void VulkanBackend::doSweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first,
+                                         const Buffer& mask, const SweepParams& p) {
+  // As doSweepAggregate: the four directions at once (+x into `aggregated`, the others
+  // into a scratch of three band volumes), kSweepBandAggregateLines lines per work group,
+  // then sweep_combine.comp's sum in the oracle's order.
+  constexpr int kSweepBandAggregateLines = 1;  // mirrors kLines in sweep_band_aggregate.comp
+  const int w = aggregated.width, h = aggregated.height;
+  const Buffer spare = scratch(2, w, h, 3 * p.band);
+  PcSweepBandAggregate pc{addr(aggregated), addr(spare), addr(costs), addr(first), addr(mask), w, h,
+                          p.band,           p.p1,        p.p2};
+  const int lines = std::max(w, h);
+  dispatchGroups(kSweepBandAggregate, pc, uint32_t((lines + kSweepBandAggregateLines - 1) / kSweepBandAggregateLines),
+                 4);
+  const int64_t count = int64_t(w) * h * p.band;
+  PcSweepCombine sum{addr(aggregated), addr(spare), int32_t(count)};
+  dispatchGroups(kSweepCombine, sum, uint32_t((count + 255) / 256), 1);
+}
+
+void VulkanBackend::doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs,
+                                      const Buffer& first, const Buffer& mask, const SweepParams& p) {
+  PcSweepBandSelect pc{addr(best),         addr(aggregated), addr(costs), addr(first), addr(mask),
+                       sweepParamBlock(p), best.width,       best.height, p.planes,    p.band};
+  dispatch(float64_ ? kSweepBandSelectF64 : kSweepBandSelectF32, pc, best.width, best.height);
 }
 
 }  // namespace cs::vk

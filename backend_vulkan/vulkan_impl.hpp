@@ -83,6 +83,14 @@ class VulkanBackend final : public Backend {
   void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
                          const Buffer& other, const Buffer& mask, const SweepParams& p,
                          const ConsistencyParams& c) override;
+  void doSweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image, const Buffer& coarseBest,
+                       const Buffer& mask, const SweepParams& p, float coarseScale) override;
+  void doSweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& first,
+                       const Buffer& mask, const SweepParams& p) override;
+  void doSweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first, const Buffer& mask,
+                            const SweepParams& p) override;
+  void doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& first,
+                         const Buffer& mask, const SweepParams& p) override;
   void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                      const CameraParams& cam0, const double tPrime[3]) override;
 

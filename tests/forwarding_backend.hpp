@@ -66,6 +66,22 @@ class ForwardingBackend : public Backend {
                          const Buffer& m, const SweepParams& p, const ConsistencyParams& cp) override {
     b_.sweepInitialise(u, w, c, b, o, m, p, cp);
   }
+  void doSweepBandWarp(const Buffer& v, const Buffer& f, const Buffer& i, const Buffer& cb, const Buffer& m,
+                       const SweepParams& p, float s) override {
+    b_.sweepBandWarp(v, f, i, cb, m, p, s);
+  }
+  void doSweepBandCost(const Buffer& c, const Buffer& r, const Buffer& v, const Buffer& f, const Buffer& m,
+                       const SweepParams& p) override {
+    b_.sweepBandCost(c, r, v, f, m, p);
+  }
+  void doSweepBandAggregate(const Buffer& a, const Buffer& c, const Buffer& f, const Buffer& m,
+                            const SweepParams& p) override {
+    b_.sweepBandAggregate(a, c, f, m, p);
+  }
+  void doSweepBandSelect(const Buffer& b, const Buffer& a, const Buffer& c, const Buffer& f, const Buffer& m,
+                         const SweepParams& p) override {
+    b_.sweepBandSelect(b, a, c, f, m, p);
+  }
   void doTriangulate(const Buffer& r, const Buffer& p, const Buffer& w, const Buffer& m, const CameraParams& c,
                      const double t[3]) override {
     b_.triangulate(r, p, w, m, c, t);

@@ -563,6 +563,145 @@ std::vector<Output> sweepInitialiseCase(Backend& b) {
   return {s.get("sweepinit_u", u), s.get("sweepinit_w", w), s.get("sweepinit_confidence", confidence)};
 }
 
+// --- the band sweep ---
+
+// A band's first hypothesis clamped to the range, as sweepBandWarp places it.
+int bandStart(int centre, const SweepParams& p) { return std::clamp(centre - p.band / 2, 0, p.planes - p.band); }
+
+// A coarse sweep's answer (half resolution, the fine grid's coarse pixel as
+// sweepBandWarp finds it) whose hypotheses ramp across the image with holes (-1), at
+// q = qMax (n + 0.3) / (planes - 1): 0.2 plane from a rounding tie, so backends agree on
+// the centre n. The fine mask leaves out pixels with a band hypothesis within 0.05 px of
+// the image border (as sweepWarpCase).
+std::vector<Output> sweepBandWarpCase(Backend& b) {
+  Session s{b};
+  SweepParams p = sweepParams(4.0, 40, 2);
+  p.t[2] = -0.1;
+  p.band = 8;
+  const int cw = (kW + 1) / 2, ch = (kH + 1) / 2;
+  Host coarse(cw, ch, 2);
+  for (int y = 0; y < ch; ++y)
+    for (int x = 0; x < cw; ++x) {
+      const int n = int(2.f + 1.4f * float(x) + 0.6f * float(y)) % p.planes;
+      const bool hole = hashNoise(uint32_t(y * cw + x) * 7u + 61) < 0.1f;
+      coarse.at(x, y, 0) = hole ? -1.f : float(p.qMax * (n + 0.3) / (p.planes - 1));
+      coarse.at(x, y, 1) = 0.3f;
+    }
+  const BuiltCamera cam(toCamera(p.cam));
+  Host image = texture(kW, kH, 30), mask = discMask(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const float q = coarse.at(x / 2, y / 2, 0);
+      if (q < 0.f) continue;
+      const int start = bandStart(int(std::floor(double(q) * (p.planes - 1) / p.qMax + 0.5)), p);
+      for (int k = 0; k < p.band && mask.at(x, y) != 0.f; ++k) {
+        Vec2<double> px;
+        if (hypothesis(cam, p.t, x, y, p.qMax * (start + k) / (p.planes - 1), px) &&
+            borderDistance(cam.camera(), px) < 0.05)
+          mask.at(x, y) = 0.f;
+      }
+    }
+  Buffer volume = s.make(kW, kH, p.band), first = s.make(kW, kH, 1);
+  b.sweepBandWarp(volume, first, s.put(image), s.put(coarse), s.put(mask), p, 0.5f);
+  return {s.get("sweepbandwarp_volume", volume), s.get("sweepbandwarp_first", first)};
+}
+
+// Each pixel's true hypothesis h*(x) ramps and jumps by 9 planes along a slanted edge (more
+// than the band: windows across it find few shared hypotheses); its band starts 4 below
+// it, or 2 below in a stripe (neighbouring bands overlap in part); a patch has no band
+// (-1). Plane h at a pixel is the reference shifted by 1.3 (h - h*) px along (1, 0.5), as
+// sweepCostInputs.
+std::vector<Output> sweepBandCostCase(Backend& b) {
+  Session s{b};
+  SweepParams p = sweepParams(2.0, 40, 2);
+  p.band = 8;
+  Host reference = stretched(texture(kW, kH, 31, 1)), mask = discMask(kW, kH);
+  Host volume(kW, kH, p.band), first(kW, kH, 1);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const float hStar = 6.3f + 0.4f * float(x) + 0.2f * float(y) + (x + y / 2 > 28 ? 9.f : 0.f);
+      const bool none = x >= 30 && x < 34 && y >= 8 && y < 12;
+      const int start = none ? -1 : bandStart(int(hStar) - (y % 7 < 2 ? 2 : 0) + p.band / 2 - 4, p);
+      first.at(x, y) = float(start);
+      for (int k = 0; k < p.band; ++k) {
+        float v = -1.f;
+        const float shift = 1.3f * (float(start + k) - hStar);
+        if (none || !sampleHost(reference, float(x) + shift, float(y) + 0.5f * shift, v)) v = -1.f;
+        volume.at(x, y, k) = v;
+      }
+    }
+  Buffer costs = s.make(kW, kH, p.band);
+  b.sweepBandCost(costs, s.put(reference), s.put(volume), s.put(first), s.put(mask), p);
+  return {s.get("sweepbandcost_costs", costs)};
+}
+
+// aggregationCosts' valley, seen through bands that follow it with a jitter of up to two
+// planes each way (so neighbouring bands are shifted against each other), jump with it,
+// jump by more than the band in a stripe (paths see no shared hypothesis there), and a
+// patch without a band (paths restart after it, as after the unmasked hole).
+std::vector<Output> bandAggregateAt(Backend& b, int planes, int band, const char* name) {
+  Session s{b};
+  SweepParams p = sweepParams(2.0, planes, 2);
+  p.band = band;
+  Host mask = holedDisc(), costs(kW, kH, band), first(kW, kH, 1);
+  const float scale = float(planes - 1) / 40.f;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const uint32_t i = uint32_t(y * kW + x);
+      const float valley = scale * (6.f + 0.5f * float(x) + (x + y / 2 > 30 ? 12.f : 0.f));
+      const int jitter = int(5.f * hashNoise(i * 31u + 47)) - 2 + (y == 5 && x % 3 == 0 ? band + 3 : 0);
+      const bool none = x >= 10 && x < 13 && y >= 22 && y < 26;
+      const int start = none ? -1 : bandStart(int(valley) + jitter, p);
+      first.at(x, y) = float(start);
+      for (int k = 0; k < band; ++k) {
+        const float d = float(start + k) - valley;
+        float c = 0.1f + 0.04f * d * d + 0.3f * hashNoise((i * uint32_t(band) + uint32_t(k)) * 13u + 41);
+        if (hashNoise((i * uint32_t(band) + uint32_t(k)) * 17u + 42) < 0.05f || c > 2.f) c = 2.f;
+        costs.at(x, y, k) = mask.at(x, y) != 0.f && !none ? c : 2.f;
+      }
+    }
+  Buffer aggregated = s.make(kW, kH, band);
+  b.sweepBandAggregate(aggregated, s.put(costs), s.put(first), s.put(mask), p);
+  return {s.get(name, aggregated)};
+}
+
+std::vector<Output> sweepBandAggregateCase(Backend& b) {
+  return bandAggregateAt(b, 40, 12, "sweepbandaggregate_volume");
+}
+
+// A full 32-wide band (CUDA: every lane of the warp holds a hypothesis).
+std::vector<Output> sweepBandAggregateWideCase(Backend& b) {
+  return bandAggregateAt(b, 64, 32, "sweepbandaggregate_wide");
+}
+
+// sweepSelectCase's parabolas around a ramping hypothesis, seen through bands that
+// follow it except in two stripes where they lie wholly below or above it (the winner on
+// the band's edge: refused), and at the range's ends (the first and the last band: kept).
+std::vector<Output> sweepBandSelectCase(Backend& b) {
+  Session s{b};
+  SweepParams p = sweepParams(2.0, 40, 2);
+  p.band = 8;
+  Host mask = holedDisc(), aggregated(kW, kH, p.band), costs(kW, kH, p.band), first(kW, kH, 1);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const float hStar = -0.4f + 0.9f * float(x) + 0.05f * float(y);
+      int start = bandStart(int(std::floor(hStar + 0.5f)), p);
+      if (y >= 6 && y < 9) start = std::max(0, start - 6);
+      if (y >= 12 && y < 15) start = std::min(p.planes - p.band, start + 6);
+      first.at(x, y) = float(start);
+      for (int k = 0; k < p.band; ++k) {
+        const uint32_t i = uint32_t((y * kW + x) * p.band + k);
+        const float d = float(start + k) - hStar;
+        aggregated.at(x, y, k) = 4.f * (0.2f + 0.5f * d * d) + 0.01f * hashNoise(i * 19u + 43);
+        const bool none = (x >= 40 && x < 44 && y >= 10 && y < 13) || hashNoise(i * 23u + 44) < 0.04f;
+        costs.at(x, y, k) = none ? 2.f : 0.1f + hashNoise(i * 29u + 45);
+      }
+    }
+  Buffer best = s.make(kW, kH, 2);
+  b.sweepBandSelect(best, s.put(aggregated), s.put(costs), s.put(first), s.put(mask), p);
+  return {s.get("sweepbandselect_best", best)};
+}
+
 }  // namespace
 
 const std::vector<KernelCase>& kernelCases() {
@@ -587,7 +726,12 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"sweepAggregate", sweepAggregateCase},
                                                 {"sweepAggregate, 40 planes", sweepAggregateChunksCase},
                                                 {"sweepSelect", sweepSelectCase},
-                                                {"sweepInitialise", sweepInitialiseCase}};
+                                                {"sweepInitialise", sweepInitialiseCase},
+                                                {"sweepBandWarp", sweepBandWarpCase},
+                                                {"sweepBandCost", sweepBandCostCase},
+                                                {"sweepBandAggregate", sweepBandAggregateCase},
+                                                {"sweepBandAggregate, 32-wide band", sweepBandAggregateWideCase},
+                                                {"sweepBandSelect", sweepBandSelectCase}};
   return cases;
 }
 

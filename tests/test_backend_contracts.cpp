@@ -102,6 +102,21 @@ TEST_CASE("a kernel called with a wrong shape is refused with the kernel and the
     sp.planes = 3;
     checkRefused(b, "sweepCost", "volume has 4 channels, expected 3",
                  [&] { b.sweepCost(b.create(w, h, 3), one, four, mask, sp); });
+    // The band sweep: bands of 2 to 32 hypotheses, no more than the planes.
+    sp.band = 4;
+    checkRefused(b, "sweepBandCost", "needs a band of 2 to 3 hypotheses, got 4",
+                 [&] { b.sweepBandCost(four, one, four, other, mask, sp); });
+    sp.planes = 40, sp.band = kMaxSweepBand + 1;
+    checkRefused(b, "sweepBandAggregate", "needs a band of 2 to 32 hypotheses, got 33",
+                 [&] { b.sweepBandAggregate(four, b.create(w, h, 33), other, mask, sp); });
+    sp.band = 3;
+    checkRefused(b, "sweepBandWarp", "first is 10x9 but mask is 12x9",
+                 [&] { b.sweepBandWarp(b.create(w, h, 3), narrow, other, two, mask, sp, 0.5f); });
+    checkRefused(b, "sweepBandWarp", "needs a coarse scale in (0, 1], got 2",
+                 [&] { b.sweepBandWarp(b.create(w, h, 3), one, other, two, mask, sp, 2.f); });
+    checkRefused(b, "sweepBandSelect", "aggregated has 4 channels, expected 3",
+                 [&] { b.sweepBandSelect(two, four, b.create(w, h, 3), one, mask, sp); });
+    sp.planes = 3;
     sp.cam.model = 99;
     checkRefused(b, "sweepSelect", "unknown camera model 99",
                  [&] { b.sweepSelect(two, b.create(w, h, 3), b.create(w, h, 3), mask, sp); });

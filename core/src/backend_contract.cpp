@@ -2,6 +2,7 @@
 // public kernel checks its arguments and calls the backend's protected "do" virtual. The
 // coarse kernels' default implementations (the fine kernels in their documented order)
 // are here too.
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -85,6 +86,13 @@ class BackendContract {
             "needs 2 to " + std::to_string(kMaxSweepPlanes) + " planes, got " + std::to_string(p.planes));
     require(p.radius >= 0, "needs a window radius >= 0, got " + std::to_string(p.radius));
     return camera(p.cam, "the camera");
+  }
+
+  const BackendContract& band(const SweepParams& p) const {
+    sweep(p);
+    const int most = std::min(p.planes, kMaxSweepBand);
+    return require(p.band >= 2 && p.band <= most,
+                   "needs a band of 2 to " + std::to_string(most) + " hypotheses, got " + std::to_string(p.band));
   }
 
   void median(const Buffer& dst, const Buffer& src, const Buffer& mask) const {
@@ -323,6 +331,48 @@ void Backend::sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& co
   c.sameGrid(confidence, "confidence", 1, mask, "mask").sameGrid(best, "best", 2, mask, "mask");
   c.sameGrid(other, "other", 2, mask, "mask");
   doSweepInitialise(u, w, confidence, best, other, mask, p, consistency);
+}
+
+void Backend::sweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image, const Buffer& coarseBest,
+                            const Buffer& mask, const SweepParams& p, float coarseScale) {
+  const BackendContract c(*this, "sweepBandWarp");
+  c.band(p);
+  c.buffer(mask, "mask", 1).sameGrid(volume, "volume", p.band, mask, "mask");
+  c.sameGrid(first, "first", 1, mask, "mask").sameGrid(image, "image", 1, mask, "mask");
+  c.buffer(coarseBest, "coarseBest", 2);
+  c.require(coarseScale > 0.f && coarseScale <= 1.f,
+            "needs a coarse scale in (0, 1], got " + std::to_string(coarseScale));
+  doSweepBandWarp(volume, first, image, coarseBest, mask, p, coarseScale);
+}
+
+void Backend::sweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& first,
+                            const Buffer& mask, const SweepParams& p) {
+  const BackendContract c(*this, "sweepBandCost");
+  c.band(p);
+  c.buffer(mask, "mask", 1).sameGrid(costs, "costs", p.band, mask, "mask");
+  c.sameGrid(reference, "reference", 1, mask, "mask").sameGrid(volume, "volume", p.band, mask, "mask");
+  c.sameGrid(first, "first", 1, mask, "mask");
+  doSweepBandCost(costs, reference, volume, first, mask, p);
+}
+
+void Backend::sweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first, const Buffer& mask,
+                                 const SweepParams& p) {
+  const BackendContract c(*this, "sweepBandAggregate");
+  c.band(p);
+  c.buffer(mask, "mask", 1).sameGrid(aggregated, "aggregated", p.band, mask, "mask");
+  c.sameGrid(costs, "costs", p.band, mask, "mask").sameGrid(first, "first", 1, mask, "mask");
+  c.require(aggregated.id != costs.id, "aggregated and costs are the same buffer");
+  doSweepBandAggregate(aggregated, costs, first, mask, p);
+}
+
+void Backend::sweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& first,
+                              const Buffer& mask, const SweepParams& p) {
+  const BackendContract c(*this, "sweepBandSelect");
+  c.band(p);
+  c.buffer(mask, "mask", 1).sameGrid(best, "best", 2, mask, "mask");
+  c.sameGrid(aggregated, "aggregated", p.band, mask, "mask").sameGrid(costs, "costs", p.band, mask, "mask");
+  c.sameGrid(first, "first", 1, mask, "mask");
+  doSweepBandSelect(best, aggregated, costs, first, mask, p);
 }
 
 void Backend::triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,

@@ -140,6 +140,9 @@ std::vector<ParamInfo> buildTable() {
                              "data-term weight floor of low-confidence pixels", Shown::PlaneSweep),
                   intParam("init_warps", &Params::initWarps, closed(0, 1000),
                            "warps per level from the sweep's down (0: as the levels above)", Shown::PlaneSweep),
+                  intParam("init_band", &Params::initBand, closed(0, 32),
+                           "hypotheses a pixel at the sweep's level around a sweep one level coarser (0: full sweep)",
+                           Shown::PlaneSweep),
               });
   std::vector<ParamInfo> view =
       grouped("field of view",

@@ -24,6 +24,7 @@ void Params::validate() const {
     require(bad.empty(), info.cppName() + " " + bad);
   }
   require(initP1 >= 0 && initP2 >= initP1, "initP1, initP2 must satisfy 0 <= initP1 <= initP2");
+  require(initBand != 1, "initBand must be 0 (a full sweep) or 2 to 32 hypotheses, got 1");
 }
 
 Params preset(const std::string& name) {
@@ -51,6 +52,7 @@ Params preset(const std::string& name) {
     p.warps = 30;
     p.warpsTaper = 10;
     p.initWarps = 2;
+    p.initBand = 32;
     return p;
   }
   if (name == "fast") {

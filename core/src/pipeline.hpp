@@ -78,16 +78,27 @@ class Pipeline {
   };
 
   // The plane-sweep initialiser: which level, its hypotheses, and its buffers.
+  // With a band (Params::initBand) the full sweep runs one level coarser (and initialises
+  // that level too) and `level`'s sweep scores only each pixel's band around its winners.
   struct Sweep {
-    size_t level = 0;
+    size_t level = 0;      // where its result initialises the solve
     SweepParams params{};  // params.t is t' (camera 0 as reference)
-    Buffer volume;         // warped samples, then the aggregated costs (planes ch)
-    Buffer costs;          // window costs (planes ch)
+    Buffer volume;         // warped samples, then the aggregated costs (planes or band ch)
+    Buffer costs;          // window costs (planes or band ch)
     Buffer best, other;
+    bool banded = false;
+    Buffer first;                // each pixel's first hypothesis (band sweep)
+    SweepParams coarseParams{};  // the full sweep one level coarser (band sweep)
+    Buffer coarseVolume, coarseCosts, coarseBest, coarseOther;
   };
   static double sweepQMax(const Eigen::Vector3d& tPrime, const Params& params);
   static int sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params);
+  static bool sweepBanded(const Params& params, int levels);
+  void runCoarseSweep();
   void runSweep();
+  void fullSweep(const Level& L, const SweepParams& p, const Buffer& volume, const Buffer& costs, const Buffer& best,
+                 const Buffer& other);
+  void bandSweep(const Level& L, const Buffer& coarseBest, const Buffer& coarseOther, float coarseScale);
   bool normalising() const { return params_.dataTerm == Params::DataTerm::Normalised; }
   bool initialising() const { return params_.init == Params::Init::PlaneSweep; }
 

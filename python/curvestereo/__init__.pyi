@@ -151,6 +151,7 @@ class Stereo:
         init_accept: float = ...,
         occlusion_weight: float = ...,
         init_warps: int = ...,
+        init_band: int = ...,
         max_fov_deg: float = ...,
         epipole_deg: float = ...,
         **more: Any,

@@ -104,6 +104,14 @@ struct Params {
   // rejected pixels then start at zero) lost 4 to 6 points on the T265-like pairs and is
   // not offered.
   int initWarps = 0;
+  // Band sweep (0: off; else 2..32 hypotheses): the full sweep runs one level coarser than
+  // initLevel (and initialises that level too), and initLevel scores only initBand
+  // hypotheses a pixel around the coarse winner (in the manner of tSGM, Rothermel et al.
+  // 2012): a far smaller volume where the coarse level found the surface; where it did
+  // not, the winner tends to land on the band's edge and is refused, or the left-right
+  // check rejects it, and the pixel keeps the coarse-to-fine estimate. Off (a full sweep)
+  // when initLevel is the coarsest level.
+  int initBand = 0;
 
   // Field of view used: rays farther than maxFovDeg/2 from the optical axis are masked
   // (0 = everything the camera model represents, which for an undistorted equidistant

@@ -78,6 +78,9 @@ struct SweepParams {
   // window whose spread is mostly noise (flat walls, sky, a dark rim) correlates weakly
   // with everything instead of strongly with a random hypothesis.
   float flatVariance;
+  // Hypotheses per pixel of a band sweep (the sweepBand kernels: 2..min(planes,
+  // kMaxSweepBand)); the full sweep's kernels ignore it.
+  int band;
 };
 
 // Left-right consistency of two sweeps, turned into the initial state and a confidence.
@@ -112,6 +115,9 @@ struct PrimalDualParams {
 // scanline's planes in registers, at most kMaxSweepPlanes / 32 per lane; Vulkan's fallback
 // holds them in shared memory).
 constexpr int kMaxSweepPlanes = 512;
+// The most hypotheses a band sweep scores per pixel (SweepParams::band): the GPU band
+// aggregations give each hypothesis of a scanline's band one lane of a 32-wide group.
+constexpr int kMaxSweepBand = 32;
 // The structure tensor's Gaussian pre-smoothing: radius ceil(3 sigma) at most this (sigma up
 // to 42 px).
 constexpr int kMaxTensorRadius = 127;
@@ -252,6 +258,37 @@ class Backend {
   void sweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
                        const Buffer& other, const Buffer& mask, const SweepParams& p, const ConsistencyParams& c);
 
+  // --- the band sweep (same family): a full sweep one level coarser proposes, the level's ---
+  // sweep scores only p.band hypotheses a pixel around the proposal (Params::initBand).
+  // `first` (1 ch) says which: channel k of volume, costs and aggregated is hypothesis
+  // first + k. Every band kernel: the sweep kernels' contract, and 2 <= p.band <=
+  // min(p.planes, kMaxSweepBand); volume, costs and aggregated have p.band channels.
+  // first: at a masked pixel x, the coarse pixel c = min(cw - 1, int((x + 0.5) s)) (and the
+  // same in y; s = coarseScale, coarse / fine; float arithmetic), its hypothesis q = coarseBest(c)
+  // (2 ch, as sweepSelect writes it; made with the same qMax) and n = floor(q (planes - 1) /
+  // qMax + 0.5) (double): first = clamp(n - band / 2, 0, planes - band); -1 where x is not
+  // masked or q < 0. volume: channel k is sweepWarp's value at hypothesis first + k; -1
+  // where first is -1.
+  void sweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image, const Buffer& coarseBest,
+                     const Buffer& mask, const SweepParams& p, float coarseScale);
+  // costs: sweepCost's 1 - ZNCC at each pixel's hypotheses, in the same summation order,
+  // where a window sample at pixel y for hypothesis h = first(x) + k is volume(y, h -
+  // first(y)) when first(y) >= 0 and that channel exists, and missing otherwise; 2 where
+  // first(x) is -1 or outside the mask.
+  void sweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& first,
+                     const Buffer& mask, const SweepParams& p);
+  // aggregated: sweepAggregate over bands: a pixel with first -1 ends the path as an unmasked
+  // one does; at hypothesis h = first(x) + k the previous pixel's terms are L_r(x - r, h) and
+  // L_r(x - r, h -+ 1) where its band holds them (omitted otherwise), m + p2 always, in that
+  // order of minima; m is the minimum over the previous pixel's band.
+  void sweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first, const Buffer& mask,
+                          const SweepParams& p);
+  // best: sweepSelect within each pixel's band (hypothesis first + k + offset), except that a
+  // winner on an edge of the band that is not an end of the full range gives (-1, 2): the
+  // minimum lies at or beyond the band, so the coarse proposal missed it.
+  void sweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& first,
+                       const Buffer& mask, const SweepParams& p);
+
   // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w (2 ch) where
   // mask is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.
   // radial is NaN outside the mask: Stereo derives the valid mask from radial instead of
@@ -319,6 +356,14 @@ class Backend {
   virtual void doSweepInitialise(const Buffer& u, const Buffer& w, const Buffer& confidence, const Buffer& best,
                                  const Buffer& other, const Buffer& mask, const SweepParams& p,
                                  const ConsistencyParams& c) = 0;
+  virtual void doSweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image, const Buffer& coarseBest,
+                               const Buffer& mask, const SweepParams& p, float coarseScale) = 0;
+  virtual void doSweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& first,
+                               const Buffer& mask, const SweepParams& p) = 0;
+  virtual void doSweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first,
+                                    const Buffer& mask, const SweepParams& p) = 0;
+  virtual void doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& first,
+                                 const Buffer& mask, const SweepParams& p) = 0;
   virtual void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                              const CameraParams& cam0, const double tPrime[3]) = 0;
 

@@ -1,0 +1,80 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The band sweep's volume (backend_cpu/plane_sweep.cpp sweepBandWarp): each masked pixel's
+// band from the coarse sweep's answer, first = clamp(n - band / 2, 0, planes - band) with n
+// the coarse hypothesis q as a plane index (-1 where the pixel is not masked or q < 0), and
+// channel k of the volume the image sampled as sweep_warp.comp samples hypothesis first + k;
+// -1 where it cannot be sampled. Geometry in `real`, compiled twice: double (-DCS_DOUBLE)
+// and float.
+// As sweep_warp.comp, a work group takes kPixels adjacent pixels of a row: their rays and
+// bands first (one invocation each, into shared memory), then its kGroupSize invocations
+// over the pixels' band channels, one contiguous run of the interleaved volume.
+#ifdef CS_DOUBLE
+#extension GL_ARB_gpu_shader_fp64 : require
+#endif
+#define CS_OWN_WORK_GROUP
+#include "common.glsl"
+#include "plane_sweep.glsl"
+#include "sampling.glsl"
+
+const int kPixels = 32;  // mirrors kSweepBandWarpPixels in backend_vulkan/kernels.cpp
+const int kGroupSize = 256;
+layout(local_size_x = kGroupSize, local_size_y = 1, local_size_z = 1) in;
+
+const float kNoSample = -1.0;
+
+layout(push_constant) uniform PC {
+  FBuf volume, first, image, coarseBest, mask;  // volume: `band` channels; coarseBest: 2
+  SweepParamsRef prm;
+  int width, height, planes, band;
+  int coarseWidth, coarseHeight;
+  float coarseScale;  // coarse / fine
+} pc;
+
+shared vec3r rays[kPixels];
+shared bool usable[kPixels];
+shared int firsts[kPixels];
+
+// The pixel's first hypothesis in the oracle's arithmetic: the coarse pixel in float, the
+// plane index n in `real` (the oracle's double), rounded half up. -1 where it has none.
+int bandFirst(int x, int y) {
+  if (!masked(pc.mask, pc.width, pc.height, x, y)) return -1;
+  precise float fx = (float(x) + 0.5) * pc.coarseScale, fy = (float(y) + 0.5) * pc.coarseScale;
+  const int cx = min(pc.coarseWidth - 1, int(fx)), cy = min(pc.coarseHeight - 1, int(fy));
+  const float q = pc.coarseBest.v[idx(pc.coarseWidth, 2, cx, cy, 0)];
+  if (q < 0.0) return -1;
+  precise real n = real(q) * real(pc.planes - 1) / pc.prm.qMax + real(0.5);
+  const int centre = int(floor(n));
+  return min(max(centre - pc.band / 2, 0), pc.planes - pc.band);
+}
+
+void main() {
+  const int lid = int(gl_LocalInvocationIndex);
+  const int x0 = int(gl_WorkGroupID.x) * kPixels, y = int(gl_WorkGroupID.y);
+  const int count = min(kPixels, pc.width - x0);
+  const Cam cam = pc.prm.cam;
+  if (lid < count) {
+    const int x = x0 + lid;
+    const int start = bandFirst(x, y);
+    // The oracle places the band before it unprojects: a pixel without a ray keeps its
+    // band, with every sample -1.
+    vec3r ray = vec3r(0.0);
+    usable[lid] = start >= 0 && camUnproject(cam, vec2r(real(x), real(y)), ray);
+    rays[lid] = ray;
+    firsts[lid] = start;
+    pc.first.v[y * pc.width + x] = float(start);
+  }
+  barrier();
+  const vec3r t = sweepTranslation(pc.prm);
+  const real qMax = pc.prm.qMax;
+  const int base = idx(pc.width, pc.band, x0, y, 0);
+  for (int i = lid; i < count * pc.band; i += kGroupSize) {
+    const int pixel = i / pc.band, k = i % pc.band;
+    float value = kNoSample;
+    vec2r px;
+    if (usable[pixel] &&
+        projectHypothesis(cam, rays[pixel], t, planeInverseDepth(qMax, pc.planes, real(firsts[pixel] + k)), px))
+      value = sampleBilinear(pc.image, pc.width, pc.height, 1, 0, float(px.x), float(px.y));
+    pc.volume.v[base + i] = value;
+  }
+}
