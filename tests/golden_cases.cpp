@@ -611,9 +611,9 @@ std::vector<Output> sweepBandWarpCase(Backend& b) {
 // it, or 2 below in a stripe (neighbouring bands overlap in part); a patch has no band
 // (-1). Plane h at a pixel is the reference shifted by 1.3 (h - h*) px along (1, 0.5), as
 // sweepCostInputs.
-std::vector<Output> sweepBandCostCase(Backend& b) {
+std::vector<Output> bandCostAt(Backend& b, int radius, const char* name) {
   Session s{b};
-  SweepParams p = sweepParams(2.0, 40, 2);
+  SweepParams p = sweepParams(2.0, 40, radius);
   p.band = 8;
   Host reference = stretched(texture(kW, kH, 31, 1)), mask = discMask(kW, kH);
   Host volume(kW, kH, p.band), first(kW, kH, 1);
@@ -632,8 +632,15 @@ std::vector<Output> sweepBandCostCase(Backend& b) {
     }
   Buffer costs = s.make(kW, kH, p.band);
   b.sweepBandCost(costs, s.put(reference), s.put(volume), s.put(first), s.put(mask), p);
-  return {s.get("sweepbandcost_costs", costs)};
+  return {s.get(name, costs)};
 }
+
+std::vector<Output> sweepBandCostCase(Backend& b) { return bandCostAt(b, 2, "sweepbandcost_costs"); }
+
+// Other windows: GPUs specialise their tiles per radius (CUDA: 0 to 3, a loop above).
+std::vector<Output> sweepBandCostRadius1Case(Backend& b) { return bandCostAt(b, 1, "sweepbandcost_radius1"); }
+std::vector<Output> sweepBandCostRadius3Case(Backend& b) { return bandCostAt(b, 3, "sweepbandcost_radius3"); }
+std::vector<Output> sweepBandCostRadius4Case(Backend& b) { return bandCostAt(b, 4, "sweepbandcost_radius4"); }
 
 // aggregationCosts' valley, seen through bands that follow it with a jitter of up to two
 // planes each way (so neighbouring bands are shifted against each other), jump with it,
@@ -729,6 +736,9 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"sweepInitialise", sweepInitialiseCase},
                                                 {"sweepBandWarp", sweepBandWarpCase},
                                                 {"sweepBandCost", sweepBandCostCase},
+                                                {"sweepBandCost, radius 1", sweepBandCostRadius1Case},
+                                                {"sweepBandCost, radius 3", sweepBandCostRadius3Case},
+                                                {"sweepBandCost, radius 4", sweepBandCostRadius4Case},
                                                 {"sweepBandAggregate", sweepBandAggregateCase},
                                                 {"sweepBandAggregate, 32-wide band", sweepBandAggregateWideCase},
                                                 {"sweepBandSelect", sweepBandSelectCase}};
