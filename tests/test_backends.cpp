@@ -52,6 +52,10 @@ Tolerance toleranceFor(const std::string& output) {
   // case whose proposals lie 0.2 plane from a rounding tie: exact.
   if (output == "sweepbandwarp_first") return {0.0, 0.0};
   if (output.rfind("sweepbandwarp_", 0) == 0) return {5e-4, 1e-9};
+  // At radius 1 a window holds 5 to 9 samples: smaller variances, so Vulkan's 2.5-ulp
+  // division and square root move 1 - ZNCC further (2.8e-4 measured on NVIDIA's driver at
+  // one pixel, NMSE 1.7e-11; CUDA and lavapipe exact).
+  if (output == "sweepbandcost_radius1") return {5e-4, 1e-9};
   if (output.rfind("sweepbandcost_", 0) == 0) return {2e-4, 1e-9};
   if (output.rfind("sweepbandaggregate_", 0) == 0) return {1e-6, 1e-15};
   if (output.rfind("sweepbandselect_", 0) == 0) return {1e-5, 1e-12};
