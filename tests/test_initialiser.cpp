@@ -566,8 +566,15 @@ TEST_CASE("warp schedule: the taper from the coarsest level, the sweep's levels 
   p.init = Params::Init::PlaneSweep;
   p.initLevel = 1;
   CHECK(warpSchedule(p, 5) == std::vector<int>{2, 2, 10, 20, 30});
-  CHECK(warpSchedule(preset("realtime"), 5) == std::vector<int>{2, 2, 10, 20, 30});
   CHECK(warpSchedule(preset("quality"), 5) == std::vector<int>{30, 30, 30, 30, 30});
+  // A band sweep's full sweep initialises the level above: initWarps from there down.
+  p.initBand = 32;
+  CHECK(sweepBanded(p, 5));
+  CHECK(warpSchedule(p, 5) == std::vector<int>{2, 2, 2, 20, 30});
+  CHECK(warpSchedule(preset("realtime"), 5) == std::vector<int>{2, 2, 2, 20, 30});
+  CHECK(!sweepBanded(p, 2));  // no level above the sweep's: a full sweep
+  CHECK(warpSchedule(p, 2) == std::vector<int>{2, 2});  // the sweep at the coarsest, both refine
+  p.initBand = 0;
   p.initLevel = 7;  // clamped to the coarsest level, as the sweep is
   CHECK(sweepLevel(p, 3) == 2);
   CHECK(warpSchedule(p, 3) == std::vector<int>{2, 2, 2});

@@ -144,9 +144,13 @@ std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p) {
 
 int sweepLevel(const Params& p, int levels) { return std::min(levels - 1, p.initLevel); }
 
+bool sweepBanded(const Params& p, int levels) {
+  return p.init == Params::Init::PlaneSweep && p.initBand > 0 && sweepLevel(p, levels) + 1 < levels;
+}
+
 std::vector<int> warpSchedule(const Params& p, int levels) {
   std::vector<int> warps(size_t(std::max(0, levels)));
-  const int sweep = sweepLevel(p, levels);
+  const int sweep = sweepLevel(p, levels) + (sweepBanded(p, levels) ? 1 : 0);
   for (int l = 0; l < levels; ++l) {
     if (p.init == Params::Init::PlaneSweep && l <= sweep && p.initWarps > 0)
       warps[size_t(l)] = p.initWarps;

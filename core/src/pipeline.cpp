@@ -66,11 +66,6 @@ double Pipeline::sweepQMax(const Eigen::Vector3d& tPrime, const Params& params) 
   return std::tan(params.initMaxParallaxDeg * M_PI / 180.0) / tPrime.norm();
 }
 
-// A band sweep needs a coarser level to propose the bands.
-bool Pipeline::sweepBanded(const Params& params, int levels) {
-  return params.init == Params::Init::PlaneSweep && params.initBand > 0 && sweepLevel(params, levels) + 1 < levels;
-}
-
 // Enough hypotheses that neighbouring ones move no pixel by more than initPxPerPlane:
 // the motion per unit of inverse depth is largest at q = 0, where it is J t' (J the
 // projection's Jacobian at the ray). Fixed per rig so a moving camera never reallocates;

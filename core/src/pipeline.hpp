@@ -93,7 +93,6 @@ class Pipeline {
   };
   static double sweepQMax(const Eigen::Vector3d& tPrime, const Params& params);
   static int sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params);
-  static bool sweepBanded(const Params& params, int levels);
   void runCoarseSweep();
   void runSweep();
   void fullSweep(const Level& L, const SweepParams& p, const Buffer& volume, const Buffer& costs, const Buffer& best,

@@ -162,8 +162,13 @@ std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p);
 // the coarsest.
 int sweepLevel(const Params& p, int levels);
 
+// Whether the sweep is a band sweep among `levels` pyramid levels: initBand set and a level
+// coarser than sweepLevel to run the full sweep at.
+bool sweepBanded(const Params& p, int levels);
+
 // Warps at each of `levels` pyramid levels (level 0 first): warps at the coarsest, warpsTaper
-// fewer at each finer one (at least 1), initWarps from the sweep's level down when set.
+// fewer at each finer one (at least 1), initWarps from the first level a sweep initialises
+// down when set (sweepLevel, or the one above it with a band: its full sweep initialises it).
 std::vector<int> warpSchedule(const Params& p, int levels);
 
 // "levels=5 scale=2 warps=30 ..." for logs and bench reports.
