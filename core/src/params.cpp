@@ -36,17 +36,18 @@ Params preset(const std::string& name) {
   Params p;
   if (name == "variational") return p;
   if (name == "realtime") {
-    // The sweep at level 1 (half resolution), warps where they are needed: the coarse
-    // levels travel from zero for the pixels the sweep's left-right check rejects (30, 20,
-    // 10 warps at levels 4, 3, 2: the coarsest does the travelling, each finer one only
-    // corrects its neighbour), the sweep's level and the full resolution only refine (2
-    // each). Measured on the 12 development pairs (CUDA, H100; the CPU oracle agrees), mean
-    // tau>1 / tau>3 % of clean binocular, T265-like binocular pairs and tau>1 of clean
-    // forward non-occluded pairs: 5.8 / 2.9, 6.9 / 3.1, 9.8 (quality: 4.6 / 3.0, 6.0 / 3.2,
-    // 8.1; the former realtime, a level-2 sweep and 5 warps everywhere: 6.4 / 4.5, 9.5 /
-    // 6.0, 12.0). The coarse levels are cheap in pixels but not in launches: 30 warps at
-    // all three measured 0.9 ms more per 848x800 frame, 20 / 20 / 20 lost 1 point on the
-    // T265-like pairs, and dropping levels 3 and 4 lost 4 to 6.
+    // A full sweep at level 2, checked and initialising level 2, then a band of 32
+    // hypotheses a pixel around its winners at level 1 (initBand); warps where they are
+    // needed: the coarse levels travel from zero for the pixels the checks reject (30, 20
+    // at levels 4, 3: the coarsest does the travelling), the levels the sweeps initialise
+    // and the full resolution only refine (2 each). Measured on the 12 development pairs
+    // (CUDA, H100; the CPU oracle agrees), mean tau>1 / tau>3 % of clean binocular,
+    // T265-like binocular pairs and tau>1 of clean / T265-like forward non-occluded pairs:
+    // 6.2 / 3.3, 7.6 / 3.7, 11.4 / 17.6 in 4.5-4.8 ms a 848x800 frame; the full level-1
+    // sweep with 30 / 20 / 10 / 2 / 2 warps: 5.8 / 2.9, 6.9 / 3.1, 9.8 / 18.4 in 6.1 ms
+    // (quality: 4.6 / 3.0, 6.0 / 3.2, 8.1 / 18.8 in 14 ms). Bands of 16 and 24 lost 0.1 to
+    // 0.2 points for 0.1 ms; 30 warps at all coarse levels cost 0.9 ms more, 20 / 12 / 4
+    // lost 0.1 to 0.2 points, dropping levels 3 and 4 lost 4 to 6 (README "Presets").
     p.init = Params::Init::PlaneSweep;
     p.initLevel = 1;
     p.warps = 30;

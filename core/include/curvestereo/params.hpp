@@ -141,7 +141,8 @@ std::string initName(Params::Init init);
 Params::Init parseInit(const std::string& name);
 
 // Named presets: "realtime" (the default of the library, the command line and Python: a
-// plane sweep at level 1, 30 / 20 / 10 warps at the levels above it, 2 from it down),
+// plane sweep at level 2 and a band of 32 hypotheses a pixel around it at level 1, 30 / 20
+// warps at levels 4 / 3, 2 at each level below),
 // "fast" (for slower GPUs: the sweep at level 2, then N = 5 warps a level), "quality"
 // (the sweep at level 1, then N = 30 at every level), "variational" (the solver alone,
 // N = 30, no initialiser: the struct's defaults) and "paper" (the paper's configuration:
