@@ -91,12 +91,7 @@ __device__ __forceinline__ WindowSums columnSums(const CostSource& c, int sx, in
     const int j = min(max(sy, 0), c.height - 1) * c.width + cx;
     const float m = __ldg(&c.mask[j]), b = __ldg(&c.volume[size_t(j) * c.planes]), a = __ldg(&c.reference[j]);
     const bool valid = column && sy >= 0 && sy < c.height && m != 0.f && !(b < 0.f);
-    s.n += valid ? 1.f : 0.f;
-    s.s0 += valid ? a : 0.f;
-    s.s1 += valid ? b : 0.f;
-    s.s00 += valid ? a * a : 0.f;
-    s.s11 += valid ? b * b : 0.f;
-    s.s01 += valid ? a * b : 0.f;
+    addSample(s, valid, a, b);
   }
   return s;
 }

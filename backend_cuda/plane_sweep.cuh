@@ -49,6 +49,17 @@ __device__ __forceinline__ void addColumn(WindowSums& s, const WindowSums& c) {
   s.n += c.n, s.s0 += c.s0, s.s1 += c.s1, s.s00 += c.s00, s.s11 += c.s11, s.s01 += c.s01;
 }
 
+// One window sample (a reference, b the hypothesis's) into a column's sums; an invalid one
+// adds +0, which leaves a sum begun at +0 bit for bit as the oracle's skipped sample does.
+__device__ __forceinline__ void addSample(WindowSums& s, bool valid, float a, float b) {
+  s.n += valid ? 1.f : 0.f;
+  s.s0 += valid ? a : 0.f;
+  s.s1 += valid ? b : 0.f;
+  s.s00 += valid ? a * a : 0.f;
+  s.s11 += valid ? b * b : 0.f;
+  s.s01 += valid ? a * b : 0.f;
+}
+
 __device__ __forceinline__ float windowCost(const WindowSums& s, int side, float flatVariance) {
   if (2.f * s.n < float(side * side)) return kNoCost;
   const float m0 = s.s0 / s.n, m1 = s.s1 / s.n;

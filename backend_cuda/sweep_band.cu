@@ -103,12 +103,7 @@ __device__ __forceinline__ WindowSums bandColumnSums(const BandCostSource& c, in
     const float b = __ldg(&c.volume[size_t(i) * c.band + min(max(j, 0), c.band - 1)]);
     const bool valid =
         column && sy >= 0 && sy < c.height && m != 0.f && there >= 0 && j >= 0 && j < c.band && !(b < 0.f);
-    s.n += valid ? 1.f : 0.f;
-    s.s0 += valid ? a : 0.f;
-    s.s1 += valid ? b : 0.f;
-    s.s00 += valid ? a * a : 0.f;
-    s.s11 += valid ? b * b : 0.f;
-    s.s01 += valid ? a * b : 0.f;
+    addSample(s, valid, a, b);
   }
   return s;
 }
@@ -212,12 +207,7 @@ __global__ void __launch_bounds__(kTileThreads)
           const float b = samples[q * band + min(max(j, 0), band - 1)], a = t.a;
           // An invalid sample adds +0 (a sum begun at +0 keeps its bits), as bandColumnSums.
           const bool valid = t.there >= 0 && j >= 0 && j < band && !(b < 0.f);
-          col.n += valid ? 1.f : 0.f;
-          col.s0 += valid ? a : 0.f;
-          col.s1 += valid ? b : 0.f;
-          col.s00 += valid ? a * a : 0.f;
-          col.s11 += valid ? b * b : 0.f;
-          col.s01 += valid ? a * b : 0.f;
+          addSample(col, valid, a, b);
         }
         addColumn(s, col);
       }
