@@ -97,8 +97,7 @@ __device__ __forceinline__ WindowSums columnSums(const CostSource& c, int sx, in
 }
 
 // The thread's plane k and run of pixels [x0, x1) of row blockIdx.y; false past the row.
-__device__ __forceinline__ bool costWork(const Img& costs, int planes, CostSource& src, int& x0, int& x1,
-                                         float*& out) {
+__device__ __forceinline__ bool costWork(const Img& costs, int planes, CostSource& src, int& x0, int& x1, float*& out) {
   const int i = blockIdx.x * kCostThreads + threadIdx.x, run = i / planes, k = i - run * planes;
   x0 = run * kCostRun;
   if (x0 >= costs.width) return false;
@@ -216,7 +215,8 @@ __device__ __forceinline__ float pathStep(const PathState<J>& s, const float (&c
   }
 #pragma unroll
   for (int j = 0; j + 1 < J; ++j) {
-    const float last = __shfl_sync(0xffffffffu, s.previous[j], 31), first = __shfl_sync(0xffffffffu, s.previous[j + 1], 0);
+    const float last = __shfl_sync(0xffffffffu, s.previous[j], 31),
+                first = __shfl_sync(0xffffffffu, s.previous[j + 1], 0);
     if (lane == 0) left[j + 1] = last;
     if (lane == 31) right[j] = first;
   }
@@ -296,8 +296,17 @@ __global__ void __launch_bounds__(32) sweepDirectionKernel(Img aggregated, Img s
   const int direction = blockIdx.y, line = blockIdx.x, width = costs.width;
   const bool rows = direction < 2;
   if (line >= (rows ? costs.height : width)) return;
-  Walk w{costs.data, mask.data, directionBuffer(aggregated, spare, direction).data, 0, 0, 0, p.planes,
-         mask.channels, direction % 2 == 0, p.p1, p.p2};
+  Walk w{costs.data,
+         mask.data,
+         directionBuffer(aggregated, spare, direction).data,
+         0,
+         0,
+         0,
+         p.planes,
+         mask.channels,
+         direction % 2 == 0,
+         p.p1,
+         p.p2};
   w.start = rows ? size_t(line) * width : size_t(line);
   w.stride = rows ? 1 : size_t(width);
   w.length = rows ? width : costs.height;
@@ -331,12 +340,7 @@ __global__ void __launch_bounds__(kSelectThreads)
       if (c[k] < kNoCost && (winner < 0 || a[k] < lowest)) winner = k, lowest = a[k];
     warpFirstMin(lowest, winner);
     if (winner >= 0) {
-      // The parabola sees the aggregated cost per path, on the scale of one window's cost.
-      auto score = [&](int k) { return k < 0 || k >= p.planes || c[k] >= kNoCost ? kNoCost : a[k] / kPaths; };
-      // float, as the oracle's int + float
-      const float k = float(winner) + parabolaOffset(score(winner - 1), score(winner), score(winner + 1));
-      const double depth = planeInverseDepth(p, double(k));
-      q = float(0.0 < depth ? depth : 0.0);  // std::max(0.0, depth)
+      q = refinedInverseDepth(a, c, p.planes, 0, winner, p);
       winnerCost = c[winner];
     }
   }
@@ -460,12 +464,23 @@ cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume
   const int runs = (costs.width + kCostRun - 1) / kCostRun;
   const dim3 grid(unsigned((runs * p.planes + kCostThreads - 1) / kCostThreads), unsigned(costs.height));
   switch (p.radius) {
-    case 0: CS_LAUNCH(sweepCostKernel<0>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p); break;
-    case 1: CS_LAUNCH(sweepCostKernel<1>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p); break;
-    case 2: CS_LAUNCH(sweepCostKernel<2>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p); break;
-    case 3: CS_LAUNCH(sweepCostKernel<3>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p); break;
-    case 4: CS_LAUNCH(sweepCostKernel<4>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p); break;
-    default: CS_LAUNCH(sweepCostWideKernel, grid, kCostThreads, 0, s, costs, reference, volume, mask, p);
+    case 0:
+      CS_LAUNCH(sweepCostKernel<0>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p);
+      break;
+    case 1:
+      CS_LAUNCH(sweepCostKernel<1>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p);
+      break;
+    case 2:
+      CS_LAUNCH(sweepCostKernel<2>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p);
+      break;
+    case 3:
+      CS_LAUNCH(sweepCostKernel<3>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p);
+      break;
+    case 4:
+      CS_LAUNCH(sweepCostKernel<4>, grid, kCostThreads, 0, s, costs, reference, volume, mask, p);
+      break;
+    default:
+      CS_LAUNCH(sweepCostWideKernel, grid, kCostThreads, 0, s, costs, reference, volume, mask, p);
   }
   static_assert(kMaxRingRadius == 4, "one case per ring radius");
   return cudaGetLastError();
@@ -490,17 +505,32 @@ cudaError_t launchAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs
 cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p) {
   static_assert(kMaxSweepPlanes == 16 * 32, "the largest chunk count");
   switch ((p.planes + 31) / 32) {
-    case 1: return launchAggregate<1>(s, aggregated, spare, costs, mask, p);
-    case 2: return launchAggregate<2>(s, aggregated, spare, costs, mask, p);
-    case 3: return launchAggregate<3>(s, aggregated, spare, costs, mask, p);
-    case 4: return launchAggregate<4>(s, aggregated, spare, costs, mask, p);
-    case 5: return launchAggregate<5>(s, aggregated, spare, costs, mask, p);
-    case 6: return launchAggregate<6>(s, aggregated, spare, costs, mask, p);
+    case 1:
+      return launchAggregate<1>(s, aggregated, spare, costs, mask, p);
+    case 2:
+      return launchAggregate<2>(s, aggregated, spare, costs, mask, p);
+    case 3:
+      return launchAggregate<3>(s, aggregated, spare, costs, mask, p);
+    case 4:
+      return launchAggregate<4>(s, aggregated, spare, costs, mask, p);
+    case 5:
+      return launchAggregate<5>(s, aggregated, spare, costs, mask, p);
+    case 6:
+      return launchAggregate<6>(s, aggregated, spare, costs, mask, p);
     case 7:
-    case 8: return launchAggregate<8>(s, aggregated, spare, costs, mask, p);
-    case 9: case 10: case 11: case 12: case 13: case 14: case 15:
-    case 16: return launchAggregate<16>(s, aggregated, spare, costs, mask, p);
-    default: return cudaErrorInvalidValue;
+    case 8:
+      return launchAggregate<8>(s, aggregated, spare, costs, mask, p);
+    case 9:
+    case 10:
+    case 11:
+    case 12:
+    case 13:
+    case 14:
+    case 15:
+    case 16:
+      return launchAggregate<16>(s, aggregated, spare, costs, mask, p);
+    default:
+      return cudaErrorInvalidValue;
   }
 }
 

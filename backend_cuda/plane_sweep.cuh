@@ -40,6 +40,19 @@ __device__ __forceinline__ float parabolaOffset(float before, float best, float 
   return low < 0.5f ? low : 0.5f;           // std::min(0.5f, low)
 }
 
+// The winner's inverse depth (>= 0), refined by the parabola through aggregated / kPaths at
+// its neighbours among the pixel's n channels (none beside an unscored one), channel k
+// being hypothesis start + k: the oracle's select after the winner is chosen. a, c: the
+// pixel's aggregated costs and window costs.
+__device__ __forceinline__ float refinedInverseDepth(const float* a, const float* c, int n, int start, int winner,
+                                                     const SweepDev& p) {
+  auto score = [&](int k) { return k < 0 || k >= n || c[k] >= kNoCost ? kNoCost : a[k] / kPaths; };
+  // float, as the oracle's int + float
+  const float k = float(start + winner) + parabolaOffset(score(winner - 1), score(winner), score(winner + 1));
+  const double depth = planeInverseDepth(p, double(k));
+  return float(0.0 < depth ? depth : 0.0);  // std::max(0.0, depth)
+}
+
 // 1 - ZNCC of one window from its sums (the oracle's windowCost after the sums).
 struct WindowSums {
   float n, s0, s1, s00, s11, s01;

@@ -372,12 +372,7 @@ __global__ void __launch_bounds__(kSelectThreads)
     warpFirstMin(lowest, winner);
     const bool edge = (winner == 0 && start > 0) || (winner == n - 1 && start + n < p.planes);
     if (winner >= 0 && !edge) {
-      // The parabola sees the aggregated cost per path, on the scale of one window's cost.
-      auto score = [&](int k) { return k < 0 || k >= n || c[k] >= kNoCost ? kNoCost : a[k] / kPaths; };
-      // float, as the oracle's int + float
-      const float k = float(start + winner) + parabolaOffset(score(winner - 1), score(winner), score(winner + 1));
-      const double depth = planeInverseDepth(p, double(k));
-      q = float(0.0 < depth ? depth : 0.0);  // std::max(0.0, depth)
+      q = refinedInverseDepth(a, c, n, start, winner, p);
       winnerCost = c[winner];
     }
   }

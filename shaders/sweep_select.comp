@@ -13,24 +13,11 @@
 #include "common.glsl"
 #include "plane_sweep.glsl"
 
-const float kNoCost = 2.0;  // cost where nothing scored (the worst 1 - ZNCC)
-const float kPaths = 4.0;   // scanline directions summed in `aggregated`
-
 layout(push_constant) uniform PC {
   FBuf best, aggregated, costs, mask;  // best: 2 channels; aggregated, costs: `planes`
   SweepParamsRef prm;                  // qMax
   int width, height, planes;
 } pc;
-
-// Vertex of the parabola through (-1, before), (0, winner), (1, after), within half a
-// plane; 0 where a neighbour did not score or the costs do not curve upwards.
-float parabolaOffset(float before, float winner, float after) {
-  if (before >= kNoCost || after >= kNoCost) return 0.0;
-  precise float curvature = before - 2.0 * winner + after;
-  if (!(curvature > 1e-6)) return 0.0;
-  precise float offset = 0.5 * (before - after) / curvature;
-  return min(0.5, max(-0.5, offset));
-}
 
 // The parabola's sample at plane k: kNoCost outside the planes or where k did not score.
 float score(int base, int k) {
