@@ -123,9 +123,7 @@ __device__ __forceinline__ bool bandCostWork(const Img& costs, const BandCostSou
   return true;
 }
 
-// Radius R known at compile time: the window's loads all issued at once; R < 0: p.radius,
-// a loop (radii past kMaxUnrolledRadius; the smaller ones take the tiled kernel).
-template <int R>
+// Radii past kMaxUnrolledRadius (the smaller ones take the tiled kernel below): a loop.
 __global__ void __launch_bounds__(kCostThreads)
     sweepBandCostKernel(Img costs, Img reference, Img volume, Img first, Img mask, SweepDev p) {
   beginKernel();
@@ -137,9 +135,8 @@ __global__ void __launch_bounds__(kCostThreads)
     *out = kNoCost;
     return;
   }
-  const int r = R >= 0 ? R : p.radius;
+  const int r = p.radius;
   WindowSums s{0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
-#pragma unroll
   for (int dx = -r; dx <= r; ++dx) addColumn(s, bandColumnSums(src, x + dx, y, r, h));
   *out = windowCost(s, 2 * r + 1, p.flatVariance);
 }
@@ -413,7 +410,7 @@ cudaError_t launchSweepBandCost(cudaStream_t s, Img costs, Img reference, Img vo
       CS_LAUNCH(sweepBandCostTileKernel<3>, tiles, kTileThreads, 0, s, costs, reference, volume, first, mask, p);
       break;
     default:
-      CS_LAUNCH(sweepBandCostKernel<-1>, grid, kCostThreads, 0, s, costs, reference, volume, first, mask, p);
+      CS_LAUNCH(sweepBandCostKernel, grid, kCostThreads, 0, s, costs, reference, volume, first, mask, p);
   }
   static_assert(kMaxUnrolledRadius == 3, "one case per unrolled radius");
   return cudaGetLastError();
