@@ -244,9 +244,7 @@ void Pipeline::initialiseLevel(size_t l) {
 void Pipeline::runCoarseSweep() {
   Level& C = levels_[sweep_.level + 1];
   fullSweep(C, sweep_.coarseParams, sweep_.coarseVolume, sweep_.coarseCosts, sweep_.coarseBest, sweep_.coarseOther);
-  stage("sweep: check");
-  backend_.sweepInitialise(C.pd.u, C.w, C.confidence, sweep_.coarseBest, sweep_.coarseOther, C.mask,
-                           sweep_.coarseParams, {params_.lrTolerancePx, params_.initAccept});
+  checkSweep(C, sweep_.coarseParams, sweep_.coarseBest, sweep_.coarseOther);
 }
 
 void Pipeline::runSweep() {
@@ -257,8 +255,13 @@ void Pipeline::runSweep() {
   } else {
     fullSweep(L, sweep_.params, sweep_.volume, sweep_.costs, sweep_.best, sweep_.other);
   }
+  checkSweep(L, sweep_.params, sweep_.best, sweep_.other);
+}
+
+// The left-right check of a level's two sweeps, which initialises that level.
+void Pipeline::checkSweep(Level& L, const SweepParams& p, const Buffer& best, const Buffer& other) {
   stage("sweep: check");
-  backend_.sweepInitialise(L.pd.u, L.w, L.confidence, sweep_.best, sweep_.other, L.mask, sweep_.params,
+  backend_.sweepInitialise(L.pd.u, L.w, L.confidence, best, other, L.mask, p,
                            {params_.lrTolerancePx, params_.initAccept});
 }
 

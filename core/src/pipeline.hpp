@@ -98,6 +98,7 @@ class Pipeline {
   void fullSweep(const Level& L, const SweepParams& p, const Buffer& volume, const Buffer& costs, const Buffer& best,
                  const Buffer& other);
   void bandSweep(const Level& L, const Buffer& coarseBest, const Buffer& coarseOther, float coarseScale);
+  void checkSweep(Level& L, const SweepParams& p, const Buffer& best, const Buffer& other);
   bool normalising() const { return params_.dataTerm == Params::DataTerm::Normalised; }
   bool initialising() const { return params_.init == Params::Init::PlaneSweep; }
 
