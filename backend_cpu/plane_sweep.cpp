@@ -64,19 +64,28 @@ float parabolaOffset(float before, float best, float after) {
 
 }  // namespace
 
+namespace {
+
+// The volume's channels at (x, y): channel k is `image` where the pixel sees hypothesis
+// start + k, kNoSample where that cannot be sampled, all kNoSample for start -1.
+void warpPixel(const View& volume, const View& image, const BuiltCamera& cam, const SweepParams& p, int x, int y,
+               int start) {
+  for (int k = 0; k < volume.channels; ++k) volume.at(x, y, k) = kNoSample;
+  Vec3<double> ray;
+  if (start < 0 || !cam.unproject(Vec2<double>(x, y), ray)) return;
+  for (int k = 0; k < volume.channels; ++k) {
+    Vec2<double> px;
+    if (!projectHypothesis(cam, ray, p.t, planeInverseDepth(p, start + k), px)) continue;
+    volume.at(x, y, k) = sampleBilinear(image, float(px.x()), float(px.y()));
+  }
+}
+
+}  // namespace
+
 void sweepWarp(const View& volume, const View& image, const View& mask, const SweepParams& p) {
   const BuiltCamera cam(toCamera(p.cam));
   parallelRows(volume.height, [&](int y) {
-    for (int x = 0; x < volume.width; ++x) {
-      for (int k = 0; k < p.planes; ++k) volume.at(x, y, k) = kNoSample;
-      Vec3<double> ray;
-      if (!masked(mask, x, y) || !cam.unproject(Vec2<double>(x, y), ray)) continue;
-      for (int k = 0; k < p.planes; ++k) {
-        Vec2<double> px;
-        if (!projectHypothesis(cam, ray, p.t, planeInverseDepth(p, k), px)) continue;
-        volume.at(x, y, k) = sampleBilinear(image, float(px.x()), float(px.y()));
-      }
-    }
+    for (int x = 0; x < volume.width; ++x) warpPixel(volume, image, cam, p, x, y, masked(mask, x, y) ? 0 : -1);
   });
 }
 
@@ -205,21 +214,15 @@ void sweepBandWarp(const View& volume, const View& first, const View& image, con
   parallelRows(volume.height, [&](int y) {
     const int cy = std::min(coarseBest.height - 1, int((float(y) + 0.5f) * coarseScale));
     for (int x = 0; x < volume.width; ++x) {
-      for (int k = 0; k < p.band; ++k) volume.at(x, y, k) = kNoSample;
-      first.at(x, y) = -1.f;
       const int cx = std::min(coarseBest.width - 1, int((float(x) + 0.5f) * coarseScale));
       const float q = coarseBest.at(cx, cy, 0);
-      if (!masked(mask, x, y) || q < 0.f) continue;
-      const int centre = int(std::floor(double(q) * double(p.planes - 1) / p.qMax + 0.5));
-      const int start = std::min(std::max(centre - p.band / 2, 0), p.planes - p.band);
-      first.at(x, y) = float(start);
-      Vec3<double> ray;
-      if (!cam.unproject(Vec2<double>(x, y), ray)) continue;
-      for (int k = 0; k < p.band; ++k) {
-        Vec2<double> px;
-        if (!projectHypothesis(cam, ray, p.t, planeInverseDepth(p, start + k), px)) continue;
-        volume.at(x, y, k) = sampleBilinear(image, float(px.x()), float(px.y()));
+      int start = -1;
+      if (masked(mask, x, y) && !(q < 0.f)) {
+        const int centre = int(std::floor(double(q) * double(p.planes - 1) / p.qMax + 0.5));
+        start = std::min(std::max(centre - p.band / 2, 0), p.planes - p.band);
       }
+      first.at(x, y) = float(start);
+      warpPixel(volume, image, cam, p, x, y, start);
     }
   });
 }
