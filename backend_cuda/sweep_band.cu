@@ -3,6 +3,7 @@
 // channel k of every volume being hypothesis first + k. The full sweep's arithmetic
 // (plane_sweep.cuh) in the oracle's order; built with --fmad=false like it.
 #include <algorithm>
+#include <climits>
 
 #include "plane_sweep.cuh"
 
@@ -17,23 +18,20 @@ constexpr int kWarpPixels = 32;
 constexpr int kWarpThreads = 256;
 
 // sweepBandCostKernel (radii past kMaxUnrolledRadius): a thread per (pixel, hypothesis),
-// hypothesis-fastest, each summing its whole window: a neighbour's sample for the same
-// hypothesis sits in a channel that depends on both pixels' bands, so column partials
-// cannot be kept across pixels as the full sweep does. A pixel's lanes read the same mask, reference and band start
-// (broadcasts) and consecutive channels of the volume (coalesced).
+// hypothesis-fastest, each summing its whole window. A pixel's lanes read the same mask,
+// reference and band start (broadcasts) and consecutive channels of the volume (coalesced).
 constexpr int kCostThreads = 128;
 constexpr int kMaxUnrolledRadius = 3;  // windows up to 7x7: the tiled kernel below
 
 // sweepBandCostTileKernel (radius <= kMaxUnrolledRadius): a block per tile of pixels stages
-// the tile and its halo (mask and band start folded into one int, reference, every sample)
-// in shared memory once, where a window's 4 (2r+1)^2 loads a thread would otherwise go to
-// L1; its threads then walk the tile's (pixel, hypothesis) pairs hypothesis-fastest.
+// the tile and its halo (mask and band start folded into one int, reference) in shared
+// memory, then walks the tile's rows: each row's column partials once (kRowHypotheses),
+// then its (pixel, hypothesis) pairs hypothesis-fastest.
 constexpr int kTileX = 16, kTileY = 8;
 constexpr int kTileThreads = 256;
 
-// sweepBandSelect: a warp per pixel, lane k on hypothesis first + k.
-constexpr int kSelectThreads = 256;
-constexpr int kSelectPixels = kSelectThreads / 32;
+// sweepBandSelect: a thread per pixel.
+constexpr int kSelectThreads = 128;
 
 // The oracle's start of the band at pixel (x, y): the coarse pixel's hypothesis rounded to
 // a plane, the band centred on it and clamped to the range; -1 outside the mask or where
@@ -148,11 +146,9 @@ struct TilePixel {
   int there;
 };
 
-// Stages the tile at (x0, y0) with its halo of R: pixels into `pixels`, their bands into
-// `samples` (halo pixel i's channel k at i * band + k; rows of the volume are contiguous).
+// Stages the tile at (x0, y0) with its halo of R: reference and band start a pixel.
 template <int R>
-__device__ __forceinline__ void stageBandTile(TilePixel* pixels, float* samples, const BandCostSource& c, int x0,
-                                              int y0) {
+__device__ __forceinline__ void stageBandTile(TilePixel* pixels, const BandCostSource& c, int x0, int y0) {
   constexpr int kW = kTileX + 2 * R, kH = kTileY + 2 * R;
   for (int i = threadIdx.x; i < kW * kH; i += blockDim.x) {
     const int sx = x0 - R + i % kW, sy = y0 - R + i / kW;
@@ -164,53 +160,99 @@ __device__ __forceinline__ void stageBandTile(TilePixel* pixels, float* samples,
     }
     pixels[i] = t;
   }
-  const int rowFloats = kW * c.band;
-  for (int i = threadIdx.x; i < kH * rowFloats; i += blockDim.x) {
-    const int row = i / rowFloats, within = i - row * rowFloats;
-    const int sy = y0 - R + row, sx = x0 - R + within / c.band;
-    const bool inImage = sx >= 0 && sx < c.width && sy >= 0 && sy < c.height;
-    samples[i] = inImage ? __ldg(&c.volume[(size_t(sy) * c.width + (x0 - R)) * c.band + within]) : kNoSample;
+}
+
+// The lowest and highest band start among a tile row's own pixels (lo > hi: none has a band).
+template <int R>
+__device__ __forceinline__ void rowStarts(const TilePixel* pixels, int ty, int& lo, int& hi) {
+  constexpr int kW = kTileX + 2 * R;
+  lo = INT_MAX, hi = -1;
+#pragma unroll
+  for (int tx = 0; tx < kTileX; ++tx) {
+    const int there = pixels[(ty + R) * kW + tx + R].there;
+    if (there >= 0) lo = min(lo, there), hi = max(hi, there);
   }
 }
+
+// The oracle's partials of halo column c of tile row ty for hypothesis h, from the staged
+// pixels and the volume (each sample is read by the 2R + 1 rows around it: L1 hits).
+template <int R>
+__device__ __forceinline__ WindowSums tileColumnSums(const TilePixel* pixels, const BandCostSource& src, int x0, int y0,
+                                                     int ty, int c, int h) {
+  constexpr int kW = kTileX + 2 * R;
+  const int sx = min(max(x0 - R + c, 0), src.width - 1);
+  WindowSums col{0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+#pragma unroll
+  for (int dy = -R; dy <= R; ++dy) {
+    const TilePixel t = pixels[(ty + R + dy) * kW + c];
+    const int sy = min(max(y0 + ty + dy, 0), src.height - 1), j = h - t.there;
+    const float b = __ldg(&src.volume[(size_t(sy) * src.width + sx) * src.band + min(max(j, 0), src.band - 1)]);
+    // An invalid sample adds +0 (a sum begun at +0 keeps its bits), as bandColumnSums.
+    addSample(col, t.there >= 0 && j >= 0 && j < src.band && !(b < 0.f), t.a, b);
+  }
+  return col;
+}
+
+// The column partials of one tile row, kept for the hypotheses the row's bands span: the
+// windows of neighbouring pixels share 2R of their 2R + 1 columns, and where their bands
+// start alike (smooth surfaces), the same hypotheses too, so each partial is summed once
+// instead of once per window. Field f of column c, hypothesis lo + k at (f * kW + c) *
+// kRowHypotheses + k: a warp's lanes (consecutive k) read consecutive words.
+constexpr int kRowHypotheses = 64;
 
 template <int R>
 __global__ void __launch_bounds__(kTileThreads)
     sweepBandCostTileKernel(Img costs, Img reference, Img volume, Img first, Img mask, SweepDev p) {
   beginKernel();
-  constexpr int kW = kTileX + 2 * R, kH = kTileY + 2 * R;
+  constexpr int kW = kTileX + 2 * R, kH = kTileY + 2 * R, kFields = 6;
   __shared__ TilePixel pixels[kW * kH];
-  __shared__ float samples[kW * kH * kMaxSweepBand];
+  __shared__ float partials[kFields * kW * kRowHypotheses];
   const BandCostSource src{mask.data, reference.data, first.data, volume.data, costs.width, costs.height, p.band};
   const int x0 = blockIdx.x * kTileX, y0 = blockIdx.y * kTileY, band = p.band;
-  stageBandTile<R>(pixels, samples, src, x0, y0);
+  stageBandTile<R>(pixels, src, x0, y0);
   __syncthreads();
-  for (int i = threadIdx.x; i < kTileX * kTileY * band; i += blockDim.x) {
-    const int pixel = i / band, k = i - pixel * band, tx = pixel % kTileX, ty = pixel / kTileX;
-    const int x = x0 + tx, y = y0 + ty;
-    if (x >= costs.width || y >= costs.height) continue;
-    const int start = pixels[(ty + R) * kW + tx + R].there, h = start + k;
-    float cost = kNoCost;
-    if (start >= 0) {
-      // The oracle's order: dx outer, each column's partials over dy, then into the window's.
-      WindowSums s{0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+  for (int ty = 0; ty < kTileY && y0 + ty < costs.height; ++ty) {
+    int lo, hi;
+    rowStarts<R>(pixels, ty, lo, hi);  // the same in every thread: the branches below are uniform
+    const int span = hi - lo + band;
+    const bool cached = lo <= hi && span <= kRowHypotheses;
+    if (cached) {
+      for (int i = threadIdx.x; i < kW * span; i += blockDim.x) {
+        const int c = i / span, k = i - c * span;
+        const WindowSums col = tileColumnSums<R>(pixels, src, x0, y0, ty, c, lo + k);
+        const float fields[kFields] = {col.n, col.s0, col.s1, col.s00, col.s11, col.s01};
 #pragma unroll
-      for (int dx = -R; dx <= R; ++dx) {
-        WindowSums col{0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
-#pragma unroll
-        for (int dy = -R; dy <= R; ++dy) {
-          const int q = (ty + R + dy) * kW + tx + R + dx;
-          const TilePixel t = pixels[q];
-          const int j = h - t.there;
-          const float b = samples[q * band + min(max(j, 0), band - 1)], a = t.a;
-          // An invalid sample adds +0 (a sum begun at +0 keeps its bits), as bandColumnSums.
-          const bool valid = t.there >= 0 && j >= 0 && j < band && !(b < 0.f);
-          addSample(col, valid, a, b);
-        }
-        addColumn(s, col);
+        for (int f = 0; f < kFields; ++f) partials[(f * kW + c) * kRowHypotheses + k] = fields[f];
       }
-      cost = windowCost(s, 2 * R + 1, p.flatVariance);
+      __syncthreads();
     }
-    costs.data[(size_t(y) * costs.width + x) * band + k] = cost;
+    const int y = y0 + ty;
+    for (int i = threadIdx.x; i < kTileX * band; i += blockDim.x) {
+      const int tx = i / band, k = i - tx * band, x = x0 + tx;
+      if (x >= costs.width) continue;
+      const int start = pixels[(ty + R) * kW + tx + R].there;
+      float cost = kNoCost;
+      if (start >= 0) {
+        // The oracle's order: dx outer, each column's partials over dy, then into the window's.
+        WindowSums s{0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+        const int h = start + k;
+        if (cached) {
+#pragma unroll
+          for (int dx = -R; dx <= R; ++dx) {
+            const float* const column = &partials[(tx + R + dx) * kRowHypotheses + h - lo];
+            constexpr int kField = kW * kRowHypotheses;
+            addColumn(s, {column[0], column[kField], column[2 * kField], column[3 * kField], column[4 * kField],
+                          column[5 * kField]});
+          }
+        } else {  // bands too far apart in this row to share: each window alone
+#pragma unroll 1
+          for (int dx = -R; dx <= R; ++dx) addColumn(s, tileColumnSums<R>(pixels, src, x0, y0, ty, tx + R + dx, h));
+        }
+        cost = windowCost(s, 2 * R + 1, p.flatVariance);
+      }
+      costs.data[(size_t(y) * costs.width + x) * band + k] = cost;
+    }
+    if (cached) __syncthreads();  // the next row's partials overwrite these
   }
 }
 
@@ -351,29 +393,32 @@ __global__ void sweepBandCombineKernel(Img aggregated, Img spare) {
 
 // The oracle's select within the band: the first hypothesis minimising `aggregated` among
 // the scored, refused on an inner edge of the band (the full range continues past it, so
-// the minimum may lie beyond), refined by the parabola.
+// the minimum may lie beyond), refined by the parabola. A thread a pixel: its first load
+// brings the pixel's band (32 floats, one 128-byte line) into L1 and the rest hit it.
 __global__ void __launch_bounds__(kSelectThreads)
     sweepBandSelectKernel(Img best, Img aggregated, Img costs, Img first, Img mask, SweepDev p) {
   beginKernel();
-  const int lane = threadIdx.x & 31, n = p.band;
-  const long long pixel = (long long)blockIdx.x * kSelectPixels + threadIdx.x / 32;
-  if (pixel >= (long long)best.width * best.height) return;  // whole warps
+  const int n = p.band;
+  const long long pixel = (long long)blockIdx.x * kSelectThreads + threadIdx.x;
+  if (pixel >= (long long)best.width * best.height) return;
   const int x = int(pixel % best.width), y = int(pixel / best.width);
   const int start = int(at(first, x, y));
   float q = -1.f, winnerCost = kNoCost;
   if (masked(mask, x, y) && start >= 0) {
     const float* const a = &at(aggregated, x, y);
     const float* const c = &at(costs, x, y);
-    int winner = lane < n && c[lane] < kNoCost ? lane : -1;
-    float lowest = winner >= 0 ? a[lane] : 0.f;
-    warpFirstMin(lowest, winner);
+    int winner = -1;
+    float lowest = 0.f;
+    for (int k = 0; k < n; ++k) {
+      const float value = __ldg(&a[k]);
+      if (__ldg(&c[k]) < kNoCost && (winner < 0 || value < lowest)) winner = k, lowest = value;
+    }
     const bool edge = (winner == 0 && start > 0) || (winner == n - 1 && start + n < p.planes);
     if (winner >= 0 && !edge) {
       q = refinedInverseDepth(a, c, n, start, winner, p);
       winnerCost = c[winner];
     }
   }
-  if (lane != 0) return;
   at(best, x, y, 0) = q;
   at(best, x, y, 1) = winnerCost;
 }
@@ -431,7 +476,7 @@ cudaError_t launchSweepBandSelect(cudaStream_t s, Img best, Img aggregated, Img 
                                   const SweepDev& p) {
   if (!bandValid(p)) return cudaErrorInvalidValue;
   const long long pixels = (long long)best.width * best.height;
-  const dim3 grid(unsigned((pixels + kSelectPixels - 1) / kSelectPixels));
+  const dim3 grid(unsigned((pixels + kSelectThreads - 1) / kSelectThreads));
   CS_LAUNCH(sweepBandSelectKernel, grid, kSelectThreads, 0, s, best, aggregated, costs, first, mask, p);
   return cudaGetLastError();
 }

@@ -606,20 +606,21 @@ std::vector<Output> sweepBandWarpCase(Backend& b) {
   return {s.get("sweepbandwarp_volume", volume), s.get("sweepbandwarp_first", first)};
 }
 
-// Each pixel's true hypothesis h*(x) ramps and jumps by 9 planes along a slanted edge (more
-// than the band: windows across it find few shared hypotheses); its band starts 4 below
+// Each pixel's true hypothesis h*(x) ramps and jumps by `jump` planes along a slanted edge
+// (9, more than the band of 8: windows across it find few shared hypotheses); its band starts 4 below
 // it, or 2 below in a stripe (neighbouring bands overlap in part); a patch has no band
 // (-1). Plane h at a pixel is the reference shifted by 1.3 (h - h*) px along (1, 0.5), as
 // sweepCostInputs.
-std::vector<Output> bandCostAt(Backend& b, int radius, const char* name) {
+std::vector<Output> bandCostAt(Backend& b, int radius, const char* name, int band = 8, float jump = 9.f,
+                               int planes = 40) {
   Session s{b};
-  SweepParams p = sweepParams(2.0, 40, radius);
-  p.band = 8;
+  SweepParams p = sweepParams(2.0, planes, radius);
+  p.band = band;
   Host reference = stretched(texture(kW, kH, 31, 1)), mask = discMask(kW, kH);
   Host volume(kW, kH, p.band), first(kW, kH, 1);
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
-      const float hStar = 6.3f + 0.4f * float(x) + 0.2f * float(y) + (x + y / 2 > 28 ? 9.f : 0.f);
+      const float hStar = 6.3f + 0.4f * float(x) + 0.2f * float(y) + (x + y / 2 > 28 ? jump : 0.f);
       const bool none = x >= 30 && x < 34 && y >= 8 && y < 12;
       const int start = none ? -1 : bandStart(int(hStar) - (y % 7 < 2 ? 2 : 0) + p.band / 2 - 4, p);
       first.at(x, y) = float(start);
@@ -641,6 +642,9 @@ std::vector<Output> sweepBandCostCase(Backend& b) { return bandCostAt(b, 2, "swe
 std::vector<Output> sweepBandCostRadius1Case(Backend& b) { return bandCostAt(b, 1, "sweepbandcost_radius1"); }
 std::vector<Output> sweepBandCostRadius3Case(Backend& b) { return bandCostAt(b, 3, "sweepbandcost_radius3"); }
 std::vector<Output> sweepBandCostRadius4Case(Backend& b) { return bandCostAt(b, 4, "sweepbandcost_radius4"); }
+// 32-wide bands that jump by 50 planes: the rows across the edge span more hypotheses than
+// a GPU keeps a row's column partials for (CUDA: 64), so their windows are summed alone.
+std::vector<Output> sweepBandCostJumpCase(Backend& b) { return bandCostAt(b, 2, "sweepbandcost_jump", 32, 50.f, 120); }
 
 // aggregationCosts' valley, seen through bands that follow it with a jitter of up to two
 // planes each way (so neighbouring bands are shifted against each other), jump with it,
@@ -739,6 +743,7 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"sweepBandCost, radius 1", sweepBandCostRadius1Case},
                                                 {"sweepBandCost, radius 3", sweepBandCostRadius3Case},
                                                 {"sweepBandCost, radius 4", sweepBandCostRadius4Case},
+                                                {"sweepBandCost, 32-wide bands jumping 50", sweepBandCostJumpCase},
                                                 {"sweepBandAggregate", sweepBandAggregateCase},
                                                 {"sweepBandAggregate, 32-wide band", sweepBandAggregateWideCase},
                                                 {"sweepBandSelect", sweepBandSelectCase}};
