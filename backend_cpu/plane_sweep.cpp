@@ -208,19 +208,42 @@ void sweepSelect(const View& best, const View& aggregated, const View& costs, co
 
 // --- the band sweep ---
 
+namespace {
+
+// A coarse winner q as a plane index n, rounded half up (double); -1 for none (q < 0).
+int coarsePlane(const View& coarseBest, int cx, int cy, const SweepParams& p) {
+  const float q = coarseBest.at(cx, cy, 0);
+  return q < 0.f ? -1 : int(std::floor(double(q) * double(p.planes - 1) / p.qMax + 0.5));
+}
+
+// The band of pixel (x, y): centred on the winners of the coarse 3x3 neighbourhood around
+// its coarse pixel when they fit in it with kBandMargin to spare each side (at a depth edge
+// the nearest coarse pixel may lie on the other surface: the band then holds both),
+// otherwise on the nearest coarse pixel's winner. -1 where the pixel is not masked or the
+// nearest coarse pixel has no winner.
+int bandFirst(const View& coarseBest, const View& mask, const SweepParams& p, float coarseScale, int x, int y) {
+  const int cx = std::min(coarseBest.width - 1, int((float(x) + 0.5f) * coarseScale));
+  const int cy = std::min(coarseBest.height - 1, int((float(y) + 0.5f) * coarseScale));
+  const int nearest = coarsePlane(coarseBest, cx, cy, p);
+  if (!masked(mask, x, y) || nearest < 0) return -1;
+  int lo = nearest, hi = nearest;
+  for (int ny = std::max(cy - 1, 0); ny <= std::min(cy + 1, coarseBest.height - 1); ++ny)
+    for (int nx = std::max(cx - 1, 0); nx <= std::min(cx + 1, coarseBest.width - 1); ++nx) {
+      const int n = coarsePlane(coarseBest, nx, ny, p);
+      if (n >= 0) lo = std::min(lo, n), hi = std::max(hi, n);
+    }
+  const int centre = hi - lo + 2 * kBandMargin <= p.band ? (lo + hi + 1) / 2 : nearest;
+  return std::min(std::max(centre - p.band / 2, 0), p.planes - p.band);
+}
+
+}  // namespace
+
 void sweepBandWarp(const View& volume, const View& first, const View& image, const View& coarseBest, const View& mask,
                    const SweepParams& p, float coarseScale) {
   const BuiltCamera cam(toCamera(p.cam));
   parallelRows(volume.height, [&](int y) {
-    const int cy = std::min(coarseBest.height - 1, int((float(y) + 0.5f) * coarseScale));
     for (int x = 0; x < volume.width; ++x) {
-      const int cx = std::min(coarseBest.width - 1, int((float(x) + 0.5f) * coarseScale));
-      const float q = coarseBest.at(cx, cy, 0);
-      int start = -1;
-      if (masked(mask, x, y) && !(q < 0.f)) {
-        const int centre = int(std::floor(double(q) * double(p.planes - 1) / p.qMax + 0.5));
-        start = std::min(std::max(centre - p.band / 2, 0), p.planes - p.band);
-      }
+      const int start = bandFirst(coarseBest, mask, p, coarseScale, x, y);
       first.at(x, y) = float(start);
       warpPixel(volume, image, cam, p, x, y, start);
     }

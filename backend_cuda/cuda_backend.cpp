@@ -65,6 +65,7 @@ cudak::SweepDev sweepDev(const SweepParams& p) {
 static_assert(cudak::kMaxSweepPlanes == kMaxSweepPlanes,
               "launchSweepAggregate's lanes hold kMaxSweepPlanes / 32 planes each");
 static_assert(cudak::kMaxSweepBand == kMaxSweepBand, "launchSweepBandAggregate's lanes hold one hypothesis each");
+static_assert(cudak::kBandMargin == kBandMargin, "sweepBandWarp's contract");
 static_assert(cudak::kMaxTaps == 2 * kMaxTensorRadius + 1, "structure tensor taps");
 static_assert(cudak::kMaxNormaliseTaps == 2 * kMaxNormaliseRadius + 1, "normalise taps");
 

@@ -45,6 +45,7 @@ struct SweepDev {
 };
 constexpr int kMaxSweepPlanes = 512;  // launchSweepAggregate: 16 planes a lane (= cs::kMaxSweepPlanes)
 constexpr int kMaxSweepBand = 32;     // the band aggregation: one lane a hypothesis (= cs::kMaxSweepBand)
+constexpr int kBandMargin = 2;        // = cs::kBandMargin (sweepBandWarp's contract)
 // The left-right check (ConsistencyParams).
 struct ConsistencyDev {
   float tolerancePx, acceptConfidence;

@@ -33,15 +33,27 @@ constexpr int kTileThreads = 256;
 // sweepBandSelect: a thread per pixel.
 constexpr int kSelectThreads = 128;
 
-// The oracle's start of the band at pixel (x, y): the coarse pixel's hypothesis rounded to
-// a plane, the band centred on it and clamped to the range; -1 outside the mask or where
-// the coarse sweep found nothing.
+// A coarse winner as a plane index, rounded half up (double); -1 for none.
+__device__ int coarsePlane(const Img& coarseBest, const SweepDev& p, int cx, int cy) {
+  const float q = at(coarseBest, cx, cy, 0);
+  return q < 0.f ? -1 : int(floor(double(q) * double(p.planes - 1) / p.qMax + 0.5));
+}
+
+// The oracle's start of the band at pixel (x, y): centred on the coarse 3x3 neighbourhood's
+// winners where they fit with kBandMargin to spare, else on the nearest coarse pixel's;
+// -1 outside the mask or where the nearest coarse pixel found nothing.
 __device__ int bandStart(const Img& coarseBest, const Img& mask, const SweepDev& p, float coarseScale, int x, int y) {
   const int cx = min(coarseBest.width - 1, int((float(x) + 0.5f) * coarseScale));
   const int cy = min(coarseBest.height - 1, int((float(y) + 0.5f) * coarseScale));
-  const float q = at(coarseBest, cx, cy, 0);
-  if (!masked(mask, x, y) || q < 0.f) return -1;
-  const int centre = int(floor(double(q) * double(p.planes - 1) / p.qMax + 0.5));
+  const int nearest = coarsePlane(coarseBest, p, cx, cy);
+  if (!masked(mask, x, y) || nearest < 0) return -1;
+  int lo = nearest, hi = nearest;
+  for (int ny = max(cy - 1, 0); ny <= min(cy + 1, coarseBest.height - 1); ++ny)
+    for (int nx = max(cx - 1, 0); nx <= min(cx + 1, coarseBest.width - 1); ++nx) {
+      const int n = coarsePlane(coarseBest, p, nx, ny);
+      if (n >= 0) lo = min(lo, n), hi = max(hi, n);
+    }
+  const int centre = hi - lo + 2 * kBandMargin <= p.band ? (lo + hi + 1) / 2 : nearest;
   return min(max(centre - p.band / 2, 0), p.planes - p.band);
 }
 

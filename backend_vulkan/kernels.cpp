@@ -527,6 +527,7 @@ void VulkanBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Bu
 
 // Mirrors kMaxBand in sweep_band_aggregate.comp (a band's hypotheses on one invocation each).
 static_assert(kMaxSweepBand <= 32, "sweep_band_aggregate.comp walks a band with 32 invocations");
+static_assert(kBandMargin == 2, "sweep_band_warp.comp mirrors kBandMargin");
 
 void VulkanBackend::doSweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image,
                                     const Buffer& coarseBest, const Buffer& mask, const SweepParams& p,

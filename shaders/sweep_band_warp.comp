@@ -1,11 +1,10 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // The band sweep's volume (backend_cpu/plane_sweep.cpp sweepBandWarp): each masked pixel's
-// band from the coarse sweep's answer, first = clamp(n - band / 2, 0, planes - band) with n
-// the coarse hypothesis q as a plane index (-1 where the pixel is not masked or q < 0), and
-// channel k of the volume the image sampled as sweep_warp.comp samples hypothesis first + k;
-// -1 where it cannot be sampled. Geometry in `real`, compiled twice: double (-DCS_DOUBLE)
-// and float.
+// band from the coarse sweep's answer (bandFirst; -1 where the pixel is not masked or its
+// coarse pixel found nothing), and channel k of the volume the image sampled as
+// sweep_warp.comp samples hypothesis first + k; -1 where it cannot be sampled. Geometry in
+// `real`, compiled twice: double (-DCS_DOUBLE) and float.
 // As sweep_warp.comp, a work group takes kPixels adjacent pixels of a row: their rays and
 // bands first (one invocation each, into shared memory), then its kGroupSize invocations
 // over the pixels' band channels, one contiguous run of the interleaved volume.
@@ -19,6 +18,7 @@
 
 const int kPixels = 32;  // mirrors kSweepBandWarpPixels in backend_vulkan/kernels.cpp
 const int kGroupSize = 256;
+const int kBandMargin = 2;  // mirrors kBandMargin in core/internal/curvestereo/backend.hpp
 layout(local_size_x = kGroupSize, local_size_y = 1, local_size_z = 1) in;
 
 const float kNoSample = -1.0;
@@ -35,16 +35,31 @@ shared vec3r rays[kPixels];
 shared bool usable[kPixels];
 shared int firsts[kPixels];
 
-// The pixel's first hypothesis in the oracle's arithmetic: the coarse pixel in float, the
-// plane index n in `real` (the oracle's double), rounded half up. -1 where it has none.
+// A coarse winner as a plane index in the oracle's arithmetic (`real` for its double),
+// rounded half up; -1 for none.
+int coarsePlane(int cx, int cy) {
+  const float q = pc.coarseBest.v[idx(pc.coarseWidth, 2, cx, cy, 0)];
+  if (q < 0.0) return -1;
+  precise real n = real(q) * real(pc.planes - 1) / pc.prm.qMax + real(0.5);
+  return int(floor(n));
+}
+
+// The pixel's first hypothesis: the coarse pixel in float, the band centred on the coarse
+// 3x3 neighbourhood's winners where they fit with kBandMargin to spare, else on the
+// nearest coarse pixel's. -1 where it has none.
 int bandFirst(int x, int y) {
   if (!masked(pc.mask, pc.width, pc.height, x, y)) return -1;
   precise float fx = (float(x) + 0.5) * pc.coarseScale, fy = (float(y) + 0.5) * pc.coarseScale;
   const int cx = min(pc.coarseWidth - 1, int(fx)), cy = min(pc.coarseHeight - 1, int(fy));
-  const float q = pc.coarseBest.v[idx(pc.coarseWidth, 2, cx, cy, 0)];
-  if (q < 0.0) return -1;
-  precise real n = real(q) * real(pc.planes - 1) / pc.prm.qMax + real(0.5);
-  const int centre = int(floor(n));
+  const int nearest = coarsePlane(cx, cy);
+  if (nearest < 0) return -1;
+  int lo = nearest, hi = nearest;
+  for (int ny = max(cy - 1, 0); ny <= min(cy + 1, pc.coarseHeight - 1); ++ny)
+    for (int nx = max(cx - 1, 0); nx <= min(cx + 1, pc.coarseWidth - 1); ++nx) {
+      const int n = coarsePlane(nx, ny);
+      if (n >= 0) lo = min(lo, n), hi = max(hi, n);
+    }
+  const int centre = hi - lo + 2 * kBandMargin <= pc.band ? (lo + hi + 1) / 2 : nearest;
   return min(max(centre - pc.band / 2, 0), pc.planes - pc.band);
 }
 

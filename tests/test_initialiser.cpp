@@ -236,6 +236,34 @@ TEST_CASE("the band sweep refines a coarse proposal a few planes off, and refuse
   }
 }
 
+TEST_CASE("beside a coarse depth edge a band holds both sides' winners where they fit, else the nearest's") {
+  const Camera cam = lens();
+  const double t[3] = {-0.12, 0.005, 0.01};
+  SweepParams p = sweepParams(cam, t, 2.0, 40, 2);
+  p.band = 12;
+  const double spacing = p.qMax / (p.planes - 1);
+  const int cw = (cam.width + 1) / 2, ch = (cam.height + 1) / 2, edge = cw / 2;
+  Grid image(cam.width, cam.height, 1, 0.5f), mask(cam.width, cam.height, 1, 1.f);
+  Grid volume(cam.width, cam.height, p.band), first(cam.width, cam.height, 1);
+  for (const int far : {16, 30}) {  // 6 planes apart fit in 12 with 2 to spare each side; 20 do not
+    CAPTURE(far);
+    Grid coarse(cw, ch, 2);
+    for (int y = 0; y < ch; ++y)
+      for (int x = 0; x < cw; ++x) coarse.at(x, y, 0) = float((x < edge ? 10 : far) * spacing);
+    cpu::sweepBandWarp(volume.view(), first.view(), image.view(), coarse.view(), mask.view(), p, 0.5f);
+    for (int x = 0; x < cam.width; ++x) {
+      const int cx = x / 2, own = cx < edge ? 10 : far, start = int(first.at(x, cam.height / 2));
+      CAPTURE(x);
+      if ((cx == edge - 1 || cx == edge) && far == 16) {  // a coarse neighbour across the edge
+        CHECK(start <= 10);
+        CHECK(start + p.band - 1 >= far);
+      } else {
+        CHECK(start == own - p.band / 2);
+      }
+    }
+  }
+}
+
 TEST_CASE("sweepAggregate carries a clear minimum into windows that say nothing, and keeps depth edges sharp") {
   const int w = 40, h = 30, planes = 9;
   const double t[3] = {-0.12, 0.005, 0.01};
@@ -572,7 +600,7 @@ TEST_CASE("warp schedule: the taper from the coarsest level, the sweep's levels 
   CHECK(sweepBanded(p, 5));
   CHECK(warpSchedule(p, 5) == std::vector<int>{2, 2, 2, 20, 30});
   CHECK(warpSchedule(preset("realtime"), 5) == std::vector<int>{2, 2, 2, 20, 30});
-  CHECK(!sweepBanded(p, 2));  // no level above the sweep's: a full sweep
+  CHECK(!sweepBanded(p, 2));                            // no level above the sweep's: a full sweep
   CHECK(warpSchedule(p, 2) == std::vector<int>{2, 2});  // the sweep at the coarsest, both refine
   p.initBand = 0;
   p.initLevel = 7;  // clamped to the coarsest level, as the sweep is

@@ -118,6 +118,9 @@ constexpr int kMaxSweepPlanes = 512;
 // The most hypotheses a band sweep scores per pixel (SweepParams::band): the GPU band
 // aggregations give each hypothesis of a scanline's band one lane of a 32-wide group.
 constexpr int kMaxSweepBand = 32;
+// Hypotheses a band keeps beyond its coarse neighbourhood's winners on each side
+// (sweepBandWarp), so that a winner there is not refused as on the band's edge.
+constexpr int kBandMargin = 2;
 // The structure tensor's Gaussian pre-smoothing: radius ceil(3 sigma) at most this (sigma up
 // to 42 px).
 constexpr int kMaxTensorRadius = 127;
@@ -264,10 +267,13 @@ class Backend {
   // first + k. Every band kernel: the sweep kernels' contract, and 2 <= p.band <=
   // min(p.planes, kMaxSweepBand); volume, costs and aggregated have p.band channels.
   // first: at a masked pixel x, the coarse pixel c = min(cw - 1, int((x + 0.5) s)) (and the
-  // same in y; s = coarseScale, coarse / fine; float arithmetic), its hypothesis q = coarseBest(c)
-  // (2 ch, as sweepSelect writes it; made with the same qMax) and n = floor(q (planes - 1) /
-  // qMax + 0.5) (double): first = clamp(n - band / 2, 0, planes - band); -1 where x is not
-  // masked or q < 0. volume: channel k is sweepWarp's value at hypothesis first + k; -1
+  // same in y; s = coarseScale, coarse / fine; float arithmetic); a coarse pixel's plane is
+  // n = floor(q (planes - 1) / qMax + 0.5) (double) of its hypothesis q = coarseBest (2 ch,
+  // as sweepSelect writes it; made with the same qMax), none where q < 0. With lo, hi the
+  // lowest and highest plane among the 3x3 coarse pixels around c (inside the coarse image,
+  // with a plane): centre = (lo + hi + 1) / 2 if hi - lo + 2 kBandMargin <= band, else c's
+  // plane; first = clamp(centre - band / 2, 0, planes - band); -1 where x is not masked or
+  // c has no plane. volume: channel k is sweepWarp's value at hypothesis first + k; -1
   // where first is -1.
   void sweepBandWarp(const Buffer& volume, const Buffer& first, const Buffer& image, const Buffer& coarseBest,
                      const Buffer& mask, const SweepParams& p, float coarseScale);
