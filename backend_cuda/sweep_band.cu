@@ -30,7 +30,7 @@ constexpr int kMaxUnrolledRadius = 3;  // windows up to 7x7: the tiled kernel be
 constexpr int kTileX = 16, kTileY = 8;
 constexpr int kTileThreads = 256;
 
-// sweepBandSelect: a thread per pixel.
+// sweepBandSelect: a thread per pixel, a warp's 32 pixels staged together.
 constexpr int kSelectThreads = 128;
 
 // A coarse winner as a plane index, rounded half up (double); -1 for none.
@@ -405,26 +405,36 @@ __global__ void sweepBandCombineKernel(Img aggregated, Img spare) {
 
 // The oracle's select within the band: the first hypothesis minimising `aggregated` among
 // the scored, refused on an inner edge of the band (the full range continues past it, so
-// the minimum may lie beyond), refined by the parabola. A thread a pixel: its first load
-// brings the pixel's band (32 floats, one 128-byte line) into L1 and the rest hit it.
+// the minimum may lie beyond), refined by the parabola. A thread a pixel; each warp first
+// copies its 32 pixels' bands (contiguous in memory) into shared memory with coalesced
+// loads, transposed so that each lane then reads its own pixel's row without bank conflicts.
 __global__ void __launch_bounds__(kSelectThreads)
     sweepBandSelectKernel(Img best, Img aggregated, Img costs, Img first, Img mask, SweepDev p) {
   beginKernel();
-  const int n = p.band;
-  const long long pixel = (long long)blockIdx.x * kSelectThreads + threadIdx.x;
-  if (pixel >= (long long)best.width * best.height) return;
+  __shared__ float sharedA[kSelectThreads / 32][32][33], sharedC[kSelectThreads / 32][32][33];
+  const int n = p.band, lane = threadIdx.x & 31, warp = threadIdx.x / 32;
+  const long long pixels = (long long)best.width * best.height;
+  const long long warpFirst = (long long)blockIdx.x * kSelectThreads + warp * 32;
+  if (warpFirst >= pixels) return;  // whole warps
+  const long long base = warpFirst * n, end = pixels * n;
+  for (int i = lane; i < 32 * n; i += 32) {
+    const bool inside = base + i < end;
+    sharedA[warp][i / n][i % n] = inside ? __ldg(&aggregated.data[base + i]) : 0.f;
+    sharedC[warp][i / n][i % n] = inside ? __ldg(&costs.data[base + i]) : kNoCost;
+  }
+  __syncwarp();
+  const long long pixel = warpFirst + lane;
+  if (pixel >= pixels) return;
   const int x = int(pixel % best.width), y = int(pixel / best.width);
   const int start = int(at(first, x, y));
   float q = -1.f, winnerCost = kNoCost;
   if (masked(mask, x, y) && start >= 0) {
-    const float* const a = &at(aggregated, x, y);
-    const float* const c = &at(costs, x, y);
+    const float* const a = sharedA[warp][lane];
+    const float* const c = sharedC[warp][lane];
     int winner = -1;
     float lowest = 0.f;
-    for (int k = 0; k < n; ++k) {
-      const float value = __ldg(&a[k]);
-      if (__ldg(&c[k]) < kNoCost && (winner < 0 || value < lowest)) winner = k, lowest = value;
-    }
+    for (int k = 0; k < n; ++k)
+      if (c[k] < kNoCost && (winner < 0 || a[k] < lowest)) winner = k, lowest = a[k];
     const bool edge = (winner == 0 && start > 0) || (winner == n - 1 && start + n < p.planes);
     if (winner >= 0 && !edge) {
       q = refinedInverseDepth(a, c, n, start, winner, p);
