@@ -46,9 +46,9 @@ Params preset(const std::string& name) {
     // 6.1 / 3.2, 7.5 / 3.6, 11.2 / 17.3 in 4.35 ms a 848x800 frame; the full level-1
     // sweep with 30 / 20 / 10 / 2 / 2 warps: 5.8 / 2.9, 6.9 / 3.1, 9.8 / 18.4 in 6.1 ms
     // (quality: 4.6 / 3.0, 6.0 / 3.2, 8.1 / 18.8 in 14 ms). 30 warps at level 0 would reach
-    // 4.9 % on the clean pairs at about twice the frame time (README "Presets"). Bands of 16 and 24 lost 0.1 to
-    // 0.2 points for 0.1 ms; 30 warps at all coarse levels cost 0.9 ms more, 20 / 12 / 4
-    // lost 0.1 to 0.2 points, dropping levels 3 and 4 lost 4 to 6 (README "Presets").
+    // 4.9 % on the clean pairs at about twice the frame time. Bands of 16 and 24 lost 0.1
+    // to 0.2 points for 0.1 ms; 30 warps at all coarse levels cost 0.9 ms more, 20 / 12 /
+    // 4 lost 0.1 to 0.2 points, dropping levels 3 and 4 lost 4 to 6 (README "Presets").
     p.init = Params::Init::PlaneSweep;
     p.initLevel = 1;
     p.warps = 30;
