@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <string>
 
 #include "cli_util.hpp"
@@ -156,4 +158,35 @@ TEST_CASE("run: bad --pinhole / --equirect / --sampling are refused before the s
   checkRefused(runCli(dir, run + "--equirect 101"), "--equirect expects an even width");
   checkRefused(runCli(dir, run + "--sampling cubic"), "--sampling expects nearest or bilinear");
   CHECK(!fs::exists(dir / "out"));
+}
+
+TEST_CASE("bench: per-stage medians and the sweep's total a frame") {
+  const fs::path dir = writePair("cli_bench");
+  const CliOutcome o = runCli(dir, "bench --calib camchain.yaml left.png right.png --runs 3 --backend cpu");
+  CAPTURE(o.err);
+  REQUIRE(o.exitCode == 0);
+  // Each row: name, median, min, max. The total's median lies between the largest
+  // stage median and the sum of the stages' maxima (a frame's total sums its stages).
+  std::istringstream lines(o.out);
+  std::string line;
+  double largestMedian = 0, sumOfMaxima = 0, total = -1;
+  while (std::getline(lines, line)) {
+    const bool isTotal = line.rfind("sweep, all stages", 0) == 0;
+    if (line.rfind("sweep: ", 0) != 0 && !isTotal) continue;
+    const std::string numbers = line.substr(20);
+    double median = 0, lo = 0, hi = 0;
+    REQUIRE(std::sscanf(numbers.c_str(), "%lf %lf %lf", &median, &lo, &hi) == 3);
+    CHECK(lo <= median);
+    CHECK(median <= hi);
+    if (isTotal) {
+      total = median;
+    } else {
+      largestMedian = std::max(largestMedian, median);
+      sumOfMaxima += hi;
+    }
+  }
+  CAPTURE(o.out);
+  REQUIRE(total >= 0);
+  CHECK(total >= largestMedian - 0.005);
+  CHECK(total <= sumOfMaxima + 0.005);
 }
