@@ -568,26 +568,12 @@ std::vector<Output> sweepInitialiseCase(Backend& b) {
 // A band's first hypothesis clamped to the range, as sweepBandWarp places it.
 int bandStart(int centre, const SweepParams& p) { return std::clamp(centre - p.band / 2, 0, p.planes - p.band); }
 
-// sweepBandWarp's band start (backend.hpp) of a pixel whose coarse pixel is (cx, cy).
-int contractBandStart(Host& coarse, int cx, int cy, const SweepParams& p) {
-  auto plane = [&](int x, int y) {
-    const float q = coarse.at(x, y, 0);
-    return q < 0.f ? -1 : int(std::floor(double(q) * (p.planes - 1) / p.qMax + 0.5));
-  };
-  const int nearest = plane(cx, cy);
-  if (nearest < 0) return -1;
-  int lo = nearest, hi = nearest;
-  for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, coarse.h - 1); ++y)
-    for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, coarse.w - 1); ++x)
-      if (plane(x, y) >= 0) lo = std::min(lo, plane(x, y)), hi = std::max(hi, plane(x, y));
-  return bandStart(hi - lo + 2 * kBandMargin <= p.band ? (lo + hi + 1) / 2 : nearest, p);
-}
-
 // A coarse sweep's answer (half resolution, the fine grid's coarse pixel as
 // sweepBandWarp finds it) whose hypotheses ramp across the image with holes (-1), at
 // q = qMax (n + 0.3) / (planes - 1): 0.2 plane from a rounding tie, so backends agree on
 // the centre n. The fine mask leaves out pixels with a band hypothesis within 0.05 px of
-// the image border (as sweepWarpCase).
+// the image border (as sweepWarpCase), the bands placed by the oracle (a pixel's band
+// depends on the coarse answer and its own mask bit only).
 std::vector<Output> sweepBandWarpCase(Backend& b) {
   Session s{b};
   SweepParams p = sweepParams(4.0, 40, 2);
@@ -603,10 +589,11 @@ std::vector<Output> sweepBandWarpCase(Backend& b) {
       coarse.at(x, y, 1) = 0.3f;
     }
   const BuiltCamera cam(toCamera(p.cam));
-  Host image = texture(kW, kH, 30), mask = discMask(kW, kH);
+  Host image = texture(kW, kH, 30), mask = discMask(kW, kH), oracleVolume(kW, kH, p.band), starts(kW, kH, 1);
+  cpu::sweepBandWarp(oracleVolume.view(), starts.view(), image.view(), coarse.view(), mask.view(), p, 0.5f);
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
-      const int start = contractBandStart(coarse, x / 2, y / 2, p);
+      const int start = int(starts.at(x, y));
       if (start < 0) continue;
       for (int k = 0; k < p.band && mask.at(x, y) != 0.f; ++k) {
         Vec2<double> px;
