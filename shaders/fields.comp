@@ -42,6 +42,7 @@ bool fieldsAt(int x, int y, out vec2 calibration, out vec2 trajectory) {
   vec3r r1 = vec3r(pc.prm.R[0] * ray.x + pc.prm.R[1] * ray.y + pc.prm.R[2] * ray.z,
                    pc.prm.R[3] * ray.x + pc.prm.R[4] * ray.y + pc.prm.R[5] * ray.z,
                    pc.prm.R[6] * ray.x + pc.prm.R[7] * ray.y + pc.prm.R[8] * ray.z);
+  if (pc.prm.useFov != 0 && atan2r(sqrt(r1.x * r1.x + r1.y * r1.y), r1.z) > pc.prm.halfFov) return false;  // camera 1's too
   vec2r px1;
   vec3r J0, J1;
   if (!camProject(cam1, r1, px1, J0, J1) || !camInImage(cam1, px1)) return false;

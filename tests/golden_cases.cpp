@@ -292,11 +292,12 @@ FieldsParams fieldsParams() {
   FieldsParams p{};
   p.cam0 = toCameraParams(Camera::kannalaBrandt4(kW, kH, 15.2, 15.3, 22.4, 18.1, -0.0066, 0.0473, -0.0458, 0.009));
   p.cam1 = toCameraParams(Camera::kannalaBrandt4(kW, kH, 15.1, 15.2, 22.8, 17.9, -0.005, 0.039, -0.035, 0.005));
-  const double c = std::cos(0.01), sn = std::sin(0.01);
+  // 7 degrees: a crescent of camera 0 lies beyond camera 1's field of view.
+  const double c = std::cos(0.12), sn = std::sin(0.12);
   const double R[9] = {c, 0, sn, 0, 1, 0, -sn, 0, c};
   std::copy(R, R + 9, p.R);
   p.t[0] = -0.064, p.t[1] = 0.001, p.t[2] = 0.002;
-  p.maxFovDeg = 160;
+  p.maxFovDeg = 120;  // inside the disc mask, so that both cameras' limits show
   p.epipoleDeg = 3;
   return p;
 }

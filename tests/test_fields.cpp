@@ -94,3 +94,29 @@ TEST_CASE("field of view limit masks rays beyond half the angle") {
   CHECK(narrow.mask(50, 5) == 0);
   CHECK(narrow.mask(50, 30) == 1);  // 36 degrees off axis
 }
+
+TEST_CASE("the field of view limits camera 1 too: a rotated rig masks the crescent camera 1 does not see") {
+  // Equidistant, 1 px = 1.8 degrees, the 180 degree circle (radius 50 px) inside a larger
+  // sensor, so that camera 1's projections beyond 90 degrees still land on its image;
+  // camera 1 pitched by 9 degrees (5 px) about x.
+  Camera cam = Camera::kannalaBrandt4(141, 141, 101 / M_PI, 101 / M_PI, 70, 70);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(9.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  RigFields f = computeFields(cam, cam, R, Eigen::Vector3d(-0.1, 0, 0), {180.0, 3.0});
+  const BuiltCamera built(cam);
+  auto seenBy1 = [&](int x, int y) {
+    Vec3<double> ray;
+    REQUIRE(built.unproject(Vec2<double>(x, y), ray));
+    const Eigen::Vector3d r1 = R * ray;
+    return std::atan2(r1.head<2>().norm(), r1.z()) <= M_PI / 2;
+  };
+  // Along the vertical through the centre, camera 0's rim (y = 20 and 120 at 90 degrees):
+  // the rotation takes one end beyond camera 1's 90 degrees and the other within them.
+  int masked = 0;
+  for (int y : {20, 21, 22, 118, 119, 120}) {
+    CHECK(f.mask(70, y) == (seenBy1(70, y) ? 1 : 0));
+    masked += f.mask(70, y) == 0;
+  }
+  CHECK(masked == 3);          // one end's 3 outermost pixels (85 to 90 degrees > 90 - 9)
+  CHECK(f.mask(70, 30) == 1);  // 72 degrees off camera 0's axis, 81 off camera 1's
+  CHECK(f.mask(70, 110) == 1);
+}

@@ -32,8 +32,9 @@ int cmdFields(const Args& args) {
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   const Rig rig = loadCalibration(args.require("calib"));
   FieldOptions opt;
-  opt.maxFovDeg = args.getDouble("max-fov", opt.maxFovDeg);
-  opt.epipoleDeg = args.getDouble("epipole", opt.epipoleDeg);
+  // The solver's defaults, so that the mask shown is the one it solves on.
+  opt.maxFovDeg = args.getDouble("max-fov", Params{}.maxFovDeg);
+  opt.epipoleDeg = args.getDouble("epipole", Params{}.epipoleDeg);
   const RigFields f = computeFields(rig.cam0, rig.cam1, rig.R, rig.t, opt);
 
   std::filesystem::create_directories(outDir);

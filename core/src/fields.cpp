@@ -27,12 +27,19 @@ PixelFields fieldsAtPixel(const BuiltCamera& cam0, const BuiltCamera& cam1, cons
   Vec2<double> px(x, y);
   Vec3<double> ray;
   if (!cam0.unproject(px, ray)) return f;
-  if (opt.maxFovDeg > 0 && offAxisAngle(ray) > 0.5 * opt.maxFovDeg * kDegToRad) return f;
+  const double halfFov = 0.5 * opt.maxFovDeg * kDegToRad;
+  if (opt.maxFovDeg > 0 && offAxisAngle(ray) > halfFov) return f;
   if (angleToBaseline(ray, tPrime.normalized()) < opt.epipoleDeg * kDegToRad) return f;
 
-  // Calibration: where the same ray lands in image 1 (rotation and intrinsics only).
+  // Calibration: where the same ray lands in image 1 (rotation and intrinsics only). The
+  // field of view holds for camera 1 too: when the cameras are not parallel, a crescent
+  // of camera 0's rim lies outside camera 1's, and image 1 there is whatever surrounds its
+  // image circle (black on the renders). Solved, those pixels matched that surround and
+  // pulled their neighbours with them (README "Presets": the rim).
+  const Vec3<double> ray1 = R * ray;
+  if (opt.maxFovDeg > 0 && offAxisAngle(ray1) > halfFov) return f;
   Vec2<double> px1;
-  if (!cam1.project(Vec3<double>(R * ray), px1) || !cam1.inImage(px1)) return f;
+  if (!cam1.project(ray1, px1) || !cam1.inImage(px1)) return f;
 
   // Trajectory: image motion of the point as its inverse depth grows, d(pi0)/dX . t'.
   Vec2<double> proj;
