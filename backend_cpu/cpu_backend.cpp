@@ -171,6 +171,12 @@ void CpuBackend::doUpsample(const Buffer& dst, const Buffer& src, float scale, f
   cpu::upsample(view(dst), view(src), scale, valueScale);
 }
 
+void CpuBackend::doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
+                                    const Buffer& n0, const Buffer& n1, const Buffer& mask,
+                                    const EstimateUpsampleParams& p) {
+  cpu::upsampleEstimate(view(u), view(w), view(coarseU), view(coarseW), view(n0), view(n1), view(mask), p);
+}
+
 void CpuBackend::doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
                              const NormaliseParams& params) {
   cpu::normalise(view(dst), view(moments), view(src), view(mask), params);

@@ -1,7 +1,7 @@
 // The scalar CPU backend: the readable reference implementation (the oracle) that
 // every other backend is tested against. One file per stage (fields.cpp, warp.cpp, resample.cpp,
-// normalise.cpp, structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp, accumulate.cpp,
-// plane_sweep.cpp, triangulate.cpp).
+// upsample_estimate.cpp, normalise.cpp, structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp,
+// accumulate.cpp, plane_sweep.cpp, triangulate.cpp).
 #pragma once
 #include <vector>
 
@@ -17,6 +17,8 @@ void triangulate(const View& radial, const View& points, const View& w, const Vi
 void warp(const View& dst, const View& src, const View& flow);
 void downsample(const View& dst, const View& src, float scale);
 void upsample(const View& dst, const View& src, float scale, float valueScale);
+void upsampleEstimate(const View& u, const View& w, const View& coarseU, const View& coarseW, const View& n0,
+                      const View& n1, const View& mask, const EstimateUpsampleParams& p);
 void normalise(const View& dst, const View& moments, const View& src, const View& mask, const NormaliseParams& p);
 void structureTensor(const View& tensor, const View& steps, const View& image, const View& mask,
                      const TensorParams& params);
@@ -65,6 +67,9 @@ class CpuBackend final : public Backend {
   void doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
   void doDownsample(const Buffer& dst, const Buffer& src, float scale) override;
   void doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
+                          const Buffer& n0, const Buffer& n1, const Buffer& mask,
+                          const EstimateUpsampleParams& p) override;
   void doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
                    const NormaliseParams& params) override;
   void doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,

@@ -427,6 +427,16 @@ void CudaBackend::doUpsample(const Buffer& dst, const Buffer& src, float scale, 
         "upsample");
 }
 
+void CudaBackend::doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
+                                     const Buffer& n0, const Buffer& n1, const Buffer& mask,
+                                     const EstimateUpsampleParams& p) {
+  flush();
+  auto dev = [&](const Buffer& b) { return img(slot(b).dev, b); };
+  check(cudak::launchUpsampleEstimate(stream_, dev(u), dev(w), dev(coarseU), dev(coarseW), dev(n0), dev(n1), dev(mask),
+                                      {p.scale, p.edge, p.radius}),
+        "upsampleEstimate");
+}
+
 void CudaBackend::doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
                               const NormaliseParams& p) {
   flush();

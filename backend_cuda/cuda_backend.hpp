@@ -75,6 +75,9 @@ class CudaBackend final : public Backend {
   void doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) override;
   void doDownsample(const Buffer& dst, const Buffer& src, float scale) override;
   void doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) override;
+  void doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
+                          const Buffer& n0, const Buffer& n1, const Buffer& mask,
+                          const EstimateUpsampleParams& p) override;
   void doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
                    const NormaliseParams& params) override;
   void doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,

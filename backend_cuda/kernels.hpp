@@ -117,6 +117,12 @@ cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img
 cudaError_t launchWarp(cudaStream_t s, Img dst, Img src, Img flow);
 cudaError_t launchDownsample(cudaStream_t s, Img dst, Img src, float scale);
 cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float valueScale);
+struct EstimateUpsampleDev {  // cs::EstimateUpsampleParams
+  float scale, edge;
+  int radius;
+};
+cudaError_t launchUpsampleEstimate(cudaStream_t s, Img u, Img w, Img coarseU, Img coarseW, Img n0, Img n1, Img mask,
+                                   const EstimateUpsampleDev& p);
 // moments: 3 ch scratch (the horizontal pass's sums of weight, weight src, weight src^2).
 cudaError_t launchNormalise(cudaStream_t s, Img dst, Img moments, Img src, Img mask, const NormaliseDev& p);
 // tmpRows, tmpSmooth: scratch of image.width * image.height floats each.

@@ -81,6 +81,11 @@ struct PcUpsample {
   int32_t w, h, nc, sw, sh;
   float scale, valueScale;
 };
+struct PcUpsampleEstimate {
+  Addr u, w, coarseU, coarseW, n0, n1, mask;
+  int32_t width, height, coarseWidth, coarseHeight, radius;
+  float scale, edge;
+};
 struct PcBlur {
   Addr dst, src;
   int32_t w, h, radius, dir;
@@ -266,6 +271,14 @@ void VulkanBackend::doDownsample(const Buffer& dst, const Buffer& src, float sca
 void VulkanBackend::doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
   PcUpsample pc{addr(dst), addr(src), dst.width, dst.height, dst.channels, src.width, src.height, scale, valueScale};
   dispatch(kUpsample, pc, dst.width, dst.height);
+}
+
+void VulkanBackend::doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
+                                       const Buffer& n0, const Buffer& n1, const Buffer& mask,
+                                       const EstimateUpsampleParams& p) {
+  PcUpsampleEstimate pc{addr(u), addr(w),  addr(coarseU), addr(coarseW),  addr(n0), addr(n1), addr(mask),
+                        u.width, u.height, coarseU.width, coarseU.height, p.radius, p.scale,  p.edge};
+  dispatch(kUpsampleEstimate, pc, u.width, u.height);
 }
 
 // Two passes (normalise_moments.comp, normalise.comp); the taps by device address.

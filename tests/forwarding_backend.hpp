@@ -27,6 +27,10 @@ class ForwardingBackend : public Backend {
   void doWarp(const Buffer& d, const Buffer& s, const Buffer& f) override { b_.warp(d, s, f); }
   void doDownsample(const Buffer& d, const Buffer& s, float sc) override { b_.downsample(d, s, sc); }
   void doUpsample(const Buffer& d, const Buffer& s, float sc, float v) override { b_.upsample(d, s, sc, v); }
+  void doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& cu, const Buffer& cw, const Buffer& n0,
+                          const Buffer& n1, const Buffer& m, const EstimateUpsampleParams& p) override {
+    b_.upsampleEstimate(u, w, cu, cw, n0, n1, m, p);
+  }
   void doNormalise(const Buffer& d, const Buffer& mo, const Buffer& s, const Buffer& m,
                    const NormaliseParams& p) override {
     b_.normalise(d, mo, s, m, p);

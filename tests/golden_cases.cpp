@@ -134,6 +134,34 @@ std::vector<Output> upsampleCase(Backend& b) {
   return {s.get("upsample_dst", dst)};
 }
 
+// A coarse estimate with a curved depth step (1.5 to 4.5 px, plus a gentle slope) and
+// displacements along (1, 0.3); image 1 is image 0 moved by the fine step's displacement,
+// so the window matching has a right answer; the disc mask leaves pixels bilinear.
+std::vector<Output> upsampleEstimateCase(Backend& b) {
+  Session s{b};
+  const int cw = (kW + 1) / 2, ch = (kH + 1) / 2;
+  auto near = [](float x, float y) { return x + 0.3f * y > 12.f + 0.02f * (y - 9.f) * (y - 9.f); };
+  Host coarseU(cw, ch, 1), coarseW(cw, ch, 2), n1(kW, kH, 1);
+  for (int y = 0; y < ch; ++y)
+    for (int x = 0; x < cw; ++x) {
+      const float u = (near(float(x), float(y)) ? 2.25f : 0.75f) + 0.01f * float(x);
+      coarseU.at(x, y) = u;
+      coarseW.at(x, y, 0) = u;
+      coarseW.at(x, y, 1) = 0.3f * u;
+    }
+  Host n0 = texture(kW, kH, 51), mask = discMask(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      // Image 1 at x + w(x) shows image 0 at x (nearest pixel: enough to be unambiguous).
+      const float u = 2.f * ((near(0.5f * (float(x) + 0.5f) - 0.5f, 0.5f * (float(y) + 0.5f) - 0.5f) ? 2.25f : 0.75f));
+      const int tx = std::min(kW - 1, x + int(std::lround(u))), ty = std::min(kH - 1, y + int(std::lround(0.3f * u)));
+      n1.at(tx, ty) = n0.at(x, y);
+    }
+  Buffer u = s.make(kW, kH, 1), w = s.make(kW, kH, 2);
+  b.upsampleEstimate(u, w, s.put(coarseU), s.put(coarseW), s.put(n0), s.put(n1), s.put(mask), {2.f, 1.f, 2});
+  return {s.get("upsampleestimate_u", u), s.get("upsampleestimate_w", w)};
+}
+
 // A texture under a gain and an offset that vary across the image (vignetting, exposure),
 // so the window statistics differ everywhere: the local spread goes from epsilon (left)
 // to 7 epsilon (right). Sigma 2.5 (radius 8) reaches over the disc's rim and the hole.
@@ -723,6 +751,7 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"warp", warpCase},
                                                 {"downsample", downsampleCase},
                                                 {"upsample", upsampleCase},
+                                                {"upsampleEstimate", upsampleEstimateCase},
                                                 {"normalise", normaliseCase},
                                                 {"structureTensor", structureTensorCase},
                                                 {"warpDerivatives", warpDerivativesCase},

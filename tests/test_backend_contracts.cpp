@@ -66,6 +66,16 @@ TEST_CASE("a kernel called with a wrong shape is refused with the kernel and the
     checkRefused(b, "warp", "src has 2 channels, expected 1", [&] { b.warp(one, two, two2); });
     checkRefused(b, "median", "src is 10x9 but mask is 12x9", [&] { b.median(one, narrow, mask); });
     checkRefused(b, "median", "dst and src are the same buffer", [&] { b.median(one, one, mask); });
+    const Buffer coarse = b.create(6, 5, 1), coarseW = b.create(6, 5, 2);
+    checkRefused(b, "upsampleEstimate", "coarseW has 1 channel, expected 2", [&] {
+      b.upsampleEstimate(one, two, coarse, coarse, one, other, mask, {2.f, 1.f, 2});
+    });
+    checkRefused(b, "upsampleEstimate", "scale must be above 1", [&] {
+      b.upsampleEstimate(one, two, coarse, coarseW, one, other, mask, {1.f, 1.f, 2});
+    });
+    checkRefused(b, "upsampleEstimate", "radius 5 outside [0, 4]", [&] {
+      b.upsampleEstimate(one, two, coarse, coarseW, one, other, mask, {2.f, 1.f, 5});
+    });
     checkRefused(b, "accumulate", "w has 1 channel, expected 2",
                  [&] { b.accumulate(one, other, one, two, mask, 0.2f); });
     const PrimalDualBuffers pd{one, other, two, two2, b.create(w, h, 2), two};  // q: 2 channels

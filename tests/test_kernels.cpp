@@ -53,6 +53,36 @@ TEST_CASE("downsample keeps constants and the mean of a ramp; upsample scales va
     CHECK(fine.at(x, 4, 1) == doctest::Approx(2.f * ((x + 0.5f) / 2.f - 0.5f)).epsilon(1e-5));
 }
 
+TEST_CASE("upsampleEstimate: across a depth step each pixel takes the side its images match, never a blend") {
+  // Fine disparity 2 left of column 20, 6 from it on, displacement along x; image 1 is
+  // image 0 moved by it (a texture with no flat stretch), the coarse estimate that step.
+  const int W = 40, H = 12, CW = 20, CH = 6;
+  Grid n0(W, H, 1), n1(W, H, 1, 0.5f), mask(W, H, 1, 1.f), u(W, H, 1), w(W, H, 2);
+  Grid coarseU(CW, CH, 1), coarseW(CW, CH, 2);
+  auto truth = [](int x) { return x < 20 ? 2.f : 6.f; };
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) n0.at(x, y) = std::sin(1.7f * float(x) + 0.9f * float(y)) + 0.3f * std::cos(0.7f * x);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x)
+      if (x + int(truth(x)) < W) n1.at(x + int(truth(x)), y) = n0.at(x, y);
+  for (int y = 0; y < CH; ++y)
+    for (int x = 0; x < CW; ++x) coarseU.at(x, y) = coarseW.at(x, y, 0) = 0.5f * truth(2 * x);
+  upsampleEstimate(u.view(), w.view(), coarseU.view(), coarseW.view(), n0.view(), n1.view(), mask.view(),
+                   {2.f, 1.f, 2});
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      INFO("x = " << x << ", y = " << y);
+      if (x >= 17 && x <= 22) {
+        // Bilinear resampling would give 3 and 5 at x = 19, 20; here one side or the other.
+        CHECK((u.at(x, y) == 2.f || u.at(x, y) == 6.f));
+        CHECK(w.at(x, y, 0) == u.at(x, y));
+        if (y >= 2 && y < H - 2) CHECK(u.at(x, y) == truth(x));  // the window sees the right side
+      } else {
+        CHECK(u.at(x, y) == truth(x));  // away from the step: bilinear of a constant
+      }
+    }
+}
+
 TEST_CASE("median removes an isolated spike and respects the mask") {
   Grid u(9, 9, 1, 1.f), mask(9, 9, 1, 1.f), out(9, 9, 1);
   u.at(4, 4) = 50.f;

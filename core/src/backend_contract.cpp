@@ -204,6 +204,22 @@ void Backend::upsample(const Buffer& dst, const Buffer& src, float scale, float 
   doUpsample(dst, src, scale, valueScale);
 }
 
+void Backend::upsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
+                               const Buffer& n0, const Buffer& n1, const Buffer& mask,
+                               const EstimateUpsampleParams& p) {
+  const BackendContract c(*this, "upsampleEstimate");
+  c.buffer(mask, "mask", 1).sameGrid(u, "u", 1, mask, "mask").sameGrid(w, "w", 2, mask, "mask");
+  c.sameGrid(n0, "n0", 1, mask, "mask").sameGrid(n1, "n1", 1, mask, "mask");
+  c.buffer(coarseU, "coarseU", 1).sameGrid(coarseW, "coarseW", 2, coarseU, "coarseU");
+  c.require(coarseU.width >= 2 && coarseU.height >= 2,
+            "the coarse grid must be at least 2x2, got " + shapeText(coarseU.width, coarseU.height));
+  c.require(std::isfinite(p.scale) && p.scale > 1.f, "scale must be above 1, got " + std::to_string(p.scale));
+  c.require(std::isfinite(p.edge) && p.edge > 0.f, "edge must be positive, got " + std::to_string(p.edge));
+  c.require(p.radius >= 0 && p.radius <= kMaxUpsampleRadius,
+            "radius " + std::to_string(p.radius) + " outside [0, " + std::to_string(kMaxUpsampleRadius) + "]");
+  doUpsampleEstimate(u, w, coarseU, coarseW, n0, n1, mask, p);
+}
+
 void Backend::normalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
                         const NormaliseParams& params) {
   const BackendContract c(*this, "normalise");

@@ -71,6 +71,12 @@ std::vector<ParamInfo> buildTable() {
   median.alias = "median";
   median.boolField = &Params::medianFilter;
 
+  ParamInfo edgeUpsample = base("edge_upsample", Type::Bool, {},
+                                "at the coarse estimate's depth edges, each pixel takes the coarse neighbour its "
+                                "images match best instead of a bilinear blend",
+                                Shown::Always);
+  edgeUpsample.boolField = &Params::edgeUpsample;
+
   ParamInfo dataTerm =
       base("data_term", Type::Enum, {}, "what the data term compares; also sets lambda's default", Shown::Always);
   dataTerm.describeKey = "data";
@@ -115,6 +121,7 @@ std::vector<ParamInfo> buildTable() {
           floatParam("tensor_sigma", &Params::tensorSigma, closed(0, 10),
                      "Gaussian smoothing (px) of the image before its gradient", Shown::Never),
           median,
+          edgeUpsample,
           floatParam("gamma", &Params::gamma, atLeast(0), "accelerated primal-dual (0: constant steps)"),
       });
   std::vector<ParamInfo> sweep =

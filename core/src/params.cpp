@@ -73,9 +73,11 @@ Params preset(const std::string& name) {
     return p;
   }
   if (name == "paper") {
-    // Roxas & Oishi, Sec. IV: brightness constancy, 5 levels x2, N=5, K=10, du_max 0.2.
+    // Roxas & Oishi, Sec. IV: brightness constancy, 5 levels x2, N=5, K=10, du_max 0.2,
+    // bilinear upsampling.
     p = p.withDataTerm(Params::DataTerm::Brightness);
     p.warps = 5;
+    p.edgeUpsample = false;
     return p;
   }
   if (name == "quality") {

@@ -206,6 +206,12 @@ void Pipeline::buildPyramid() {
   }
 }
 
+// Params::edgeUpsample: coarse neighbours a pixel or more apart straddle a depth edge (0.5
+// measured the same), and a 5x5 window tells the surfaces apart where 3x3 is swayed by
+// texture (CPU oracle, clean binocular tau>1 4.9 against 5.0 %).
+constexpr float kEdgeUpsamplePx = 1.f;
+constexpr int kEdgeUpsampleRadius = 2;
+
 void Pipeline::initialiseLevel(size_t l) {
   Level& L = levels_[l];
   stage("structure tensor");
@@ -218,8 +224,13 @@ void Pipeline::initialiseLevel(size_t l) {
   } else {
     const Level& coarse = levels_[l + 1];
     const float s = float(params_.scale);
-    backend_.upsample(L.pd.u, coarse.pd.u, s, s);
-    backend_.upsample(L.w, coarse.w, s, s);
+    if (params_.edgeUpsample) {
+      backend_.upsampleEstimate(L.pd.u, L.w, coarse.pd.u, coarse.w, L.n0, L.n1, L.mask,
+                                {s, kEdgeUpsamplePx, kEdgeUpsampleRadius});
+    } else {
+      backend_.upsample(L.pd.u, coarse.pd.u, s, s);
+      backend_.upsample(L.w, coarse.w, s, s);
+    }
     if (initialising() && l < sweep_.level) backend_.upsample(L.confidence, coarse.confidence, s, 1.f);
   }
   if (initialising() && sweep_.banded && l == sweep_.level + 1) runCoarseSweep();

@@ -129,6 +129,7 @@ class Stereo:
         iterations: int = ...,
         du_max: float = ...,
         median_filter: bool = ...,
+        edge_upsample: bool = ...,
         data_term: Literal["normalised", "brightness"] = ...,
         norm_sigma: float = ...,
         noise_level: float = ...,

@@ -22,6 +22,13 @@ struct Params {
   int iterations = 10;
   float duMax = 0.2f;        // clamp of the disparity increment per warp (px of that level)
   bool medianFilter = true;  // 3x3 median of u after each warp's iterations
+  // Each level starts from the coarser one's estimate resampled. Bilinear resampling
+  // invents disparities between two surfaces at every depth edge, a band a few pixels wide
+  // that the few warps after the sweep cannot undo. With edgeUpsample, where the four
+  // coarse neighbours of a pixel differ by a pixel or more, the pixel takes the one whose
+  // displacement its 5x5 window matches best (Backend::upsampleEstimate). Off in the
+  // paper preset (plain bilinear, as the paper).
+  bool edgeUpsample = true;
 
   // Data term (DESIGN.md "Photometry"): what the residual rho compares. Normalised: each
   // pyramid level's images after local contrast normalisation (zero mean, unit spread in a

@@ -125,6 +125,14 @@ constexpr int kBandMargin = 2;
 // to 42 px).
 constexpr int kMaxTensorRadius = 127;
 
+// How the estimate moves one pyramid level finer (Backend::upsampleEstimate).
+constexpr int kMaxUpsampleRadius = 4;
+struct EstimateUpsampleParams {
+  float scale;  // fine / coarse size ratio (> 1); disparities and displacements grow by it
+  float edge;   // px of the fine level: coarse neighbours this far apart straddle a depth edge
+  int radius;   // matching window (2 radius + 1)^2, 0..kMaxUpsampleRadius
+};
+
 // The normalised Gaussian taps of standard deviation sigma > 0 over radius ceil(3 sigma)
 // (2 radius + 1 of them, the middle one at offset 0): the one definition behind the
 // structure tensor's smoothing on every backend and normaliseParams().
@@ -178,6 +186,16 @@ class Backend {
   void downsample(const Buffer& dst, const Buffer& src, float scale);
   // dst = valueScale * src resampled bilinearly to dst's (finer) grid; same channels.
   void upsample(const Buffer& dst, const Buffer& src, float scale, float valueScale);
+  // The estimate one level finer. u = scale coarseU and w = scale coarseW, resampled
+  // bilinearly as upsample(); but where the coarse pixels around a masked fine pixel,
+  // (ix, iy), (ix + 1, iy), (ix, iy + 1), (ix + 1, iy + 1) (ix = floor of its coarse x,
+  // clamped to [0, coarse width - 2]; iy alike), span scale * coarseU >= p.edge, bilinear
+  // resampling would invent disparities between two surfaces. There the pixel takes the u and w of the one whose
+  // displacement matches best: the least sum over the window offsets (dy, then dx, -radius..radius) of |n0(q) -
+  // bilinear n1(q + scale coarseW)|, q the offset pixel clamped to the image; the first in that order on ties. u, mask,
+  // n0, n1 1 ch, w 2 ch on the fine grid; coarseU 1 ch, coarseW 2 ch on a coarse grid at least 2x2.
+  void upsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
+                        const Buffer& n0, const Buffer& n1, const Buffer& mask, const EstimateUpsampleParams& p);
   // dst = (src - m) / sqrt(v + epsilon^2), with m and v the mean and variance of src over
   // the masked pixels of a Gaussian window (weights taps(dx) taps(dy), pixels outside the
   // image skipped); 0 outside the mask. moments (3 ch) is scratch: the horizontal pass's
@@ -337,6 +355,9 @@ class Backend {
   virtual void doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) = 0;
   virtual void doDownsample(const Buffer& dst, const Buffer& src, float scale) = 0;
   virtual void doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) = 0;
+  virtual void doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
+                                  const Buffer& n0, const Buffer& n1, const Buffer& mask,
+                                  const EstimateUpsampleParams& p) = 0;
   virtual void doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
                            const NormaliseParams& params) = 0;
   virtual void doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
