@@ -807,6 +807,7 @@ SolveInputs loadSolveInputs(const std::string& dir) {
 
 std::vector<Output> runSolve(const SolveInputs& in, const std::string& backend) {
   Params p = preset("variational");
+  p.edgeUpsample = true;  // as the sweep presets: the whole solve covers upsampleEstimate
   p.levels = 2;
   p.minWidth = 24;
   p.warps = 8;

@@ -620,9 +620,15 @@ TEST_CASE("init parameters: validation, parseInit / initName, preset quality") {
   CHECK(preset("paper").dataTerm == Params::DataTerm::Brightness);
   const auto names = presetNames();
   CHECK(std::find(names.begin(), names.end(), "quality") != names.end());
-  // quality is variational plus the initialiser.
+  // quality is variational plus the initialiser and the edge-aware upsampling.
+  CHECK(good.edgeUpsample);
+  CHECK(preset("realtime").edgeUpsample);
+  CHECK(preset("fast").edgeUpsample);
+  CHECK(!preset("variational").edgeUpsample);
+  CHECK(!preset("paper").edgeUpsample);
   Params same = good;
   same.init = Params::Init::None;
+  same.edgeUpsample = false;
   CHECK(describe(same) == describe(preset("variational")));
   CHECK(describe(good).find("init=planesweep") != std::string::npos);
   good.validate();

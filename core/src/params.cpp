@@ -50,6 +50,7 @@ Params preset(const std::string& name) {
     // to 0.2 points for 0.1 ms; 30 warps at all coarse levels cost 0.9 ms more, 20 / 12 /
     // 4 lost 0.1 to 0.2 points, dropping levels 3 and 4 lost 4 to 6 (README "Presets").
     p.init = Params::Init::PlaneSweep;
+    p.edgeUpsample = true;
     p.initLevel = 1;
     p.warps = 30;
     p.warpsTaper = 10;
@@ -69,19 +70,19 @@ Params preset(const std::string& name) {
     p.warps = 5;
     p.duMax = 1.f;
     p.init = Params::Init::PlaneSweep;
+    p.edgeUpsample = true;
     p.initLevel = 2;
     return p;
   }
   if (name == "paper") {
-    // Roxas & Oishi, Sec. IV: brightness constancy, 5 levels x2, N=5, K=10, du_max 0.2,
-    // bilinear upsampling.
+    // Roxas & Oishi, Sec. IV: brightness constancy, 5 levels x2, N=5, K=10, du_max 0.2.
     p = p.withDataTerm(Params::DataTerm::Brightness);
     p.warps = 5;
-    p.edgeUpsample = false;
     return p;
   }
   if (name == "quality") {
     p.init = Params::Init::PlaneSweep;
+    p.edgeUpsample = true;
     return p;
   }
   std::string known;

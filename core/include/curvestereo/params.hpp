@@ -26,9 +26,11 @@ struct Params {
   // invents disparities between two surfaces at every depth edge, a band a few pixels wide
   // that the few warps after the sweep cannot undo. With edgeUpsample, where the four
   // coarse neighbours of a pixel differ by a pixel or more, the pixel takes the one whose
-  // displacement its 5x5 window matches best (Backend::upsampleEstimate). Off in the
-  // paper preset (plain bilinear, as the paper).
-  bool edgeUpsample = true;
+  // displacement its 5x5 window matches best (Backend::upsampleEstimate). On in the presets
+  // with the plane sweep; off here (variational, paper): without the sweep the coarse
+  // estimate is least reliable at edges, and the solver alone measured worse with it
+  // (README "Presets").
+  bool edgeUpsample = false;
 
   // Data term (DESIGN.md "Photometry"): what the residual rho compares. Normalised: each
   // pyramid level's images after local contrast normalisation (zero mean, unit spread in a
