@@ -40,15 +40,15 @@ Params preset(const std::string& name) {
     // hypotheses a pixel around its winners at level 1 (initBand); warps where they are
     // needed: the coarse levels travel from zero for the pixels the checks reject (30, 20
     // at levels 4, 3: the coarsest does the travelling), the levels the sweeps initialise
-    // and the full resolution only refine (2 each). Measured on the 12 development pairs
-    // (CUDA, H100; the CPU oracle agrees), mean tau>1 / tau>3 % of clean binocular,
-    // T265-like binocular pairs and tau>1 of clean / T265-like forward non-occluded pairs:
-    // 6.1 / 3.2, 7.5 / 3.6, 11.2 / 17.3 in 4.35 ms a 848x800 frame; the full level-1
-    // sweep with 30 / 20 / 10 / 2 / 2 warps: 5.8 / 2.9, 6.9 / 3.1, 9.8 / 18.4 in 6.1 ms
-    // (quality: 4.6 / 3.0, 6.0 / 3.2, 8.1 / 18.8 in 14 ms). 30 warps at level 0 would reach
-    // 4.9 % on the clean pairs at about twice the frame time. Bands of 16 and 24 lost 0.1
-    // to 0.2 points for 0.1 ms; 30 warps at all coarse levels cost 0.9 ms more, 20 / 12 /
-    // 4 lost 0.1 to 0.2 points, dropping levels 3 and 4 lost 4 to 6 (README "Presets").
+    // and the full resolution only refine (2 each), each from the coarser estimate
+    // resampled without blending surfaces across depth edges (edgeUpsample). Measured on
+    // the 12 development pairs (CUDA, H200; the CPU oracle agrees), mean tau>1 / tau>3 %
+    // of clean binocular, T265-like binocular pairs and tau>1 of clean / T265-like forward
+    // non-occluded pairs: 4.8 / 2.8, 6.4 / 3.3, 8.2 / 15.3 in 4.3 ms a 848x800 frame
+    // (bilinear upsampling: 5.8 / 3.5, 7.3 / 4.0, 10.0 / 17.2; quality: 4.7 / 3.4,
+    // 6.5 / 3.8, 6.6 / 16.3 in 12.6 ms). Bands of 16 and 24 lost 0.1 to 0.2 points for
+    // 0.1 ms; 30 warps at all coarse levels cost 0.9 ms more, 20 / 12 / 4 lost 0.1 to 0.2
+    // points, dropping levels 3 and 4 lost 4 to 6 (README "Presets").
     p.init = Params::Init::PlaneSweep;
     p.edgeUpsample = true;
     p.initLevel = 1;
@@ -63,8 +63,8 @@ Params preset(const std::string& name) {
     // resolution, a sixth of level 1's sweep time), then N = 5 warps a level. With 5 warps
     // the step per warp is chosen so that a level can still travel about as far as the N =
     // 30 presets (5 x 1.0 px against 30 x 0.2): the sweep's upsampled estimate is several
-    // level px off at edges. Measured as realtime's above: 6.4 / 4.5, 9.5 / 6.0, 12.0 %,
-    // about 2.5 ms less per 848x800 frame on the H100. (The tapered schedule after a
+    // level px off at edges. Measured as realtime's above: 5.4 / 4.0, 8.2 / 5.3, 9.6 %,
+    // about 0.9 ms less per 848x800 frame on an H200. (The tapered schedule after a
     // level-2 sweep measured worse, 8.4 / 9.9 % tau>1: a coarse sweep leaves the fine
     // levels more to travel.)
     p.warps = 5;
