@@ -190,10 +190,11 @@ class Backend {
   // bilinearly as upsample(); but where the coarse pixels around a masked fine pixel,
   // (ix, iy), (ix + 1, iy), (ix, iy + 1), (ix + 1, iy + 1) (ix = floor of its coarse x,
   // clamped to [0, coarse width - 2]; iy alike), span scale * coarseU >= p.edge, bilinear
-  // resampling would invent disparities between two surfaces. There the pixel takes the u and w of the one whose
-  // displacement matches best: the least sum over the window offsets (dy, then dx, -radius..radius) of |n0(q) -
-  // bilinear n1(q + scale coarseW)|, q the offset pixel clamped to the image; the first in that order on ties. u, mask,
-  // n0, n1 1 ch, w 2 ch on the fine grid; coarseU 1 ch, coarseW 2 ch on a coarse grid at least 2x2.
+  // resampling would invent disparities between two surfaces. There the pixel takes the u
+  // and w of the neighbour whose displacement matches best: the least sum over the window
+  // offsets (dy, then dx, each -radius..radius) of |n0(q) - bilinear n1(q + scale coarseW)|,
+  // q the offset pixel clamped to the image; the first in that order on ties. u, mask, n0,
+  // n1 1 ch, w 2 ch on the fine grid; coarseU 1 ch, coarseW 2 ch on a coarse grid >= 2x2.
   void upsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
                         const Buffer& n0, const Buffer& n1, const Buffer& mask, const EstimateUpsampleParams& p);
   // dst = (src - m) / sqrt(v + epsilon^2), with m and v the mean and variance of src over
