@@ -8,6 +8,11 @@ namespace {
 
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
+// The ray lies farther than halfFov from its camera's optical axis (z); off without a limit.
+__device__ bool beyondFov(const V3& ray, const FieldsDev& p) {
+  return p.maxFovDeg > 0 && atan2(sqrt(ray.x * ray.x + ray.y * ray.y), ray.z) > 0.5 * p.maxFovDeg * kDegToRad;
+}
+
 __global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsDev p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
@@ -17,13 +22,12 @@ __global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsDe
   V3 ray;
   do {
     if (!cameraUnproject(p.cam0, double(x), double(y), ray)) break;
-    const double halfFov = 0.5 * p.maxFovDeg * kDegToRad;
-    if (p.maxFovDeg > 0 && atan2(sqrt(ray.x * ray.x + ray.y * ray.y), ray.z) > halfFov) break;
+    if (beyondFov(ray, p)) break;
     const double c = fabs(ray.x * p.baselineDir[0] + ray.y * p.baselineDir[1] + ray.z * p.baselineDir[2]);
     if (acos(fmin(1.0, c)) < p.epipoleDeg * kDegToRad) break;
     const V3 r1{p.R[0] * ray.x + p.R[1] * ray.y + p.R[2] * ray.z, p.R[3] * ray.x + p.R[4] * ray.y + p.R[5] * ray.z,
                 p.R[6] * ray.x + p.R[7] * ray.y + p.R[8] * ray.z};
-    if (p.maxFovDeg > 0 && atan2(sqrt(r1.x * r1.x + r1.y * r1.y), r1.z) > halfFov) break;  // camera 1's too
+    if (beyondFov(r1, p)) break;  // camera 1's field of view too
     V2 px1;
     if (!cameraProject(p.cam1, r1, px1)) break;
     if (!(px1.x >= -0.5 && px1.y >= -0.5 && px1.x <= p.cam1.width - 0.5 && px1.y <= p.cam1.height - 0.5)) break;

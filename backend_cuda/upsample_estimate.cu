@@ -25,12 +25,28 @@ __device__ float windowMismatch(const float (&window0)[(2 * R + 1) * (2 * R + 1)
   return sum;
 }
 
-// Of the four coarse neighbours (ix, iy) + (k % 2, k / 2), the one whose displacement
-// image 1 confirms best; the first on ties. A neighbour equal to an earlier one scores
-// the same and cannot win, so it is not scored again.
+// The four coarse neighbours (ix, iy) + (k % 2, k / 2) of a fine pixel, in the contract's
+// order, their disparities and displacements already scaled to the fine level.
+struct Neighbours {
+  float u[4], wx[4], wy[4];
+};
+
+__device__ Neighbours loadNeighbours(const Img& coarseU, const Img& coarseW, int ix, int iy, float s) {
+  Neighbours n;
+#pragma unroll
+  for (int k = 0; k < 4; ++k) {
+    const int kx = ix + k % 2, ky = iy + k / 2;
+    n.u[k] = s * at(coarseU, kx, ky);
+    n.wx[k] = s * at(coarseW, kx, ky, 0);
+    n.wy[k] = s * at(coarseW, kx, ky, 1);
+  }
+  return n;
+}
+
+// The neighbour whose displacement image 1 confirms best; the first on ties. A neighbour
+// equal to an earlier one scores the same and cannot win, so it is not scored again.
 template <int R>
-__device__ int bestNeighbour(const Img& coarseU, const Img& coarseW, const Img& n0, const Img& n1, int x, int y, int ix,
-                             int iy, float s) {
+__device__ int bestNeighbour(const Neighbours& n, const Img& n0, const Img& n1, int x, int y) {
   float window0[(2 * R + 1) * (2 * R + 1)];
 #pragma unroll
   for (int dy = -R; dy <= R; ++dy)
@@ -41,15 +57,11 @@ __device__ int bestNeighbour(const Img& coarseU, const Img& coarseW, const Img& 
   int best = 0;
   float bestMismatch = 0.f;
   for (int k = 0; k < 4; ++k) {
-    const int kx = ix + k % 2, ky = iy + k / 2;
-    const float u = at(coarseU, kx, ky), wx = at(coarseW, kx, ky, 0), wy = at(coarseW, kx, ky, 1);
     bool seen = false;
-    for (int j = 0; j < k; ++j) {
-      const int jx = ix + j % 2, jy = iy + j / 2;
-      seen |= at(coarseU, jx, jy) == u && at(coarseW, jx, jy, 0) == wx && at(coarseW, jx, jy, 1) == wy;
-    }
+#pragma unroll
+    for (int j = 0; j < k; ++j) seen |= n.u[j] == n.u[k] && n.wx[j] == n.wx[k] && n.wy[j] == n.wy[k];
     if (seen) continue;
-    const float m = windowMismatch<R>(window0, n1, x, y, s * wx, s * wy);
+    const float m = windowMismatch<R>(window0, n1, x, y, n.wx[k], n.wy[k]);
     if (k == 0 || m < bestMismatch) best = k, bestMismatch = m;
   }
   return best;
@@ -67,17 +79,14 @@ __global__ void upsampleEstimateKernel(Img u, Img w, Img coarseU, Img coarseW, I
   if (masked(mask, x, y)) {
     const int ix = min(max(int(floorf(cx)), 0), coarseU.width - 2);
     const int iy = min(max(int(floorf(cy)), 0), coarseU.height - 2);
-    float lowest = s * at(coarseU, ix, iy), highest = lowest;
-    for (int k = 1; k < 4; ++k) {
-      const float v = s * at(coarseU, ix + k % 2, iy + k / 2);
-      lowest = fminf(lowest, v), highest = fmaxf(highest, v);
-    }
+    const Neighbours n = loadNeighbours(coarseU, coarseW, ix, iy, s);
+    const float lowest = fminf(fminf(n.u[0], n.u[1]), fminf(n.u[2], n.u[3]));
+    const float highest = fmaxf(fmaxf(n.u[0], n.u[1]), fmaxf(n.u[2], n.u[3]));
     if (highest - lowest >= edge) {
-      const int best = bestNeighbour<R>(coarseU, coarseW, n0, n1, x, y, ix, iy, s);
-      const int bx = ix + best % 2, by = iy + best / 2;
-      uOut = s * at(coarseU, bx, by);
-      wx = s * at(coarseW, bx, by, 0);
-      wy = s * at(coarseW, bx, by, 1);
+      const int best = bestNeighbour<R>(n, n0, n1, x, y);
+      uOut = n.u[best];
+      wx = n.wx[best];
+      wy = n.wy[best];
     }
   }
   at(u, x, y) = uOut;

@@ -26,6 +26,11 @@ layout(push_constant) uniform PC {
   int w, h;
 } pc;
 
+// The ray lies farther than halfFov from its camera's optical axis (z); off without a limit.
+bool beyondFov(vec3r ray) {
+  return pc.prm.useFov != 0 && atan2r(sqrt(ray.x * ray.x + ray.y * ray.y), ray.z) > pc.prm.halfFov;
+}
+
 bool fieldsAt(int x, int y, out vec2 calibration, out vec2 trajectory) {
   calibration = vec2(0.0);
   trajectory = vec2(0.0);
@@ -33,7 +38,7 @@ bool fieldsAt(int x, int y, out vec2 calibration, out vec2 trajectory) {
   vec2r px = vec2r(real(x), real(y));
   vec3r ray;
   if (!camUnproject(cam0, px, ray)) return false;
-  if (pc.prm.useFov != 0 && atan2r(sqrt(ray.x * ray.x + ray.y * ray.y), ray.z) > pc.prm.halfFov) return false;
+  if (beyondFov(ray)) return false;
   vec3r tDir = vec3r(pc.prm.tDir[0], pc.prm.tDir[1], pc.prm.tDir[2]);
   real cosB = abs(ray.x * tDir.x + ray.y * tDir.y + ray.z * tDir.z);
   if (acosr(min(R(1.0), cosB)) < pc.prm.epipole) return false;
@@ -42,7 +47,7 @@ bool fieldsAt(int x, int y, out vec2 calibration, out vec2 trajectory) {
   vec3r r1 = vec3r(pc.prm.R[0] * ray.x + pc.prm.R[1] * ray.y + pc.prm.R[2] * ray.z,
                    pc.prm.R[3] * ray.x + pc.prm.R[4] * ray.y + pc.prm.R[5] * ray.z,
                    pc.prm.R[6] * ray.x + pc.prm.R[7] * ray.y + pc.prm.R[8] * ray.z);
-  if (pc.prm.useFov != 0 && atan2r(sqrt(r1.x * r1.x + r1.y * r1.y), r1.z) > pc.prm.halfFov) return false;  // camera 1's too
+  if (beyondFov(r1)) return false;  // camera 1's field of view too
   vec2r px1;
   vec3r J0, J1;
   if (!camProject(cam1, r1, px1, J0, J1) || !camInImage(cam1, px1)) return false;
