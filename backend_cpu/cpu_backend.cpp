@@ -159,6 +159,20 @@ void CpuBackend::doTriangulate(const Buffer& radial, const Buffer& points, const
   cpu::triangulate(view(radial), view(points), view(w), view(mask), cam0, tPrime);
 }
 
+void CpuBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
+                                 const Buffer& mask, const CarryParams& p) {
+  const View guessView = guess.id >= 0 ? view(guess) : View{};
+  cpu::carryEstimate(view(dst), view(src), guess.id >= 0 ? &guessView : nullptr, view(motion).data, view(mask), p);
+}
+
+void CpuBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
+                                  const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                                  const TemporalParams& p) {
+  const View confidenceView = confidence.id >= 0 ? view(confidence) : View{};
+  cpu::temporalFilter(view(state), view(u), view(w), view(prior), view(radial),
+                      confidence.id >= 0 ? &confidenceView : nullptr, view(mask), p);
+}
+
 void CpuBackend::doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
   cpu::warp(view(dst), view(src), view(flow));
 }

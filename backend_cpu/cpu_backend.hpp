@@ -1,7 +1,7 @@
 // The scalar CPU backend: the readable reference implementation (the oracle) that
 // every other backend is tested against. One file per stage (fields.cpp, warp.cpp, resample.cpp,
 // upsample_estimate.cpp, normalise.cpp, structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp,
-// accumulate.cpp, plane_sweep.cpp, triangulate.cpp).
+// accumulate.cpp, plane_sweep.cpp, triangulate.cpp, carry_estimate.cpp, temporal_filter.cpp).
 #pragma once
 #include <vector>
 
@@ -44,6 +44,10 @@ void sweepBandAggregate(const View& aggregated, const View& costs, const View& f
                         const SweepParams& p);
 void sweepBandSelect(const View& best, const View& aggregated, const View& costs, const View& first, const View& mask,
                      const SweepParams& p);
+void carryEstimate(const View& dst, const View& src, const View* guess, const float motion[kMotionFloats],
+                   const View& mask, const CarryParams& p);
+void temporalFilter(const View& state, const View& u, const View& w, const View& prior, const View& radial,
+                    const View* confidence, const View& mask, const TemporalParams& p);
 
 // Physical memory, or the container's memory limit when lower (0 if unknown): create()
 // refuses buffers beyond it with a cs::Error naming the size instead of being OOM-killed.
@@ -102,6 +106,11 @@ class CpuBackend final : public Backend {
                          const ConsistencyParams& c) override;
   void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                      const CameraParams& cam0, const double tPrime[3]) override;
+  void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
+                       const Buffer& mask, const CarryParams& p) override;
+  void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
+                        const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                        const TemporalParams& p) override;
 
  private:
   // The view of a buffer (Backend has checked it: created here, used no larger).

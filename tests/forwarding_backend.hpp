@@ -90,6 +90,14 @@ class ForwardingBackend : public Backend {
                      const double t[3]) override {
     b_.triangulate(r, p, w, m, c, t);
   }
+  void doCarryEstimate(const Buffer& d, const Buffer& s, const Buffer& g, const Buffer& mo, const Buffer& m,
+                       const CarryParams& p) override {
+    b_.carryEstimate(d, s, g, mo, m, p);
+  }
+  void doTemporalFilter(const Buffer& st, const Buffer& u, const Buffer& w, const Buffer& pr, const Buffer& r,
+                        const Buffer& c, const Buffer& m, const TemporalParams& p) override {
+    b_.temporalFilter(st, u, w, pr, r, c, m, p);
+  }
 
  protected:
   Backend& b_;

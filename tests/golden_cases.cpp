@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
+
+#include <Eigen/Geometry>
 
 #include "cpu_backend.hpp"
 #include "curvestereo/camera.hpp"
@@ -352,6 +355,94 @@ std::vector<Output> triangulateCase(Backend& b) {
   const double tPrime[3] = {-0.064, 0.001, 0.002};
   b.triangulate(radial, points, s.put(w), s.put(mask), fieldsParams().cam0, tPrime);
   return {s.get("triangulate_radial", radial), s.get("triangulate_points", points)};
+}
+
+// --- sequences ---
+
+// A state of a scene: a tilted plane 2-4 m away, a near box (q 1.5) over part of it, a
+// patch at infinity (q 0) and holes (q -1); variances in px^2.
+Host sequenceState(int w, int h) {
+  Host st(w, h, 2);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float q = 0.25f + 0.25f * float(x) / float(w) + 0.05f * float(y) / float(h);
+      if (x >= 14 && x < 24 && y >= 10 && y < 22) q = 1.5f;
+      if (x >= 30 && y < 8) q = 0.f;
+      if ((x * 7 + y * 3) % 29 == 0) q = -1.f;
+      st.at(x, y, 0) = q;
+      st.at(x, y, 1) = 0.1f + 0.5f * hashNoise(uint32_t(y * w + x) * 613u + 7u);
+    }
+  return st;
+}
+
+// Camera 0 turns 6 degrees about y and 3 about x and moves 12 cm, mostly forward.
+Host sequenceMotion() {
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.105, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(0.052, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  Host m(kMotionFloats, 1, 1);
+  for (int i = 0; i < 9; ++i) m.v[size_t(i)] = float(R(i / 3, i % 3));
+  m.v[9] = 0.04f, m.v[10] = -0.02f, m.v[11] = 0.11f;
+  return m;
+}
+
+// Into the same grid from this frame's depth (the temporal filter's prior): one step from the
+// guess, which holds NaN, +inf and non-positive values too.
+std::vector<Output> carryEstimateCase(Backend& b) {
+  Session s{b};
+  Host state = sequenceState(kW, kH), motion = sequenceMotion(), mask = discMask(kW, kH);
+  Host guess = noise(kW, kH, 1, 61, 0.5f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      float& g = guess.at(x, y);
+      g = 2.5f + g;
+      if (x >= 15 && x < 25 && y >= 12 && y < 22) g = 0.7f;
+      if ((x + 2 * y) % 17 == 0) g = std::numeric_limits<float>::quiet_NaN();
+      if ((x + 2 * y) % 19 == 0) g = std::numeric_limits<float>::infinity();
+      if ((3 * x + y) % 23 == 0) g = (x % 2) ? 0.f : -1.f;
+    }
+  const CameraParams cam = fieldsParams().cam0;
+  Buffer dst = s.make(kW, kH, 2);
+  b.carryEstimate(dst, s.put(state), s.put(guess), s.put(motion), s.put(mask), {cam, cam, {0, 0, 0}, 1});
+  return {s.get("carry_prior", dst)};
+}
+
+// Into a coarser grid of camera 1' (extraT = t'), by three fixed-point steps from the state
+// itself: the warm start's proposals.
+std::vector<Output> carryEstimateCoarseCase(Backend& b) {
+  Session s{b};
+  Host state = sequenceState(kW, kH), motion = sequenceMotion();
+  const int cw = (kW + 1) / 2, ch = (kH + 1) / 2;
+  Host mask = discMask(cw, ch);
+  Camera coarse = toCamera(fieldsParams().cam0).scaled(0.5);
+  coarse.width = cw, coarse.height = ch;
+  CarryParams p{fieldsParams().cam0, toCameraParams(coarse), {-0.064, 0.001, 0.002}, 3};
+  Buffer dst = s.make(cw, ch, 2);
+  b.carryEstimate(dst, s.put(state), Buffer{}, s.put(motion), s.put(mask), p);
+  return {s.get("carry_coarse", dst)};
+}
+
+// A prior that agrees in places (filtered), disagrees in others (reset: the gate), is missing
+// in some; a measurement at infinity, NaN and a confidence that falls across the image.
+std::vector<Output> temporalFilterCase(Backend& b) {
+  Session s{b};
+  Host prior = sequenceState(kW, kH), mask = discMask(kW, kH), radial(kW, kH, 1), confidence(kW, kH, 1);
+  Host u = noise(kW, kH, 1, 71, 3.f), w = noise(kW, kH, 2, 72, 3.f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const float q = prior.at(x, y, 0);
+      // Within a fraction of a px of the prior, or far off on the box (a moving object).
+      const float qm = std::max(0.f, q) + 0.004f * (2.f * hashNoise(uint32_t(y * kW + x) * 977u + 5u) - 1.f);
+      radial.at(x, y) = (x >= 14 && x < 24 && y >= 10 && y < 16) ? 1.f / 0.6f : 1.f / std::max(qm, 1e-3f);
+      if (x >= 30 && y < 6) radial.at(x, y) = std::numeric_limits<float>::infinity();
+      if ((x + 3 * y) % 31 == 0) radial.at(x, y) = std::numeric_limits<float>::quiet_NaN();
+      confidence.at(x, y) = float(x) / float(kW - 1);
+    }
+  const FieldsParams fp = fieldsParams();
+  TemporalParams p{fp.cam0, {-0.064, 0.001, 0.002}, 0.8f, 3.f, 0.5f, 0.1f, 0.1f};
+  Buffer state = s.make(kW, kH, 2), ub = s.put(u), wb = s.put(w);
+  b.temporalFilter(state, ub, wb, s.put(prior), s.put(radial), s.put(confidence), s.put(mask), p);
+  return {s.get("temporal_state", state), s.get("temporal_u", ub), s.get("temporal_w", wb)};
 }
 
 // --- plane sweep ---
@@ -777,7 +868,10 @@ const std::vector<KernelCase>& kernelCases() {
                                                 {"sweepBandCost, 32-wide bands jumping 50", sweepBandCostJumpCase},
                                                 {"sweepBandAggregate", sweepBandAggregateCase},
                                                 {"sweepBandAggregate, 32-wide band", sweepBandAggregateWideCase},
-                                                {"sweepBandSelect", sweepBandSelectCase}};
+                                                {"sweepBandSelect", sweepBandSelectCase},
+                                                {"carryEstimate", carryEstimateCase},
+                                                {"carryEstimate, coarser grid of camera 1'", carryEstimateCoarseCase},
+                                                {"temporalFilter", temporalFilterCase}};
   return cases;
 }
 

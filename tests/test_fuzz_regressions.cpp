@@ -9,6 +9,7 @@
 
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/rig.hpp"
+#include "curvestereo/sequence.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -45,6 +46,11 @@ std::string load(const std::string& target, const fs::path& file) {
       cs::readExr(file.string());
     } else if (target == "flo") {
       cs::readFlo(file.string());
+    } else if (target == "sequence") {  // fuzz_sequence runs both readers; a seed is named for its format
+      if (file.filename().string().rfind("poses", 0) == 0)
+        cs::readPoses(file.string());
+      else
+        cs::parseAslCsv(readAll(file), file.filename().string());
     } else {
       FAIL("unknown fuzz target directory " << target);
     }

@@ -401,3 +401,38 @@ void Backend::triangulate(const Buffer& radial, const Buffer& points, const Buff
 }
 
 }  // namespace cs
+
+namespace cs {
+
+void Backend::carryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
+                            const Buffer& mask, const CarryParams& p) {
+  const BackendContract c(*this, "carryEstimate");
+  c.buffer(mask, "mask", 1).sameGrid(dst, "dst", 2, mask, "mask");
+  c.buffer(src, "src", 2).buffer(motion, "motion", 1);
+  if (guess.id >= 0) c.sameGrid(guess, "guess", 1, mask, "mask");
+  c.require(motion.width == kMotionFloats && motion.height == 1,
+            "motion is " + shapeText(motion) + ", expected " + std::to_string(kMotionFloats) + "x1x1");
+  c.camera(p.dstCam, "dstCam", &mask, "mask").camera(p.srcCam, "srcCam", &src, "src");
+  c.require(p.iterations >= 1, "needs at least one iteration, got " + std::to_string(p.iterations));
+  c.require(dst.id != src.id, "dst and src are the same buffer");
+  doCarryEstimate(dst, src, guess, motion, mask, p);
+}
+
+void Backend::temporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
+                             const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                             const TemporalParams& p) {
+  const BackendContract c(*this, "temporalFilter");
+  c.buffer(mask, "mask", 1).sameGrid(state, "state", 2, mask, "mask").sameGrid(prior, "prior", 2, mask, "mask");
+  c.sameGrid(u, "u", 1, mask, "mask").sameGrid(w, "w", 2, mask, "mask").sameGrid(radial, "radial", 1, mask, "mask");
+  if (confidence.id >= 0) c.sameGrid(confidence, "confidence", 1, mask, "mask");
+  c.camera(p.cam, "cam", &mask, "mask");
+  c.require(state.id != prior.id, "state and prior are the same buffer");
+  c.require(p.strength >= 0.f && p.strength < 1.f, "strength must be in [0, 1), got " + std::to_string(p.strength));
+  c.require(p.gate > 0.f && p.sigmaPx > 0.f && p.processPx >= 0.f,
+            "gate and sigmaPx must be > 0 and processPx >= 0");
+  c.require(p.minConfidence > 0.f && p.minConfidence <= 1.f,
+            "minConfidence must be in (0, 1], got " + std::to_string(p.minConfidence));
+  doTemporalFilter(state, u, w, prior, radial, confidence, mask, p);
+}
+
+}  // namespace cs

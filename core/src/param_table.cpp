@@ -161,7 +161,26 @@ std::vector<ParamInfo> buildTable() {
                                         "mask rays this close to the baseline, degrees", Shown::Never),
                             "epipole"),
               });
+  ParamInfo warm = base("warm_start", Type::Bool, {},
+                        "sequences: start each frame from the previous one's estimate (needs init_band)",
+                        Shown::Never);
+  warm.boolField = &Params::warmStart;
+  std::vector<ParamInfo> sequence =
+      grouped("sequences (run --sequence, Stereo::next)",
+              {
+                  warm,
+                  intParam("cold_every", &Params::coldEvery, closed(0, 1000000),
+                           "solve every N-th frame cold (0: only the first and failed ones)", Shown::Never),
+                  floatParam("warm_fail_ratio", &Params::warmFailRatio, closed(0, 1),
+                             "a warm frame with fewer consistent pixels than this x the last cold one's is redone cold",
+                             Shown::Never),
+                  floatParam("temporal_strength", &Params::temporalStrength, {0, 1, false, true},
+                             "temporal filter: the carried depth's largest weight (0: off)", Shown::Never),
+                  floatParam("temporal_gate", &Params::temporalGate, above(0),
+                             "temporal filter: reset a pixel beyond this many standard deviations", Shown::Never),
+              });
   table.insert(table.end(), sweep.begin(), sweep.end());
+  table.insert(table.end(), sequence.begin(), sequence.end());
   table.insert(table.end(), view.begin(), view.end());
   return table;
 }

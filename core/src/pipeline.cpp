@@ -186,11 +186,12 @@ void Pipeline::upload(const ImageF& left, const ImageF& right) {
   backend_.upload(rawRight_, right.data.data());
 }
 
-void Pipeline::buildPyramid() {
+// The images of levels 0 .. count - 1 (a warm frame never visits the coarser ones).
+void Pipeline::buildPyramid(size_t count) {
   stage("calibration warp");
   backend_.warp(levels_[0].i1, rawRight_, calibration_);
   stage("pyramid");
-  for (size_t l = 1; l < levels_.size(); ++l) {
+  for (size_t l = 1; l < count; ++l) {
     backend_.downsample(levels_[l].i0, levels_[l - 1].i0, float(params_.scale));
     backend_.downsample(levels_[l].i1, levels_[l - 1].i1, float(params_.scale));
   }
@@ -200,7 +201,8 @@ void Pipeline::buildPyramid() {
   // average the zero-mean fine texture away and starve the coarse levels.
   stage("normalise");
   const NormaliseParams np = normaliseParams(params_);
-  for (Level& L : levels_) {
+  for (size_t l = 0; l < count; ++l) {
+    Level& L = levels_[l];
     backend_.normalise(L.n0, L.moments, L.i0, L.mask, np);
     backend_.normalise(L.n1, L.moments, L.i1, L.mask, np);
   }
@@ -365,7 +367,51 @@ void Pipeline::solveLevel(Level& L, int warps, const std::function<void(int)>& w
   }
 }
 
-void Pipeline::issueFrame(const std::function<void(double)>& progress) {
+// The warm start: the previous frame's state, carried into this frame's view of camera 0
+// and of camera 1' (the sweep's other view), stands in for the full sweep one level above
+// the band's: its left-right check initialises that level, and the band sweep below
+// searches around it. A few fixed-point steps find where each pixel's point was.
+constexpr int kCarrySteps = 3;
+
+void Pipeline::carryIntoCoarseSweep() {
+  Level& C = levels_[sweep_.level + 1];
+  stage("carry");
+  CarryParams p{toCameraParams(levels_[0].cam0), toCameraParams(C.cam0), {0, 0, 0}, kCarrySteps};
+  backend_.carryEstimate(sweep_.coarseBest, state_, Buffer{}, motion_, C.mask, p);
+  std::copy(tPrime_.data(), tPrime_.data() + 3, p.extraT);
+  backend_.carryEstimate(sweep_.coarseOther, state_, Buffer{}, motion_, C.mask, p);
+  checkSweep(C, sweep_.coarseParams, sweep_.coarseBest, sweep_.coarseOther);
+}
+
+void Pipeline::triangulate() {
+  stage("triangulate");
+  const double tp[3] = {tPrime_.x(), tPrime_.y(), tPrime_.z()};
+  backend_.triangulate(radial_, points_, levels_[0].w, levels_[0].mask, toCameraParams(levels_[0].cam0), tp);
+}
+
+// The temporal filter's measurement model, in px of disparity at full resolution: a pixel
+// the sweep's check fully trusts is good to about half a pixel (the realtime preset's
+// tau>1 is ~5 % on such pixels), the deviation growing as its confidence falls (floored, so
+// a rejected pixel still counts a little); a static surface carried by the motion may move
+// by a tenth of a pixel a frame (the nearest-pixel lookup of carryEstimate).
+constexpr float kMeasurementPx = 0.5f;
+constexpr float kDriftPx = 0.1f;
+constexpr float kConfidenceFloor = 0.1f;
+
+void Pipeline::filterResult() {
+  Level& L0 = levels_[0];
+  stage("temporal filter");
+  const CameraParams cam = toCameraParams(L0.cam0);
+  backend_.carryEstimate(prior_, state_, radial_, motion_, L0.mask, {cam, cam, {0, 0, 0}, 1});
+  TemporalParams tp{cam, {tPrime_.x(), tPrime_.y(), tPrime_.z()}, params_.temporalStrength, params_.temporalGate,
+                    kMeasurementPx, kDriftPx, kConfidenceFloor};
+  backend_.temporalFilter(next_, L0.pd.u, L0.w, prior_, radial_, L0.confidence, L0.mask, tp);
+  // The filtered disparities' depth and points (the state keeps the filtered inverse depth
+  // whatever the strength; at 0 the disparities are the measurement's).
+  if (params_.temporalStrength > 0.f) triangulate();
+}
+
+void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind kind) {
   // Progress in pixel-warps: a warp costs about the same per pixel at every level, and the
   // plane sweep about kSweepWarpsPerPlane warps per pixel and hypothesis (measured at full
   // resolution with 262 hypotheses: 2x the level's 30 warps on the CPU, 3x with CUDA).
@@ -378,23 +424,28 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress) {
   } else if (initialising()) {
     sweepWork = pixels(levels_[sweep_.level]) * sweep_.params.planes * kSweepWarpsPerPlane;
   }
+  // A warm frame starts at the band sweep's level, its coarser neighbour initialised by the
+  // carried estimate instead of a sweep and warps.
+  const bool warm = kind.warm && canWarmStart();
+  const size_t levels = warm ? sweep_.level + 1 : levels_.size();
+  if (warm) coarseSweepWork = 0;
   double total = sweepWork + coarseSweepWork, done = 0;
   const std::vector<int> warps = warpSchedule(params_, int(levels_.size()));
-  for (size_t l = 0; l < levels_.size(); ++l) total += pixels(levels_[l]) * warps[l];
+  for (size_t l = 0; l < levels; ++l) total += pixels(levels_[l]) * warps[l];
   auto advance = [&](double work) {
     done += work;
     if (progress) progress(std::min(1.0, done / total));
   };
-  buildPyramid();
-  for (size_t l = levels_.size(); l-- > 0;) {
+  buildPyramid(levels);
+  if (warm) carryIntoCoarseSweep();
+  for (size_t l = levels; l-- > 0;) {
     initialiseLevel(l);
     if (initialising() && sweep_.banded && l == sweep_.level + 1) advance(coarseSweepWork);
     if (initialising() && l == sweep_.level) advance(sweepWork);
     solveLevel(levels_[l], warps[l], [&](int) { advance(pixels(levels_[l])); });
   }
-  stage("triangulate");
-  const double tp[3] = {tPrime_.x(), tPrime_.y(), tPrime_.z()};
-  backend_.triangulate(radial_, points_, levels_[0].w, levels_[0].mask, toCameraParams(levels_[0].cam0), tp);
+  triangulate();
+  if (kind.filter) filterResult();
 }
 
 // Straight into the result's images: a warp pixel is two floats and a point three, laid
@@ -426,21 +477,48 @@ void Pipeline::download(DepthResult& out) {
     out.depth.points = Image<Point3f>();
 }
 
-void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
-                   DepthResult& out) {
-  profiling_ = profile;
-  upload(left, right);
-  const bool replay = !profiling_ && backend_.canReplayFrame();
-  if (replay) {
+void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
+  if (kind.filter && state_.id < 0) throw Error("pipeline: a filtered frame before resetSequence()");
+  if (!profiling_ && backend_.canReplayFrame(kind.slot())) {
     // A replayed frame issues nothing the warps could report: its start and, once its
     // results are here, its end.
     if (progress) progress(0.0);
-    backend_.replayFrame();
+    backend_.replayFrame(kind.slot());
   } else {
-    backend_.beginFrame();
-    issueFrame(progress);
+    backend_.beginFrame(kind.slot());
+    issueFrame(progress, kind);
     backend_.endFrame();
   }
+}
+
+void Pipeline::resetSequence() {
+  if (state_.id < 0) {
+    const Level& L0 = levels_[0];
+    state_ = backend_.create(L0.size.width, L0.size.height, 2);
+    next_ = backend_.create(L0.size.width, L0.size.height, 2);
+    prior_ = backend_.create(L0.size.width, L0.size.height, 2);
+    motion_ = backend_.create(kMotionFloats, 1, 1);
+  }
+  backend_.fill(state_, -1.f);
+  setMotion(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+}
+
+void Pipeline::setMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  if (motion_.id < 0) throw Error("pipeline: setMotion before resetSequence()");
+  float m[kMotionFloats];
+  for (int i = 0; i < 9; ++i) m[i] = float(R(i / 3, i % 3));
+  for (int i = 0; i < 3; ++i) m[9 + i] = float(t[i]);
+  backend_.upload(motion_, m);
+}
+
+void Pipeline::commitSequenceFrame() { backend_.copy(state_, next_); }
+
+void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
+                   DepthResult& out, FrameKind kind) {
+  profiling_ = profile;
+  upload(left, right);
+  const bool replay = !profiling_ && backend_.canReplayFrame(kind.slot());
+  issueOrReplay(progress, kind);
   download(out);
   if (replay && progress) progress(1.0);
   if (profiling_)
@@ -454,15 +532,9 @@ Pipeline::DeviceIO Pipeline::deviceIO() const {
   return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_, L0.confidence};
 }
 
-void Pipeline::runOnDevice() {
+void Pipeline::runOnDevice(FrameKind kind) {
   profiling_ = false;
-  if (backend_.canReplayFrame()) {
-    backend_.replayFrame();
-  } else {
-    backend_.beginFrame();
-    issueFrame(nullptr);
-    backend_.endFrame();
-  }
+  issueOrReplay(nullptr, kind);
 }
 
 }  // namespace cs

@@ -20,6 +20,15 @@ T* fitImage(Image<T>& img, int w, int h) {
   return img.data.data();
 }
 
+// A frame of a sequence is cold (the full schedule, as a pair) or warm (from the previous
+// frame's estimate carried into its view: no levels above the band sweep's, no full sweep),
+// with or without the temporal filter. Each kind is its own recorded frame
+// (Backend::beginFrame's slot).
+struct FrameKind {
+  bool warm = false, filter = false;
+  int slot() const { return (warm ? 2 : 0) + (filter ? 1 : 0); }
+};
+
 class Pipeline {
  public:
   // Allocates every buffer of every level once. userMask (optional, full resolution)
@@ -49,7 +58,21 @@ class Pipeline {
   // out.depth.z are left to the caller: the mask is not downloaded, since triangulate
   // leaves radial NaN wherever it is 0 (backend.hpp).
   void run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
-           DepthResult& out);
+           DepthResult& out, FrameKind kind = {});
+
+  // --- sequences ---
+  // Whether warm frames are possible: the band sweep's coarse level is where the carried
+  // estimate enters (Params::warmStart).
+  bool canWarmStart() const { return initialising() && sweep_.banded; }
+  // Allocates the sequence's buffers on first use and forgets the carried state: the next
+  // frame must be cold.
+  void resetSequence();
+  // The motion of camera 0 since the previous frame (X_new = R X_prev + t); identity when
+  // unknown. Uploaded outside the frame, so a replayed frame uses it.
+  void setMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
+  // Makes the frame just solved the one the next frame carries (a failed warm frame is not
+  // committed: it is solved again cold from the same state).
+  void commitSequenceFrame();
 
   // For callers whose images are already on the backend's device (cs::cuda::DeviceStereo):
   // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
@@ -61,7 +84,7 @@ class Pipeline {
     Buffer confidence;                              // 1 ch; id -1 without the initialiser
   };
   DeviceIO deviceIO() const;
-  void runOnDevice();
+  void runOnDevice(FrameKind kind = {});
 
  private:
   struct Level {
@@ -103,8 +126,12 @@ class Pipeline {
   bool initialising() const { return params_.init == Params::Init::PlaneSweep; }
 
   void upload(const ImageF& left, const ImageF& right);
-  void issueFrame(const std::function<void(double)>& progress);
-  void buildPyramid();
+  void issueFrame(const std::function<void(double)>& progress, FrameKind kind);
+  void issueOrReplay(const std::function<void(double)>& progress, FrameKind kind);
+  void buildPyramid(size_t levels);
+  void carryIntoCoarseSweep();
+  void filterResult();
+  void triangulate();
   void stage(const char* name);
   void initialiseLevel(size_t l);
   void solveLevel(Level& level, int warps, const std::function<void(int)>& warpDone);
@@ -119,6 +146,10 @@ class Pipeline {
   Buffer rawRight_, calibration_, radial_, points_;
   bool profiling_ = false;
   Selection selection_;
+  // A sequence's state at level 0 (Backend::carryEstimate): `state` is the committed
+  // frame's, `next` this frame's filtered result, `prior` the state carried into this
+  // frame's view; `motion` the kMotionFloats of camera 0's motion. Created by resetSequence.
+  Buffer state_, next_, prior_, motion_;
 };
 
 }  // namespace cs

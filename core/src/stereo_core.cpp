@@ -75,4 +75,27 @@ DeviceIO StereoCore::deviceIO() const {
 
 void StereoCore::runOnDevice() { pipeline_->runOnDevice(); }
 
+StereoCore::SequenceFrame StereoCore::beginSequenceFrame(const Pose* pose) {
+  if (sequenceFrames_ == 0) pipeline_->resetSequence();
+  const bool moved = pose && hasPose_ && sequenceFrames_ > 0;
+  const Motion m = moved ? motionBetween(pose_, *pose) : Motion{};
+  pipeline_->setMotion(m.R, m.t);
+  hasPose_ = pose != nullptr;
+  if (pose) pose_ = *pose;
+  SequenceFrame frame;
+  // The filter also records the state a warm frame carries (at strength 0, only that).
+  frame.filter = params_.temporalStrength > 0 || (params_.warmStart && pipeline_->canWarmStart());
+  const bool scheduledCold = params_.coldEvery > 0 && sequenceFrames_ % params_.coldEvery == 0;
+  frame.warm = sequenceFrames_ > 0 && !scheduledCold && params_.warmStart && pipeline_->canWarmStart();
+  return frame;
+}
+
+bool StereoCore::warmFailed(double share) const { return share < params_.warmFailRatio * coldShare_; }
+
+void StereoCore::endSequenceFrame(const SequenceFrame& frame, double share) {
+  if (!frame.warm) coldShare_ = share;
+  pipeline_->commitSequenceFrame();
+  ++sequenceFrames_;
+}
+
 }  // namespace cs::detail

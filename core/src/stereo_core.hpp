@@ -11,6 +11,7 @@
 #include "curvestereo/backend.hpp"
 #include "curvestereo/image.hpp"
 #include "curvestereo/params.hpp"
+#include "curvestereo/pose.hpp"
 #include "curvestereo/rig.hpp"
 
 namespace cs {
@@ -61,6 +62,23 @@ class StereoCore {
   DeviceIO deviceIO() const;
   void runOnDevice();
 
+  // --- sequences (Stereo::next, DeviceStereo::next): the schedule, written once ---
+  // Decides the next frame's kind and prepares it: the first frame after a reset is cold
+  // (and clears the carried state), then every Params::coldEvery-th; the others are warm
+  // where the parameters allow (Pipeline::canWarmStart). pose (optional): camera 0's
+  // T_world_cam0; the carried estimate moves by its change since the previous frame's pose
+  // (none when either is missing: taken as it is).
+  struct SequenceFrame {
+    bool warm = false, filter = false;
+  };
+  SequenceFrame beginSequenceFrame(const Pose* pose);
+  // Whether a warm frame whose share of left-right consistent pixels is `share` failed:
+  // below Params::warmFailRatio times the last cold frame's share.
+  bool warmFailed(double share) const;
+  // The frame is done (cold with its share, or warm): its state is carried into the next.
+  void endSequenceFrame(const SequenceFrame& frame, double share);
+  void resetSequence() { sequenceFrames_ = 0; }
+
   Backend& backend() { return *backend_; }
   const Backend& backend() const { return *backend_; }
   Pipeline& pipeline() { return *pipeline_; }
@@ -75,6 +93,10 @@ class StereoCore {
   std::string backendName_;
   std::unique_ptr<Backend> backend_;
   std::unique_ptr<Pipeline> pipeline_;  // set by the constructor, which throws when it cannot
+  long long sequenceFrames_ = 0;        // frames since the sequence's start (0: the next is the first)
+  bool hasPose_ = false;                // the previous frame's pose, when it had one
+  Pose pose_;
+  double coldShare_ = 0;  // consistent share of the last cold frame
 };
 
 }  // namespace cs::detail

@@ -130,6 +130,27 @@ struct Params {
   double maxFovDeg = 180.0;
   double epipoleDeg = 3.0;
 
+  // Sequences (Stereo::next; a single pair ignores these). A frame after the first starts
+  // from the previous frame's estimate carried into its view (warmStart): the band sweep
+  // searches around it instead of the full coarse sweep, and the coarse levels above the
+  // band are skipped. Needs the plane sweep with a band (realtime); other presets solve
+  // every frame cold. Every coldEvery-th frame is solved cold (0: only the first and the
+  // failed ones): a warm start can keep an error it never re-examines, such as an object
+  // that entered faster than the band follows. A warm frame whose share of left-right
+  // consistent pixels falls below warmFailRatio times that of the last cold frame is
+  // solved again, cold.
+  bool warmStart = true;
+  int coldEvery = 30;
+  float warmFailRatio = 0.8f;
+  // The temporal filter of a sequence's result (Backend::temporalFilter): the previous
+  // frame's filtered depth, carried into the new view, is averaged with the new estimate
+  // where the two agree within temporalGate standard deviations, the prior weighing at
+  // most temporalStrength (0: off; 0.8 averages about the last 9 frames of a static
+  // surface); a pixel that disagrees takes the new value at once, so moving objects leave
+  // no trail.
+  float temporalStrength = 0.8f;
+  float temporalGate = 3.f;
+
   // This data term with its default lambda.
   Params withDataTerm(DataTerm term) const;
 

@@ -2,7 +2,8 @@
 //
 //   cs::Stereo stereo(cs::loadKalibr("camchain.yaml"));  // preset("realtime"), backend "auto"
 //   cs::DepthResult r = stereo.compute(left, right);   // r.depth: radial metres
-//   stereo.compute(left, right, r);                     // the next frame, into r's buffers
+//   stereo.compute(left, right, r);                     // another pair, into r's buffers
+//   stereo.next(left, right, r, &pose);                 // a sequence's next frame (warm start)
 //
 // A Stereo object is not thread-safe; use one per thread (they share nothing).
 #pragma once
@@ -13,6 +14,7 @@
 
 #include "curvestereo/image.hpp"
 #include "curvestereo/params.hpp"
+#include "curvestereo/pose.hpp"
 #include "curvestereo/rig.hpp"
 #include "curvestereo/timing.hpp"
 #include "curvestereo/triangulate.hpp"
@@ -42,6 +44,13 @@ struct DepthResult {
   ImageF confidence;
   std::vector<StageTime> stages;  // time of each stage of this frame (when profiling)
   double totalMs = 0;
+  // Sequences (Stereo::next): whether this frame started from the previous one's estimate,
+  // whether it was a warm frame that failed its check and was solved again cold, and the
+  // share of solved pixels that passed the sweep's left-right check (NaN without the
+  // initialiser): the figure a warm frame is judged by.
+  bool warm = false;
+  bool redone = false;
+  double consistentShare = 0;
 };
 
 class Stereo {
@@ -90,6 +99,20 @@ class Stereo {
   // the initialiser, the confidence become empty images). If it throws, `result` is left
   // in an unspecified but valid state.
   void compute(const ImageF& left, const ImageF& right, DepthResult& result);
+
+  // --- sequences: frame after frame of one rig (a live camera or a recording) ---
+  // The next frame of a sequence. From the second frame on it starts from the previous
+  // frame's estimate carried into this frame's view (Params::warmStart: with the band sweep
+  // of realtime) and its result is filtered over time (Params::temporalStrength). `pose`
+  // (optional) is camera 0's T_world_cam0 for this frame: with the previous frame's, the
+  // carried estimate follows the rig's motion; without, it is carried as it is (the
+  // temporal filter then resets wherever the image moved). Every Params::coldEvery-th frame
+  // is solved cold, and a warm frame that fails (Params::warmFailRatio) is solved again cold
+  // (result.redone). Same checks and outputs as compute(); result.warm says which it was.
+  void next(const ImageF& left, const ImageF& right, DepthResult& result, const Pose* pose = nullptr);
+  DepthResult next(const ImageF& left, const ImageF& right, const Pose* pose = nullptr);
+  // A new sequence: the next frame is solved cold and nothing is carried into it.
+  void resetSequence();
 
   const std::string& backendName() const;
   std::string deviceName() const;

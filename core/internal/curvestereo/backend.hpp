@@ -133,6 +133,29 @@ struct EstimateUpsampleParams {
   int radius;   // matching window (2 radius + 1)^2, 0..kMaxUpsampleRadius
 };
 
+// Carrying a frame's estimate into the next frame's view (Backend::carryEstimate): a
+// sequence's warm start and the temporal filter's prior.
+constexpr int kMotionFloats = 12;  // the motion buffer: R row-major, then t
+constexpr int kFrameSlots = 4;     // recorded frames a backend keeps (beginFrame)
+struct CarryParams {
+  CameraParams srcCam;  // the grid of src (the previous view's camera 0)
+  CameraParams dstCam;  // the grid of dst: the same lens, at src's scale or another level's
+  double extraT[3];     // added to the motion's t: t' carries into camera 1' (the sweep's other view), 0 into camera 0
+  int iterations;       // fixed-point steps, >= 1
+};
+
+// The per-pixel temporal filter of a sequence (Backend::temporalFilter): a one-state Kalman
+// filter on inverse depth, its variances in px^2 of disparity.
+struct TemporalParams {
+  CameraParams cam;      // level 0's camera 0
+  double tPrime[3];      // t' (triangulate's)
+  float strength;        // the prior weighs at most this (gain >= 1 - strength), [0, 1)
+  float gate;            // an innovation beyond gate standard deviations resets the pixel, > 0
+  float sigmaPx;         // the measurement's standard deviation (px) at confidence 1, > 0
+  float processPx;       // how far (px) a static surface's disparity may drift between frames, >= 0
+  float minConfidence;   // floor of the confidence in the measurement's deviation, (0, 1]
+};
+
 // The normalised Gaussian taps of standard deviation sigma > 0 over radius ceil(3 sigma)
 // (2 radius + 1 of them, the middle one at offset 0): the one definition behind the
 // structure tensor's smoothing on every backend and normaliseParams().
@@ -314,6 +337,36 @@ class Backend {
   void sweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& first,
                        const Buffer& mask, const SweepParams& p);
 
+  // --- sequences (one file / shader per kernel: carry_estimate, temporal_filter) ---
+  // A state is 2 ch: q, the inverse radial depth (1/m, >= 0; 0 at infinity) from the view's
+  // centre, and v, its variance (px^2); q < 0 is no estimate. motion is a buffer of
+  // kMotionFloats (1 ch, 12x1; uploaded each frame, so a recorded frame replays with the
+  // frame's own motion): R row-major, then t; a point X of src's view is R X + t in dst's,
+  // plus p.extraT.
+  // dst (2 ch, p.dstCam's grid): src (2 ch, p.srcCam's grid) seen from the new view, by a
+  // backward fixed point: T = t + extraT, ray = dstCam.unproject(x); the first q is 1 /
+  // guess(x) (guess 1 ch on dst's grid, radial depth: +inf gives 0; NaN or <= 0 gives
+  // none) or, without a guess (id -1), src's q at the nearest src pixel to
+  // srcCam.project(ray); then p.iterations times: s = src at the nearest pixel (floor(c +
+  // 0.5) per coordinate, in double) to srcCam.project(R^T (ray - q T)), ray_s =
+  // srcCam.unproject(that pixel), q = q_s / |R ray_s + q_s T|, v = v_s. (-1, 0) where x is
+  // not masked or not unprojectable, or a step finds no estimate (the pixel outside src's
+  // image, an invalid projection or unprojection, q_s < 0). mask 1 ch on dst's grid.
+  void carryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
+                     const Buffer& mask, const CarryParams& p);
+  // The measurement is this frame's radial depth (1 ch): at a masked pixel where it is not
+  // NaN, q_m = 1 / radial (0 at +inf), g = |J t'| (J the projection's Jacobian at x's unit
+  // ray: px per unit of q), R = (p.sigmaPx / max(confidence, p.minConfidence))^2 (confidence
+  // 1 ch, id -1: 1 everywhere), and from the prior (2 ch, carryEstimate's) P = v_p +
+  // p.processPx^2. Where the prior has no estimate or (g (q_m - q_p))^2 > p.gate^2 (P + R),
+  // state = (q_m, R) and u, w are kept (the new value at once: a moving object leaves no
+  // trail). Else K = max(P / (P + R), 1 - p.strength), q = q_p + K (q_m - q_p), state = (q,
+  // (1 - K)^2 P + K^2 R), and, with p.strength > 0, w = cam.project(ray + q t') - x, u = |w|
+  // (kept where that projection is invalid; at strength 0 q is the measurement's). Elsewhere state = (-1, 0), u and w kept. state, prior 2 ch;
+  // u, radial, mask 1 ch; w 2 ch; state is not prior.
+  void temporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior, const Buffer& radial,
+                      const Buffer& confidence, const Buffer& mask, const TemporalParams& p);
+
   // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w (2 ch) where
   // mask is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.
   // radial is NaN outside the mask: Stereo derives the valid mask from radial instead of
@@ -330,10 +383,15 @@ class Backend {
   // can record it (a CUDA graph, a Vulkan command buffer) returns true from
   // canReplayFrame() afterwards, and the pipeline then calls replayFrame() instead of
   // issuing the kernels again. Never used while stage timing is on.
-  virtual void beginFrame() {}
+  // A sequence issues up to kFrameSlots different frames (cold or warm, with or without the
+  // temporal filter): each has its slot, recorded and replayed on its own.
+  virtual void beginFrame(int slot) { (void)slot; }
   virtual void endFrame() {}
-  virtual bool canReplayFrame() const { return false; }
-  virtual void replayFrame() {}
+  virtual bool canReplayFrame(int slot) const {
+    (void)slot;
+    return false;
+  }
+  virtual void replayFrame(int slot) { (void)slot; }
 
   // --- stage timing ---
   // beginStage() ends the current stage and starts the named one; takeStageTimes() ends
@@ -394,6 +452,11 @@ class Backend {
                                  const Buffer& mask, const SweepParams& p) = 0;
   virtual void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                              const CameraParams& cam0, const double tPrime[3]) = 0;
+  virtual void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
+                               const Buffer& mask, const CarryParams& p) = 0;
+  virtual void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
+                                const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                                const TemporalParams& p) = 0;
 
  private:
   friend class BackendContract;  // core/src/backend_contract.cpp: the checks

@@ -1,0 +1,89 @@
+// Recorded stereo sequences: the frame list of an ASL/EuRoC folder or of two image folders,
+// with optional per-frame poses. Opening only lists the frames (cheap even for thousands);
+// images are read one frame at a time by load(), so a long recording never sits in memory.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "curvestereo/image.hpp"
+#include "curvestereo/pose.hpp"
+
+namespace cs {
+
+struct SequenceOptions {
+  // Left/right frames of an ASL folder are paired when their timestamps differ by at most
+  // this: the two cameras of a rig are triggered together but logged with some jitter.
+  double pairToleranceMs = 1.0;
+  // A pose is attached to a frame when one lies within this of the frame's (cam0) timestamp.
+  // No interpolation: a pose from another instant would be silently wrong for motion.
+  double poseToleranceMs = 5.0;
+  // Optional poses file (T_world_cam0 per timestamp), its format detected by content:
+  //  - CSV "t_ns,px,py,pz,qx,qy,qz,qw", comma separated, '#' header lines (EuRoC style);
+  //  - TUM trajectory text "t_seconds tx ty tz qx qy qz qw", space separated, '#' comments.
+  // Empty: an ASL folder's poses_cam0.csv when it has one, else no poses.
+  std::string poses;
+};
+
+struct SequenceFrame {  // one stereo frame, not yet read
+  int64_t timestampNs = 0;
+  std::string leftPath, rightPath;
+  bool hasPose = false;
+  Pose pose;  // T_world_cam0 when hasPose
+};
+
+class Sequence {
+ public:
+  // source: (a) an ASL/EuRoC folder: the folder holding mav0/, or mav0/ itself
+  //             (cam0/data.csv "#timestamp [ns],filename" + cam0/data/<file>, cam1 alike);
+  //             its poses_cam0.csv (next to mav0/ or in it) is used when options.poses is empty;
+  //         (b) "LEFT,RIGHT", each a folder of PNG images or a glob pattern ("left/*.png,right/*.png"),
+  //             paired by sorted name (natural order: "9.png" before "10.png"), the i-th left with
+  //             the i-th right. A frame's timestamp is its left file's stem when every stem is an
+  //             integer (ns), else index * 1e9 / 30 (with a note).
+  // Throws cs::Error, one line naming the problem: a missing folder or data.csv, a malformed
+  // data.csv line ("…/cam0/data.csv line 7: …"), no frames, left/right counts that differ in
+  // (b), a malformed poses file, or a source that is neither (a) nor (b).
+  static Sequence open(const std::string& source, const SequenceOptions& options = {});
+
+  const std::vector<SequenceFrame>& frames() const { return frames_; }
+  // Notes the caller should show, one line each, so that nothing is dropped silently: every
+  // frame that could not be paired ("cam0 1000033333333.png: no cam1 frame within 1 ms"),
+  // frames left without a pose although poses were given, folder pairs whose names differ.
+  const std::vector<std::string>& warnings() const { return warnings_; }
+  // "16 stereo frames (ASL, 16 with poses); 0 unpaired"
+  std::string summary() const;
+
+  // Reads frame i as float gray in [0, 1] (8/16-bit PNG; colour converted to Rec. 601 luma,
+  // as the CLI does). Throws cs::Error naming the frame's index, timestamp and file when a
+  // file is missing or unreadable, or when the two images differ in size.
+  void load(size_t i, ImageF& left, ImageF& right) const;
+
+ private:
+  std::vector<SequenceFrame> frames_;
+  std::vector<std::string> warnings_;
+  std::string kind_;  // "ASL" or "folder pairs"
+  bool posesGiven_ = false;
+  size_t unpaired_ = 0;  // frames of either camera without a partner
+};
+
+// One row of an ASL camera's data.csv.
+struct AslRow {
+  int64_t timestampNs = 0;
+  std::string filename;
+  int line = 0;  // 1-based line in the file, for messages
+};
+// Parses the text of an ASL data.csv ("#timestamp [ns],filename"); `name` names it in errors.
+// Tolerates CRLF, a UTF-8 byte-order mark, spaces around fields, '#' header/comment lines and
+// blank lines. Returns the rows sorted by timestamp. Throws cs::Error "NAME line N: ..." on a
+// line that is not "integer,filename" or on a timestamp that repeats.
+std::vector<AslRow> parseAslCsv(const std::string& text, const std::string& name = "data.csv");
+
+// Reads a poses file (either format of SequenceOptions::poses) into timestamp (ns) -> pose.
+// Throws cs::Error "FILE line N: ..." on a malformed line, non-finite values, a zero
+// quaternion or a repeated timestamp. parsePoses does the same on text already read.
+std::map<int64_t, Pose> readPoses(const std::string& path);
+std::map<int64_t, Pose> parsePoses(const std::string& text, const std::string& name = "poses");
+
+}  // namespace cs
