@@ -1,10 +1,13 @@
 // curvestereo_cuda_bench: the CUDA device-pointer path timed end to end per frame, as a
 // robot would run it: pinned host pair -> device (async), DeviceStereo::compute on one
 // stream, radial depth -> pinned host, synchronise. Median / min / max over --runs frames
-// after 3 warm-up frames (direct, recorded, first replay).
+// after 3 warm-up frames (direct, recorded, first replay). --sequence N then times N
+// consecutive frames of a sequence (DeviceStereo::next) on the same pair, as a static
+// camera sees it (warm frames after each cold one), after a warm-up that records every kind
+// of frame: the medians of the warm and of the cold frames, each end to end and GPU only.
 //
 //   curvestereo_cuda_bench [--size WxH | --calib CAMCHAIN LEFT.png RIGHT.png] [--preset NAME]
-//                          [--levels L] [--warps N] [--iterations K] [--runs R]
+//                          [--levels L] [--warps N] [--iterations K] [--runs R] [--sequence N]
 #include <cuda_runtime.h>
 
 #include <algorithm>
@@ -29,7 +32,7 @@ void ok(cudaError_t e, const char* what) {
 
 int main(int argc, char** argv) try {
   std::string size = "848x800", preset = "realtime", calib, leftPath, rightPath;
-  int levels = -1, warps = -1, iterations = -1, runs = 50;
+  int levels = -1, warps = -1, iterations = -1, runs = 50, sequence = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -48,6 +51,8 @@ int main(int argc, char** argv) try {
       iterations = std::stoi(next());
     else if (a == "--runs")
       runs = std::stoi(next());
+    else if (a == "--sequence")
+      sequence = std::stoi(next());
     else if (a == "--calib") {
       calib = next();
       leftPath = next();
@@ -148,6 +153,53 @@ int main(int argc, char** argv) try {
   std::printf("          (frame: end to end incl. pair upload and depth download; solve: GPU time of the graph)\n");
   std::printf("depth:    %.1f %% of pixels finite, median %.3f m\n", 100.0 * finite / double(n),
               depths.empty() ? 0.0 : double(depths[depths.size() / 2]));
+
+  if (sequence > 0) {
+    // One frame of the sequence: end to end as frame() (pair upload, next(), depth download,
+    // synchronise) and its GPU time from events around next(). Returns whether it was warm.
+    auto sequenceFrame = [&](double& frameMs, double& gpuMs) {
+      const auto t0 = std::chrono::steady_clock::now();
+      ok(cudaMemcpyAsync(dPair, hPair, 2 * n * sizeof(float), cudaMemcpyHostToDevice, stream), "upload");
+      ok(cudaEventRecord(e0, stream), "cudaEventRecord");
+      const cs::cuda::DeviceDepth d = stereo.next(dPair, dPair + n);
+      ok(cudaEventRecord(e1, stream), "cudaEventRecord");
+      ok(cudaMemcpyAsync(hDepth, d.radial, n * sizeof(float), cudaMemcpyDeviceToHost, stream), "download");
+      ok(cudaStreamSynchronize(stream), "synchronize");
+      frameMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      float t = 0.f;
+      ok(cudaEventElapsedTime(&t, e0, e1), "cudaEventElapsedTime");
+      gpuMs = t;
+      return d.warm;
+    };
+    // Warm-up: each kind of frame run directly, recorded, replayed (a sequence restarted
+    // cold three times, two frames each).
+    double frameMs = 0, gpuMs = 0;
+    for (int i = 0; i < 3; ++i) {
+      stereo.resetSequence();
+      for (int k = 0; k < 2; ++k) sequenceFrame(frameMs, gpuMs);
+    }
+    stereo.resetSequence();
+    std::vector<double> warmMs, warmGpuMs, coldMs, coldGpuMs;
+    for (int i = 0; i < sequence; ++i) {
+      const bool warm = sequenceFrame(frameMs, gpuMs);
+      (warm ? warmMs : coldMs).push_back(frameMs);
+      (warm ? warmGpuMs : coldGpuMs).push_back(gpuMs);
+    }
+    std::printf(
+        "\nsequence: %d frames through next() on the same pair (static camera): %zu warm, %zu cold (coldEvery %d)\n",
+        sequence, warmMs.size(), coldMs.size(), params.coldEvery);
+    if (!warmMs.empty()) {
+      summary(warmMs, "warm:    ");
+      summary(warmGpuMs, "warm GPU:");
+    } else {
+      std::printf("warm:     none (these parameters solve every frame cold: warmStart needs the band sweep)\n");
+    }
+    if (!coldMs.empty()) {
+      summary(coldMs, "cold:    ");
+      summary(coldGpuMs, "cold GPU:");
+    }
+    std::printf("          (end to end incl. pair upload and depth download; GPU: events around next())\n");
+  }
   cudaFree(dPair);
   cudaFreeHost(hPair);
   cudaFreeHost(hDepth);

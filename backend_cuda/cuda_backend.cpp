@@ -68,6 +68,8 @@ static_assert(cudak::kMaxSweepBand == kMaxSweepBand, "launchSweepBandAggregate's
 static_assert(cudak::kBandMargin == kBandMargin, "sweepBandWarp's contract");
 static_assert(cudak::kMaxTaps == 2 * kMaxTensorRadius + 1, "structure tensor taps");
 static_assert(cudak::kMaxNormaliseTaps == 2 * kMaxNormaliseRadius + 1, "normalise taps");
+static_assert(cudak::kMotionFloats == kMotionFloats, "the motion buffer");
+static_assert(cudak::kMaxInlineFloats >= kMotionFloats, "the motion is uploaded by its launch");
 
 }  // namespace
 
@@ -126,8 +128,7 @@ CudaBackend::~CudaBackend() {
     if (g) cudaGraphDestroy(g);
   }
   cudaStreamSynchronize(stream_);
-  if (exec_) cudaGraphExecDestroy(exec_);
-  if (graph_) cudaGraphDestroy(graph_);
+  dropGraph();
   for (Slot& s : slots_) {
     cudaFree(s.dev);
     if (s.pinned) cudaFreeHost(s.pinned);
@@ -163,9 +164,12 @@ const CudaBackend::Slot& CudaBackend::slot(const Buffer& b) const {
 }
 
 float* CudaBackend::devicePointer(const Buffer& b) {
-  Slot& s = slots_[size_t(slot(b).buffer.id)];
-  if (!s.handedOut) s.handedOut = s.dev;
-  return s.handedOut;
+  const Slot& s = slot(b);
+  if (s.dev != s.home) {  // moved by a kernel called outside a frame
+    returnBuffersHome();
+    flush();
+  }
+  return s.home;
 }
 
 float** CudaBackend::scratchHolding(const float* memory) {
@@ -177,17 +181,34 @@ float** CudaBackend::scratchHolding(const float* memory) {
   return nullptr;
 }
 
-// Buffers only ever trade memory with scratch roles (primalDual, accumulate), whose
-// contents between calls do not matter: copy the buffer home and trade back.
-void CudaBackend::returnHandedOutBuffers() {
-  for (Slot& s : slots_) {
-    if (!s.handedOut || s.dev == s.handedOut) continue;
-    float** holder = scratchHolding(s.handedOut);
-    if (!holder) throw Error("cuda backend: lost track of a buffer's memory");
-    enqueue({s.handedOut, s.dev, s.buffer.count(), 0.f});
-    *holder = s.dev;
-    s.dev = s.handedOut;
+// Buffers only ever trade memory with scratch roles (primalDual, warpTail), whose contents
+// between calls do not matter: copy the buffer home and trade back. Frames end with every
+// buffer home, so that the memory a recorded frame reads at its start (the inputs, a
+// sequence's carried state, the estimate a warm frame keeps where its check fails) and
+// where it leaves its results are the same for every slot's graph and for the host's view.
+// Only buffers whose last call left them in a scratch role's memory are copied (at most a
+// level's solver state: 12 floats a pixel).
+void CudaBackend::returnBuffersHome() {
+  // A buffer's home may be held by another buffer that took it from a scratch role since
+  // (same-size buffers share roles): that one goes home first, on a later pass.
+  for (bool progress = true; progress;) {
+    progress = false;
+    bool left = false;
+    for (Slot& s : slots_) {
+      if (s.dev == s.home) continue;
+      float** holder = scratchHolding(s.home);
+      if (!holder) {
+        left = true;
+        continue;
+      }
+      enqueue({s.home, s.dev, s.buffer.count(), 0.f});
+      *holder = s.dev;
+      s.dev = s.home;
+      progress = true;
+    }
+    if (!left) return;
   }
+  throw Error("cuda backend: lost track of a buffer's memory");
 }
 
 float* CudaBackend::pinnedFor(Slot& s) {
@@ -231,10 +252,12 @@ void CudaBackend::flush() {
 }
 
 void CudaBackend::dropGraph() {
-  if (exec_) cudaGraphExecDestroy(exec_);
-  if (graph_) cudaGraphDestroy(graph_);
-  exec_ = nullptr;
-  graph_ = nullptr;
+  for (FrameRecord& f : frames_) {
+    if (f.exec) cudaGraphExecDestroy(f.exec);
+    if (f.graph) cudaGraphDestroy(f.graph);
+    f.exec = nullptr;
+    f.graph = nullptr;
+  }
 }
 
 Buffer CudaBackend::doCreate(int width, int height, int channels) {
@@ -244,16 +267,26 @@ Buffer CudaBackend::doCreate(int width, int height, int channels) {
   s.buffer = Buffer{int(slots_.size()), width, height, channels};
   ok(cudaMalloc(&s.dev, s.buffer.count() * sizeof(float)), "cudaMalloc");
   ok(cudaMemsetAsync(s.dev, 0, s.buffer.count() * sizeof(float), stream_), "cudaMemsetAsync");
+  s.home = s.dev;
   slots_.push_back(s);
-  // New buffers mean a new pipeline: record its frame afresh.
+  // New buffers mean a new pipeline: record its frames afresh.
   dropGraph();
-  framesIssued_ = 0;
+  for (FrameRecord& f : frames_) f.issued = 0;
   return s.buffer;
 }
 
 void CudaBackend::doUpload(const Buffer& dst, const float* host) {
   flush();
   Slot& s = slots_[size_t(slot(dst).buffer.id)];
+  if (dst.count() <= size_t(cudak::kMaxInlineFloats)) {
+    // Small (a sequence's motion, every frame): carried by the launch, so the host never
+    // waits for a staging area the stream has not yet read.
+    cudak::InlineFloats values{};
+    values.count = int(dst.count());
+    std::copy(host, host + dst.count(), values.value);
+    check(cudak::launchSetFloats(stream_, s.dev, values), "upload");
+    return;
+  }
   float* staging = pinnedFor(s);
   ok(cudaEventSynchronize(s.staged), "cudaEventSynchronize");  // the previous upload left the staging area
   const size_t bytes = dst.count() * sizeof(float);
@@ -315,6 +348,39 @@ void CudaBackend::doTriangulate(const Buffer& radial, const Buffer& points, cons
   check(cudak::launchTriangulate(stream_, img(slot(radial).dev, radial), img(slot(points).dev, points),
                                  img(slot(w).dev, w), img(slot(mask).dev, mask), camDev(cam0), tPrime),
         "triangulate");
+}
+
+void CudaBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
+                                  const Buffer& mask, const CarryParams& p) {
+  flush();
+  cudak::CarryDev d{};
+  d.srcCam = camDev(p.srcCam);
+  d.dstCam = camDev(p.dstCam);
+  std::copy(p.extraT, p.extraT + 3, d.extraT);
+  d.iterations = p.iterations;
+  const cudak::Img guessImg = guess.id >= 0 ? img(slot(guess).dev, guess) : cudak::Img{nullptr, 0, 0, 0};
+  check(cudak::launchCarryEstimate(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), guessImg,
+                                   slot(motion).dev, img(slot(mask).dev, mask), d),
+        "carryEstimate");
+}
+
+void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
+                                   const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                                   const TemporalParams& p) {
+  flush();
+  cudak::TemporalDev d{};
+  d.cam = camDev(p.cam);
+  std::copy(p.tPrime, p.tPrime + 3, d.tPrime);
+  d.strength = p.strength;
+  d.gate = p.gate;
+  d.sigmaPx = p.sigmaPx;
+  d.processPx = p.processPx;
+  d.minConfidence = p.minConfidence;
+  const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
+  check(cudak::launchTemporalFilter(stream_, img(slot(state).dev, state), img(slot(u).dev, u), img(slot(w).dev, w),
+                                    img(slot(prior).dev, prior), img(slot(radial).dev, radial), weight,
+                                    img(slot(mask).dev, mask), d),
+        "temporalFilter");
 }
 
 void CudaBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
@@ -618,29 +684,64 @@ void CudaBackend::synchronize() {
   ok(cudaStreamSynchronize(stream_), "synchronize");
 }
 
-void CudaBackend::beginFrame() {
+namespace {
+
+void checkFrameSlot(int slot) {
+  if (slot < 0 || slot >= kFrameSlots)
+    throw Error("cuda backend: frame slot " + std::to_string(slot) + " outside 0.." + std::to_string(kFrameSlots - 1));
+}
+
+}  // namespace
+
+void CudaBackend::beginFrame(int slot) {
+  checkFrameSlot(slot);
+  if (capturing_) {  // a frame that failed while it was recorded: drop what it captured
+    cudaGraph_t g = nullptr;
+    cudaStreamEndCapture(stream_, &g);
+    if (g) cudaGraphDestroy(g);
+    capturing_ = false;
+  }
+  // What was queued outside the frame (a sequence's fill, copy, motion) runs before it and
+  // is not recorded; a buffer a kernel called outside a frame moved goes home first.
+  returnBuffersHome();
   flush();
-  if (profiling_ || framesIssued_ == 0) return;  // run directly
-  dropGraph();
+  frameSlot_ = slot;
+  FrameRecord& f = frames_[size_t(slot)];
+  if (profiling_ || f.issued == 0) return;  // run directly
+  if (f.exec) cudaGraphExecDestroy(f.exec);
+  if (f.graph) cudaGraphDestroy(f.graph);
+  f.exec = nullptr;
+  f.graph = nullptr;
   ok(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeRelaxed), "cudaStreamBeginCapture");
   capturing_ = true;
 }
 
 void CudaBackend::endFrame() {
-  returnHandedOutBuffers();
+  returnBuffersHome();
   flush();
-  ++framesIssued_;
+  if (frameSlot_ < 0) return;  // no beginFrame: nothing to record
+  FrameRecord& f = frames_[size_t(frameSlot_)];
+  frameSlot_ = -1;
+  ++f.issued;
   if (!capturing_) return;
   capturing_ = false;
-  ok(cudaStreamEndCapture(stream_, &graph_), "cudaStreamEndCapture");
-  ok(cudaGraphInstantiate(&exec_, graph_, 0), "cudaGraphInstantiate");
-  ok(cudaGraphLaunch(exec_, stream_), "cudaGraphLaunch");
+  ok(cudaStreamEndCapture(stream_, &f.graph), "cudaStreamEndCapture");
+  ok(cudaGraphInstantiate(&f.exec, f.graph, 0), "cudaGraphInstantiate");
+  ok(cudaGraphLaunch(f.exec, stream_), "cudaGraphLaunch");
 }
 
-void CudaBackend::replayFrame() {
+bool CudaBackend::canReplayFrame(int slot) const {
+  return slot >= 0 && slot < kFrameSlots && frames_[size_t(slot)].exec != nullptr;
+}
+
+void CudaBackend::replayFrame(int slot) {
+  checkFrameSlot(slot);
+  if (!frames_[size_t(slot)].exec)
+    throw Error("cuda backend: no recorded frame in slot " + std::to_string(slot) + " to replay");
+  // As beginFrame: the queued work first, every buffer where the graph expects it.
+  returnBuffersHome();
   flush();
-  if (!exec_) throw Error("cuda backend: no recorded frame to replay");
-  ok(cudaGraphLaunch(exec_, stream_), "cudaGraphLaunch");
+  ok(cudaGraphLaunch(frames_[size_t(slot)].exec, stream_), "cudaGraphLaunch");
 }
 
 void CudaBackend::beginStage(const std::string& name) {

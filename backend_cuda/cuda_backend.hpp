@@ -1,8 +1,10 @@
 // The CUDA backend: the kernels of backend.hpp on one CUDA stream, one device buffer per
-// Backend buffer (allocated once), pinned host staging for transfers, and the frame
-// recorded once as a CUDA graph and replayed. This header names no CUDA types (core's
-// backend registry includes it): the CUDA handles are forward-declared driver structs.
+// Backend buffer (allocated once), pinned host staging for transfers, and each kind of
+// frame (Backend::beginFrame's slot) recorded once as a CUDA graph and replayed. This
+// header names no CUDA types (core's backend registry includes it): the CUDA handles are
+// forward-declared driver structs.
 #pragma once
+#include <array>
 #include <map>
 #include <memory>
 #include <string>
@@ -38,24 +40,33 @@ class CudaBackend final : public Backend {
 
   void synchronize() override;
 
-  // The first frame runs directly (it allocates scratch and loads the kernels); the
-  // second is captured into a graph, which later frames replay. Creating buffers or
-  // recomputing fields (a new pose) drops the graph.
-  void beginFrame() override;
+  // Per slot (kFrameSlots, each a kind of frame with its own kernel sequence): the slot's
+  // first frame runs directly (it allocates scratch and loads the kernels); its second is
+  // captured into the slot's graph, which its later frames replay. Creating buffers drops
+  // every slot's graph and starts them afresh; recomputing fields (a new pose) drops the
+  // graphs, and each slot's next frame is recorded again. Work queued outside a frame
+  // (copy(), fill(), upload(): a sequence's state and motion) is enqueued before it, never
+  // recorded. Every frame starts and ends with every buffer in its own memory (see
+  // devicePointer()), so the slots' graphs may run in any order.
+  void beginFrame(int slot) override;
   void endFrame() override;
-  bool canReplayFrame() const override { return exec_ != nullptr; }
-  void replayFrame() override;
+  bool canReplayFrame(int slot) const override;
+  void replayFrame(int slot) override;
 
   // Stage times from CUDA events on the stream (no host synchronisation per stage).
   void beginStage(const std::string& name) override;
   std::vector<StageTime> takeStageTimes() override;
 
   // --- CUDA extensions (used by cs::cuda::DeviceStereo) ---
-  // The buffer's memory. Within a frame the backend may move a buffer to memory it holds
-  // for another role (rather than copying it back); from the first call on, every frame
-  // ends with this buffer back at the pointer returned here.
+  // The buffer's memory: where it was allocated. Within a frame (and a kernel called
+  // outside one) the backend may move a buffer to memory it holds for another role rather
+  // than copying it back; every frame ends with every buffer back in its own memory, and
+  // this call brings a buffer moved outside a frame back (enqueued on the stream).
   float* devicePointer(const Buffer& b);
   CUstream_st* stream() const { return stream_; }
+  // Enqueues the copies and fills still queued (they are otherwise enqueued with the next
+  // call that needs them), so that everything asked for so far is on the stream.
+  void enqueueQueued() { flush(); }
   // dst = the packed float image at src (device memory, rows srcPitchBytes apart), async.
   void copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes);
   // Whether primal-dual iterations may run five per launch on levels whose tiles then fit
@@ -115,13 +126,18 @@ class CudaBackend final : public Backend {
                          const Buffer& mask, const SweepParams& p) override;
   void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                      const CameraParams& cam0, const double tPrime[3]) override;
+  void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
+                       const Buffer& mask, const CarryParams& p) override;
+  void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
+                        const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                        const TemporalParams& p) override;
 
  private:
   struct Slot {
     float* dev = nullptr;
     float* pinned = nullptr;       // host staging, allocated at the first transfer
     CUevent_st* staged = nullptr;  // completes when the last upload from `pinned` is done
-    float* handedOut = nullptr;    // what devicePointer() returned: the buffer's memory at every frame's end
+    float* home = nullptr;         // the memory allocated for it: dev at every frame's start and end
     Buffer buffer;
   };
   struct PrimalDualScratch {
@@ -140,12 +156,12 @@ class CudaBackend final : public Backend {
   // primal-dual iterations; barsFromPrimals: the first reads u, v in place of uBar, vBar.
   void iterate(const PrimalDualBuffers& pd, const DataTermBuffers& data, const Buffer& tensor, const Buffer& steps,
                const Buffer& mask, const PrimalDualParams& params, bool barsFromPrimals);
-  // Moves the buffers handed out by devicePointer() back to that memory (endFrame()).
-  void returnHandedOutBuffers();
+  // Moves every buffer that holds another's memory back to its own (queued copies).
+  void returnBuffersHome();
   float** scratchHolding(const float* memory);
   const Slot& slot(const Buffer& b) const;
   float* pinnedFor(Slot& s);
-  void dropGraph();
+  void dropGraph();  // every slot's
   // Every launch goes through check(), which sets lastLaunch_ to Other; the launches that
   // lastLaunch_ names set it after their check().
   void check(int launchResult, const char* what);
@@ -170,10 +186,14 @@ class CudaBackend final : public Backend {
   LastLaunch lastLaunch_ = LastLaunch::Other;
   bool fiveIterationLaunches_ = true;
 
-  CUgraph_st* graph_ = nullptr;
-  CUgraphExec_st* exec_ = nullptr;
+  struct FrameRecord {
+    CUgraph_st* graph = nullptr;
+    CUgraphExec_st* exec = nullptr;
+    int issued = 0;  // frames issued (directly or captured) since the buffers were created
+  };
+  std::array<FrameRecord, kFrameSlots> frames_{};
+  int frameSlot_ = -1;  // the slot of the frame being issued (beginFrame .. endFrame), else -1
   bool capturing_ = false;
-  int framesIssued_ = 0;
 
   bool profiling_ = false;
   std::vector<std::pair<std::string, CUevent_st*>> stageMarks_;

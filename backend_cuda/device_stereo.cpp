@@ -2,8 +2,11 @@
 // caller's stream, fed from and leaving its results in device memory.
 #include <cuda_runtime.h>
 
+#include <limits>
+
 #include "cuda_backend.hpp"
 #include "curvestereo/cuda.hpp"
+#include "pipeline.hpp"
 #include "stereo_core.hpp"
 
 namespace cs::cuda {
@@ -13,6 +16,26 @@ std::string probe(int device) { return probeCuda(std::to_string(device)); }
 struct DeviceStereo::Impl {
   CudaBackend* backend = nullptr;  // owned by core
   std::unique_ptr<detail::StereoCore> core;
+
+  // The images from the caller's device memory into the pipeline's inputs.
+  void takeInputs(const detail::DeviceIO& io, const float* left, const float* right, size_t pitchBytes) {
+    backend->copyFromDevice(io.left, left, pitchBytes);
+    backend->copyFromDevice(io.right, right, pitchBytes);
+  }
+  // The outputs' device memory (where every frame leaves them).
+  DeviceDepth outputs(const detail::DeviceIO& io) {
+    CudaBackend& b = *backend;
+    DeviceDepth d;
+    d.width = io.left.width;
+    d.height = io.left.height;
+    d.valid = b.devicePointer(io.valid);
+    d.disparity = b.devicePointer(io.disparity);
+    d.warp = b.devicePointer(io.warp);
+    d.radial = b.devicePointer(io.radial);
+    d.points = b.devicePointer(io.points);
+    d.confidence = io.confidence.id >= 0 ? b.devicePointer(io.confidence) : nullptr;
+    return d;
+  }
 };
 
 // The construction and validation of cs::Stereo (detail::StereoCore), on a CudaBackend
@@ -39,21 +62,29 @@ void DeviceStereo::setMask(const ImageU8& mask) { impl_->core->setMask(mask); }
 DeviceDepth DeviceStereo::compute(const float* left, const float* right, size_t pitchBytes) {
   if (!left || !right) throw Error("cuda: DeviceStereo::compute needs two device images");
   const detail::DeviceIO io = impl_->core->deviceIO();
-  CudaBackend& b = *impl_->backend;
-  b.copyFromDevice(io.left, left, pitchBytes);
-  b.copyFromDevice(io.right, right, pitchBytes);
+  impl_->takeInputs(io, left, right, pitchBytes);
   impl_->core->runOnDevice();
-  DeviceDepth d;
-  d.width = io.left.width;
-  d.height = io.left.height;
-  d.valid = b.devicePointer(io.valid);
-  d.disparity = b.devicePointer(io.disparity);
-  d.warp = b.devicePointer(io.warp);
-  d.radial = b.devicePointer(io.radial);
-  d.points = b.devicePointer(io.points);
-  d.confidence = io.confidence.id >= 0 ? b.devicePointer(io.confidence) : nullptr;
+  return impl_->outputs(io);
+}
+
+// cs::Stereo::next's schedule (detail::StereoCore) without its readback: the frame's share
+// of consistent pixels is never known here, so the core is told NaN (it then judges no warm
+// frame failed, and DeviceStereo never asks).
+DeviceDepth DeviceStereo::next(const float* left, const float* right, const Pose* pose, size_t pitchBytes) {
+  if (!left || !right) throw Error("cuda: DeviceStereo::next needs two device images");
+  detail::StereoCore& core = *impl_->core;
+  const detail::StereoCore::SequenceFrame frame = core.beginSequenceFrame(pose);
+  const detail::DeviceIO io = core.deviceIO();
+  impl_->takeInputs(io, left, right, pitchBytes);
+  core.pipeline().runOnDevice(FrameKind{frame.warm, frame.filter});
+  core.endSequenceFrame(frame, std::numeric_limits<double>::quiet_NaN());
+  impl_->backend->enqueueQueued();  // the commit of the carried state, on the stream now
+  DeviceDepth d = impl_->outputs(io);
+  d.warm = frame.warm;
   return d;
 }
+
+void DeviceStereo::resetSequence() { impl_->core->resetSequence(); }
 
 cudaStream_t DeviceStereo::stream() const { return impl_->backend->stream(); }
 std::string DeviceStereo::deviceName() const { return impl_->backend->device(); }

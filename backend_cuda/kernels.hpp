@@ -111,9 +111,38 @@ struct MemOps {
 };
 
 cudaError_t launchMemOps(cudaStream_t s, const MemOps& ops);
+// A small upload (count <= kMaxInlineFloats) carried by the launch itself: no staging area
+// to wait for, so it never blocks the host (the sequence's motion, every frame).
+constexpr int kMaxInlineFloats = 16;
+struct InlineFloats {
+  int count;
+  float value[kMaxInlineFloats];
+};
+cudaError_t launchSetFloats(cudaStream_t s, float* dst, const InlineFloats& values);
 cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsDev& p);
 cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img mask, const CamDev& cam0,
                               const double tPrime[3]);
+
+// Sequences (carry_estimate.cu, temporal_filter.cu; backend.hpp carryEstimate,
+// temporalFilter). motion: kMotionFloats floats on the device (R row-major, then t), read
+// by the kernel, so that a recorded frame uses each frame's upload.
+constexpr int kMotionFloats = 12;  // = cs::kMotionFloats
+struct CarryDev {                  // cs::CarryParams
+  CamDev srcCam, dstCam;
+  double extraT[3];
+  int iterations;
+};
+// guess.data null: none (the first q from src).
+cudaError_t launchCarryEstimate(cudaStream_t s, Img dst, Img src, Img guess, const float* motion, Img mask,
+                                const CarryDev& p);
+struct TemporalDev {  // cs::TemporalParams
+  CamDev cam;
+  double tPrime[3];
+  float strength, gate, sigmaPx, processPx, minConfidence;
+};
+// confidence.data null: 1 everywhere.
+cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img confidence,
+                                 Img mask, const TemporalDev& p);
 cudaError_t launchWarp(cudaStream_t s, Img dst, Img src, Img flow);
 cudaError_t launchDownsample(cudaStream_t s, Img dst, Img src, float scale);
 cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float valueScale);

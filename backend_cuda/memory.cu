@@ -1,4 +1,5 @@
-// fill() and copy(): queued copies and fills of disjoint buffers run as one launch.
+// fill() and copy(): queued copies and fills of disjoint buffers run as one launch; small
+// uploads carried by their launch.
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
@@ -25,6 +26,11 @@ __global__ void memOpsKernel(MemOps ops) {
   } else {
     for (size_t i = first; i < o.count; i += stride) o.dst[i] = o.src ? o.src[i] : o.value;
   }
+}
+
+__global__ void setFloatsKernel(float* dst, InlineFloats values) {
+  beginKernel();
+  if (int(threadIdx.x) < values.count) dst[threadIdx.x] = values.value[threadIdx.x];
 }
 }  // namespace
 
@@ -54,6 +60,13 @@ cudaError_t launchMemOps(cudaStream_t s, const MemOps& ops) {
   for (int i = 0; i < ops.count; ++i) largest = std::max(largest, ops.op[i].count);
   const unsigned blocks = unsigned(std::max<size_t>(1, std::min<size_t>((largest / 4 + 255) / 256, 2048)));
   CS_LAUNCH(memOpsKernel, dim3(blocks, unsigned(ops.count)), 256, 0, s, ops);
+  return cudaGetLastError();
+}
+
+cudaError_t launchSetFloats(cudaStream_t s, float* dst, const InlineFloats& values) {
+  if (values.count <= 0) return cudaSuccess;
+  if (values.count > kMaxInlineFloats) return cudaErrorInvalidValue;
+  CS_LAUNCH(setFloatsKernel, 1, kMaxInlineFloats, 0, s, dst, values);
   return cudaGetLastError();
 }
 

@@ -274,6 +274,224 @@ TEST_CASE("CUDA device-pointer API: the initialiser's confidence stays on the de
   cudaStreamDestroy(stream);
 }
 
+namespace {
+
+// The largest difference between two outputs and the number of values finite in one only.
+struct Difference {
+  double maxAbs = 0;
+  long long nonFinite = 0;
+};
+Difference difference(const std::vector<float>& a, const std::vector<float>& b) {
+  Difference d;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (std::isfinite(a[i]) != std::isfinite(b[i]))
+      ++d.nonFinite;
+    else if (std::isfinite(a[i]))
+      d.maxAbs = std::max(d.maxAbs, double(std::abs(a[i] - b[i])));
+    else if (!(a[i] == b[i] || (std::isnan(a[i]) && std::isnan(b[i]))))
+      ++d.nonFinite;
+  }
+  return d;
+}
+
+// Rotation about y by `angle` (rad), row-major, then t: a motion buffer's floats.
+std::vector<float> motionFloats(double angle, const Eigen::Vector3d& t) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  return {float(c), 0.f, float(s), 0.f, 1.f, 0.f, float(-s), 0.f, float(c), float(t.x()), float(t.y()), float(t.z())};
+}
+
+}  // namespace
+
+// Backend::beginFrame's slots: two kinds of frame (the carries of a warm start; the prior
+// and the temporal filter), each recorded in its own slot and replayed, interleaved. Between
+// frames, as a sequence does: the motion uploaded (read by the recorded kernels, not baked
+// into them), the state reset by fill() or committed by copy() and an input uploaded after
+// it (queued work runs before the frame, in order, and is never recorded into it). Each
+// frame's outputs against the oracle running the same calls.
+TEST_CASE("CUDA frame slots: each kind of frame replays with the frame's motion and state") {
+  if (noDevice("cuda frame slots")) return;
+  const synth::SynthPair pair = smallPair(25);
+  const CameraParams cam = toCameraParams(pair.rig.cam0), half = toCameraParams(pair.rig.cam0.scaled(0.5));
+  const int w = cam.width, h = cam.height;
+  const size_t n = size_t(w) * h, nHalf = size_t(half.width) * half.height;
+  const Eigen::Vector3d tPrime = pair.rig.R.transpose() * pair.rig.t;
+  // Frame k's state (inverse depth 0.15 .. 0.55 /m, some pixels without an estimate), the
+  // measurement (radial depth with NaN, +inf and negative pixels) and its confidence.
+  auto stateAt = [&](int k) {
+    std::vector<float> v(2 * n);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t i = size_t(y) * w + x;
+        const bool none = golden::hash01(uint32_t(i) * 13U + uint32_t(k)) < 0.05f;
+        v[2 * i] = none ? -1.f : 0.35f + 0.2f * std::sin(0.05f * x + 0.3f * k) * std::cos(0.07f * y);
+        v[2 * i + 1] = 0.2f + 0.5f * golden::hash01(uint32_t(i) + 7U * uint32_t(k));
+      }
+    return v;
+  };
+  std::vector<float> radial(n), confidence(n), ones(n, 1.f), onesHalf(nHalf, 1.f), u0(n), w0(2 * n);
+  for (size_t i = 0; i < n; ++i) {
+    const float q = 0.35f + 0.2f * golden::hash01(uint32_t(i) * 3U + 1U);
+    radial[i] = i % 97 == 0 ? std::nanf("") : i % 89 == 0 ? INFINITY : i % 83 == 0 ? -1.f : 1.f / q;
+    confidence[i] = golden::hash01(uint32_t(i) * 5U + 2U);
+    u0[i] = 3.f * golden::hash01(uint32_t(i) + 11U);
+    w0[2 * i] = u0[i];
+    w0[2 * i + 1] = 0.1f;
+  }
+  constexpr int kFrames = 9;
+  // Per frame: carried (full and half resolution), or prior, filtered state, u and w.
+  auto run = [&](Backend& b) {
+    auto put = [&](const std::vector<float>& host, int bw, int bh, int channels) {
+      const Buffer buf = b.create(bw, bh, channels);
+      b.upload(buf, host.data());
+      return buf;
+    };
+    const Buffer state = b.create(w, h, 2), next = put(stateAt(0), w, h, 2), motion = b.create(kMotionFloats, 1, 1);
+    const Buffer mask = put(ones, w, h, 1), maskHalf = put(onesHalf, half.width, half.height, 1);
+    const Buffer guess = put(radial, w, h, 1), weight = put(confidence, w, h, 1);
+    const Buffer carried = b.create(w, h, 2), carriedHalf = b.create(half.width, half.height, 2);
+    const Buffer prior = b.create(w, h, 2), filtered = b.create(w, h, 2), u = b.create(w, h, 1),
+                 flow = b.create(w, h, 2);
+    std::vector<std::vector<std::vector<float> > > out;
+    for (int k = 0; k < kFrames; ++k) {
+      // Between frames: reset or commit, the next input after it, u and w afresh, the motion.
+      if (k % 4 == 0)
+        b.fill(state, -1.f);
+      else
+        b.copy(state, next);
+      b.upload(next, stateAt(k + 1).data());
+      b.upload(u, u0.data());
+      b.upload(flow, w0.data());
+      b.upload(motion, motionFloats(0.02 * (k % 3 - 1), Eigen::Vector3d(0.05 * (k % 2), 0.01, -0.02 * (k % 3))).data());
+      const int slot = k % 3 == 2 ? 1 : 0;
+      if (b.canReplayFrame(slot)) {
+        b.replayFrame(slot);
+      } else {
+        b.beginFrame(slot);
+        if (slot == 0) {
+          b.carryEstimate(carried, state, Buffer{}, motion, mask, {cam, cam, {0, 0, 0}, 3});
+          b.carryEstimate(carriedHalf, state, Buffer{}, motion, maskHalf,
+                          {cam, half, {tPrime.x(), tPrime.y(), tPrime.z()}, 3});
+        } else {
+          b.carryEstimate(prior, state, guess, motion, mask, {cam, cam, {0, 0, 0}, 1});
+          b.temporalFilter(filtered, u, flow, prior, guess, weight, mask,
+                           {cam, {tPrime.x(), tPrime.y(), tPrime.z()}, 0.8f, 3.f, 0.5f, 0.1f, 0.1f});
+        }
+        b.endFrame();
+      }
+      std::vector<std::vector<float> > frame;
+      for (const Buffer& buf :
+           slot == 0 ? std::vector<Buffer>{carried, carriedHalf} : std::vector<Buffer>{prior, filtered, u, flow}) {
+        frame.emplace_back(buf.count());
+        b.download(buf, frame.back().data());
+      }
+      out.push_back(frame);
+    }
+    return out;
+  };
+  auto cpu = createBackend("cpu");
+  const auto ref = run(*cpu);
+  cuda::CudaBackend cudaBackend(0);
+  const auto got = run(cudaBackend);
+  CHECK(cudaBackend.canReplayFrame(0));
+  CHECK(cudaBackend.canReplayFrame(1));
+  for (int k = 0; k < kFrames; ++k) {
+    long long estimates = 0;
+    for (size_t i = 0; i < got[size_t(k)].size(); ++i) {
+      const Difference d = difference(got[size_t(k)][i], ref[size_t(k)][i]);
+      if (i == 0)
+        for (size_t p = 0; p < ref[size_t(k)][0].size(); p += 2) estimates += ref[size_t(k)][0][p] >= 0.f;
+      INFO("frame " << k << ", output " << i);
+      CHECK(d.nonFinite == 0);
+      CHECK(d.maxAbs <= 1e-4);
+    }
+    MESSAGE("frame " << k << " (slot " << (k % 3 == 2 ? 1 : 0) << "): " << estimates << " pixels with an estimate");
+    if (k % 4 != 0) CHECK(estimates > 0);  // a reset frame carries nothing
+  }
+}
+
+// DeviceStereo::next: with coldEvery 3 a sequence goes cold, warm, warm, cold, ...: the cold
+// and the warm frame (both temporally filtered) each run directly, are recorded into their
+// slots and replayed, interleaved. Every frame against cs::Stereo::next on the same backend
+// (the same kernels and graphs: identical) and on the CPU oracle.
+TEST_CASE("CUDA device-pointer API: a sequence's cold and warm frames as cs::Stereo::next gives them") {
+  if (noDevice("cuda device sequences")) return;
+  synth::SynthConfig cfg;
+  cfg.camera = synth::defaultFisheye(161);
+  cfg.baseline = 0.12;
+  cfg.seed = 9;
+  cfg.samplesPerAxis = 2;
+  const synth::SynthPair pair = synth::renderPair(cfg);
+  Params params = preset("realtime");
+  params.minWidth = 20;
+  params.coldEvery = 3;
+  // The host API checks each warm frame and may solve it again cold; the device API cannot
+  // (no readback). With no warm frame judged failed both follow the schedule alone.
+  params.warmFailRatio = 0.f;
+  const int w = pair.left.width, h = pair.left.height;
+  const size_t n = size_t(w) * h;
+  cudaStream_t stream = nullptr;
+  ok(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
+  float* images = nullptr;
+  ok(cudaMalloc(&images, 2 * n * sizeof(float)));
+  ok(cudaMemcpy(images, pair.left.data.data(), n * sizeof(float), cudaMemcpyHostToDevice));
+  ok(cudaMemcpy(images + n, pair.right.data.data(), n * sizeof(float), cudaMemcpyHostToDevice));
+  {
+    Stereo host(pair.rig, params, "cuda"), oracle(pair.rig, params, "cpu");
+    cuda::DeviceStereo dev(pair.rig, params, stream);
+    const Pose pose;  // a static camera: the same pose every frame
+    // The schedule, then a new sequence (cold again).
+    const std::vector<bool> warmSchedule = {false, true, true, false, true, true, false, true, false};
+    const size_t resetBefore = 8;
+    cuda::DeviceDepth first;
+    for (size_t frame = 0; frame < warmSchedule.size(); ++frame) {
+      if (frame == resetBefore) {
+        dev.resetSequence();
+        host.resetSequence();
+        oracle.resetSequence();
+      }
+      const cuda::DeviceDepth d = dev.next(images, images + n, &pose);
+      const DepthResult ref = host.next(pair.left, pair.right, &pose);
+      const DepthResult cpu = oracle.next(pair.left, pair.right, &pose);
+      INFO("frame " << frame);
+      CHECK(d.warm == warmSchedule[frame]);
+      CHECK(ref.warm == warmSchedule[frame]);
+      CHECK(cpu.warm == warmSchedule[frame]);
+      CHECK_FALSE(ref.redone);
+      CHECK_FALSE(cpu.redone);
+      if (frame == 0) first = d;
+      CHECK(d.valid == first.valid);
+      CHECK(d.disparity == first.disparity);
+      CHECK(d.radial == first.radial);
+      const std::vector<float> valid = fetch(d.valid, n, stream), u = fetch(d.disparity, n, stream),
+                               radial = fetch(d.radial, n, stream);
+      long long validCount = 0, differ = 0, close = 0, validDiffer = 0;
+      for (size_t i = 0; i < n; ++i) {
+        const bool v = valid[i] != 0.f;
+        validDiffer += v != bool(cpu.valid.data[i]);
+        differ += v != bool(ref.valid.data[i]);
+        differ +=
+            !(radial[i] == ref.depth.radial.data[i] || (std::isnan(radial[i]) && std::isnan(ref.depth.radial.data[i])));
+        if (!v || !ref.valid.data[i]) continue;
+        ++validCount;
+        differ += u[i] != ref.disparity.data[i];
+        if (cpu.valid.data[i]) close += std::abs(u[i] - cpu.disparity.data[i]) <= 0.05f;
+      }
+      MESSAGE("sequence frame " << frame << (d.warm ? " (warm)" : " (cold)") << ": " << validCount << " valid, "
+                                << differ << " values differ from the host API, "
+                                << 100.0 * close / double(std::max(1LL, validCount))
+                                << " % within 0.05 px of the oracle");
+      CHECK(validCount > 0);
+      CHECK(differ == 0);
+      CHECK(validDiffer == 0);
+      // The first frame is a pair's solve; later ones carry the backends' small differences
+      // from frame to frame (the carry's nearest pixel, the band sweep's proposals).
+      CHECK(double(close) >= (frame == 0 ? 0.99 : 0.98) * double(validCount));
+    }
+  }
+  cudaFree(images);
+  cudaStreamDestroy(stream);
+}
+
 TEST_CASE("CUDA device-pointer API refuses what it cannot run") {
   // The validation is cs::Stereo's own code (detail::StereoCore): the same messages, given
   // before any device is needed.
@@ -300,6 +518,7 @@ TEST_CASE("CUDA device-pointer API refuses what it cannot run") {
   CHECK_THROWS_AS(cuda::DeviceStereo(pair.rig, preset("variational"), cudaStreamLegacy), Error);
   cuda::DeviceStereo dev(pair.rig, preset("variational"));
   CHECK_THROWS_AS(dev.compute(nullptr, nullptr), Error);
+  CHECK_THROWS_AS(dev.next(nullptr, nullptr), Error);
   // setMask as Stereo's: the size checked, the pipeline kept.
   CHECK_THROWS_WITH_AS(dev.setMask(ImageU8(7, 5, 1)), doctest::Contains("mask is 7x5 but the images are"), Error);
   dev.setMask(ImageU8(pair.left.width, pair.left.height, 1));

@@ -1,11 +1,15 @@
 // curvestereo bench [--calib CAMCHAIN LEFT RIGHT | --size WxH] [--runs N]: time per
 // frame and per stage after a warm-up frame, in the manner of libSGM's benchmark.
+// curvestereo bench --sequence SRC [--calib C] [--runs N]: a sequence's frames through
+// Stereo::next, warm and cold frames timed apart.
 #include <algorithm>
 #include <cstdio>
+#include <functional>
 #include <map>
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "curvestereo/sequence.hpp"
 #include "synth/scene.hpp"
 
 namespace cs::cli {
@@ -52,14 +56,107 @@ Inputs benchInputs(const Args& args) {
   return {pair.rig, pair.left, pair.right, "synthetic " + size};
 }
 
+void printStageTable(const std::vector<std::string>& order, std::map<std::string, std::vector<double>>& perStage,
+                     const std::vector<double>& sweepTotals) {
+  std::printf("%-20s %10s %10s %10s\n", "stage", "median ms", "min", "max");
+  for (const std::string& name : order) {
+    Summary s = summarize(perStage[name]);
+    std::printf("%-20s %10.2f %10.2f %10.2f\n", name.c_str(), s.median, s.min, s.max);
+  }
+  // The plane sweep is several stages (the coarse and the band sweep, both views, the
+  // checks); its total a frame is what the sweep costs.
+  if (!sweepTotals.empty()) {
+    Summary s = summarize(sweepTotals);
+    std::printf("%-20s %10.2f %10.2f %10.2f\n", "sweep, all stages", s.median, s.min, s.max);
+  }
+}
+
+// The stage times of one frame into the table's columns.
+void collectStages(const DepthResult& r, std::map<std::string, std::vector<double>>& perStage,
+                   std::vector<std::string>& order, std::vector<double>& sweepTotals) {
+  double sweepMs = 0.0;
+  bool swept = false;
+  for (const StageTime& s : r.stages) {
+    if (!perStage.count(s.name)) order.push_back(s.name);
+    perStage[s.name].push_back(s.ms);
+    if (s.name.rfind("sweep", 0) == 0) sweepMs += s.ms, swept = true;
+  }
+  if (swept) sweepTotals.push_back(sweepMs);
+}
+
+// bench --sequence: every frame held in memory, then `runs` passes through Stereo::next
+// (each from a reset: a cold first frame, warm ones after), after one pass that records
+// every kind of frame; a last pass profiles the warm frames' stages.
+int benchSequence(const Args& args, Stereo& stereo, const Sequence& sequence, int runs) {
+  const std::vector<SequenceFrame>& frames = sequence.frames();
+  std::vector<ImageF> lefts(frames.size()), rights(frames.size());
+  for (size_t i = 0; i < frames.size(); ++i) sequence.load(i, lefts[i], rights[i]);
+  std::printf("input:    sequence %s\n", sequence.summary().c_str());
+  std::printf("runs:     %d passes of %zu frames after 1 warm-up pass\n", runs, frames.size());
+  DepthResult r;
+  auto pass = [&](bool profiled, const std::function<void(const DepthResult&)>& each) {
+    stereo.setProfiling(profiled);
+    stereo.resetSequence();
+    for (size_t i = 0; i < frames.size(); ++i) {
+      stereo.next(lefts[i], rights[i], r, frames[i].hasPose ? &frames[i].pose : nullptr);
+      each(r);
+    }
+  };
+  pass(false, [](const DepthResult&) {});
+  std::vector<double> warm, cold, sweepTotals;
+  int redone = 0;
+  Progress progress("benchmark");
+  for (int k = 0; k < runs; ++k) {
+    pass(false, [&](const DepthResult& f) {
+      (f.warm ? warm : cold).push_back(f.totalMs);
+      redone += f.redone;
+    });
+    progress(double(k + 1) / runs);
+  }
+  progress.done();
+  std::map<std::string, std::vector<double>> perStage;
+  std::vector<std::string> order;
+  pass(true, [&](const DepthResult& f) {
+    if (f.warm) collectStages(f, perStage, order, sweepTotals);
+  });
+  (void)args;
+  for (auto [name, times] : {std::pair{"warm", &warm}, std::pair{"cold", &cold}}) {
+    if (times->empty()) {
+      std::printf("%s:     no frames\n", name);
+      continue;
+    }
+    const Summary s = summarize(*times);
+    std::printf("%s:     median %.2f ms  min %.2f  max %.2f  (%.1f fps) over %zu frames, end to end into a reused "
+                "DepthResult\n",
+                name, s.median, s.min, s.max, 1000.0 / s.median, times->size());
+  }
+  std::printf("redone:   %d warm frames failed their check and were solved again cold\n", redone);
+  std::printf("warm frames, profiled (synchronised at each stage):\n");
+  printStageTable(order, perStage, sweepTotals);
+  return 0;
+}
+
 }  // namespace
 
 int cmdBench(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"calib", "size", "runs", "scale-intrinsics", "outputs"});
+  known.insert({"calib", "size", "runs", "scale-intrinsics", "outputs", "sequence", "poses"});
   args.allowOnly(known);
   if (args.has("runs") && args.getInt("runs", 0) < 1) throw Error("option --runs must be >= 1");
   const Params params = paramsFromArgs(args);
+  if (args.has("sequence")) {
+    if (!args.positional().empty()) throw Error("bench --sequence takes no images: the sequence names them");
+    SequenceOptions options;
+    options.poses = args.get("poses", "");
+    const Sequence sequence = Sequence::open(args.get("sequence", ""), options);
+    for (const std::string& w : sequence.warnings()) std::fprintf(stderr, "curvestereo: warning: %s\n", w.c_str());
+    Stereo stereo(loadCalibration(sequenceCalibration(args, args.get("sequence", ""))), params,
+                  backendFromArgs(args));
+    if (args.get("outputs", "depth") == "depth") stereo.setOutputs({false, false, false, false});
+    std::printf("device:   %s (backend %s)\n", stereo.deviceName().c_str(), stereo.backendName().c_str());
+    std::printf("settings: %s\n", describe(params).c_str());
+    return benchSequence(args, stereo, sequence, args.getInt("runs", stereo.backendName() == "cpu" ? 1 : 5));
+  }
   const Inputs in = benchInputs(args);
   Stereo stereo(in.rig, params, backendFromArgs(args));
   // A GPU frame takes milliseconds: 50 of them give a stable median. The CPU oracle takes
@@ -102,14 +199,7 @@ int cmdBench(const Args& args) {
     } else {
       stereo.compute(in.left, in.right, result);
       (profiled ? profiledTotals : totals).push_back(result.totalMs);
-      double sweepMs = 0.0;
-      bool swept = false;
-      for (const StageTime& s : result.stages) {
-        if (!perStage.count(s.name)) order.push_back(s.name);
-        perStage[s.name].push_back(s.ms);
-        if (s.name.rfind("sweep", 0) == 0) sweepMs += s.ms, swept = true;
-      }
-      if (swept) sweepTotals.push_back(sweepMs);
+      collectStages(result, perStage, order, sweepTotals);
     }
     progress(double(i + 1) / (3 * runs));
   }
@@ -121,17 +211,7 @@ int cmdBench(const Args& args) {
       t.median, t.min, t.max, 1000.0 / t.median);
   std::printf("by value: median %.2f ms (compute returning a new DepthResult each frame)\n", tv.median);
   std::printf("profiled: median %.2f ms (synchronised at each stage)\n", tp.median);
-  std::printf("%-20s %10s %10s %10s\n", "stage", "median ms", "min", "max");
-  for (const std::string& name : order) {
-    Summary s = summarize(perStage[name]);
-    std::printf("%-20s %10.2f %10.2f %10.2f\n", name.c_str(), s.median, s.min, s.max);
-  }
-  // The plane sweep is several stages (the coarse and the band sweep, both views, the
-  // checks); its total a frame is what the sweep costs.
-  if (!sweepTotals.empty()) {
-    Summary s = summarize(sweepTotals);
-    std::printf("%-20s %10.2f %10.2f %10.2f\n", "sweep, all stages", s.median, s.min, s.max);
-  }
+  printStageTable(order, perStage, sweepTotals);
   return 0;
 }
 

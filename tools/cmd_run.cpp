@@ -1,15 +1,20 @@
 // curvestereo run --calib CALIB LEFT RIGHT -o OUTDIR [--backend B] [--preset P] [--mask PNG]
 //                 [--pinhole FOV[,WxH]] [--equirect W] [--sampling nearest|bilinear]
+// curvestereo run --calib CALIB --sequence SRC -o OUTDIR [--poses FILE] [--cold] [...]:
+//                 each frame's outputs into OUTDIR/<t_ns>/
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <unistd.h>
+#include <chrono>
 #include <filesystem>
 
 #include "commands.hpp"
 #include "common.hpp"
 #include "curvestereo/depth_views.hpp"
 #include "curvestereo/image_io.hpp"
+#include "curvestereo/sequence.hpp"
 
 namespace cs::cli {
 
@@ -106,12 +111,96 @@ void requireOutputFolder(const std::string& dir) {
     throw Error("-o " + dir + ": is an existing file, not a folder for the outputs");
 }
 
+// Frames per second and counts, one line, in place on a terminal.
+struct SequenceTally {
+  int frames = 0, warm = 0, cold = 0, redone = 0;
+  double solveMs = 0, warmMs = 0, coldMs = 0;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  void add(const DepthResult& r) {
+    ++frames;
+    solveMs += r.totalMs;
+    (r.warm ? warm : cold) += 1;
+    (r.warm ? warmMs : coldMs) += r.totalMs;
+    redone += r.redone;
+  }
+  double wallSeconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+};
+
+// run --sequence: every frame through Stereo::next (warm start and temporal filter unless
+// --cold), each frame's outputs in OUT/<t_ns>/ under a pair run's names. A frame that cannot
+// be read or solved stops the run with one line naming it; the frames before stay written.
+int runSequence(const Args& args, const std::string& outDir) {
+  const std::string source = args.get("sequence", "");
+  SequenceOptions options;
+  options.poses = args.get("poses", "");
+  options.pairToleranceMs = args.getDouble("pair-tolerance-ms", options.pairToleranceMs);
+  const Sequence sequence = Sequence::open(source, options);
+  for (const std::string& w : sequence.warnings()) std::fprintf(stderr, "curvestereo: warning: %s\n", w.c_str());
+  Params params = paramsFromArgs(args);
+  const bool cold = args.has("cold");
+  if (cold) params.warmStart = false, params.temporalStrength = 0.f;  // every frame alone: the baseline
+  const float minConfidence = minConfidenceFromArgs(args, params);
+  const Rig rig = loadCalibration(sequenceCalibration(args, source));
+  const ViewOptions views = viewOptions(args, rig.cam0);
+  Stereo stereo(rig, params, backendFromArgs(args));
+  if (args.has("mask")) stereo.setMask(loadMask(args.get("mask", "")));
+  std::printf("sequence: %s\n", sequence.summary().c_str());
+  std::printf("backend: %s (%s) - %s\n", stereo.backendName().c_str(), stereo.deviceName().c_str(),
+              stereo.backendChoice().c_str());
+  std::printf("settings: %s; %s\n", describe(params).c_str(),
+              cold ? "cold: every frame solved alone" : "warm start and temporal filter");
+  const bool tty = isatty(fileno(stderr));
+  SequenceTally tally;
+  ImageF left, right;
+  DepthResult r;
+  const std::vector<SequenceFrame>& frames = sequence.frames();
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const SequenceFrame& f = frames[i];
+    const std::string name = std::to_string(f.timestampNs);
+    try {
+      sequence.load(i, left, right);
+      stereo.next(left, right, r, f.hasPose ? &f.pose : nullptr);
+      const std::string dir = (std::filesystem::path(outDir) / name).string();
+      writeOutputs(dir, r, left, minConfidence);
+      writeViews(dir, views, rig.cam0, r, minConfidence);
+    } catch (const Error& e) {
+      if (tty) std::fputc('\n', stderr);
+      throw Error("frame " + std::to_string(i) + " (t " + name + " ns): " + e.what() + " (" +
+                  std::to_string(tally.frames) + " frames before it are written)");
+    }
+    tally.add(r);
+    const double fps = tally.frames / std::max(1e-9, tally.wallSeconds());
+    if (tty || tally.frames == int(frames.size()) || tally.frames % 30 == 0)
+      std::fprintf(stderr, "%sframe %d/%zu  %s%s  %.1f ms  %.1f frames/s%s", tty ? "\r" : "", tally.frames,
+                   frames.size(), r.warm ? "warm" : "cold", r.redone ? " (warm failed, redone)" : "", r.totalMs, fps,
+                   tty ? "   " : "\n");
+  }
+  if (tty) std::fputc('\n', stderr);
+  auto mean = [](double ms, int n) { return n ? ms / n : 0.0; };
+  std::printf("%d frames in %.1f s: %.2f ms a frame solved (warm %d, %.2f ms; cold %d, %.2f ms; %d warm frames "
+              "redone cold); outputs in %s/<t_ns>/\n",
+              tally.frames, tally.wallSeconds(), mean(tally.solveMs, tally.frames), tally.warm,
+              mean(tally.warmMs, tally.warm), tally.cold, mean(tally.coldMs, tally.cold), tally.redone, outDir.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert({"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling"});
+  known.insert({"sequence", "poses", "cold", "pair-tolerance-ms"});
   args.allowOnly(known);
+  if (args.has("sequence")) {
+    if (!args.positional().empty()) throw Error("run --sequence takes no images: the sequence names them");
+    const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
+    requireOutputFolder(outDir);
+    return runSequence(args, outDir);
+  }
+  for (const char* option : {"poses", "cold", "pair-tolerance-ms"})
+    if (args.has(option)) throw Error(std::string("--") + option + " is for run --sequence");
   if (args.positional().size() != 2) throw Error("run needs exactly two images: LEFT RIGHT");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   requireOutputFolder(outDir);

@@ -230,4 +230,15 @@ std::string formatStages(const std::vector<StageTime>& stages) {
   return s.str();
 }
 
+// --calib, or the sequence folder's own camchain.yaml (the ASL layout keeps it there).
+std::string sequenceCalibration(const Args& args, const std::string& source) {
+  if (args.has("calib")) return args.get("calib", "");
+  const std::filesystem::path own = std::filesystem::path(source) / "camchain.yaml";
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(own, ec))
+    throw Error("run --sequence needs --calib CALIB (the sequence has no camchain.yaml of its own)");
+  std::fprintf(stderr, "curvestereo: note: calibration %s\n", own.string().c_str());
+  return own.string();
+}
+
 }  // namespace cs::cli

@@ -21,6 +21,14 @@ commands:
                                 --equirect: range_equirect.exr (--sampling nearest|bilinear);
                                 --scale-intrinsics: images at a uniform rescale of the
                                 calibrated resolution (e.g. half) scale the cameras
+  run --sequence SRC -o OUTDIR [--calib CALIB] [--poses FILE] [--cold]
+                                a recorded sequence, frame after frame: each frame's outputs
+                                in OUTDIR/<t_ns>/; SRC: an ASL/EuRoC folder (mav0/cam0,
+                                cam1; its poses_cam0.csv and camchain.yaml are used) or
+                                "LEFT,RIGHT" folders or globs paired by sorted name;
+                                --poses: T_world_cam0 as CSV (t_ns,px,py,pz,qx,qy,qz,qw)
+                                or TUM text; --cold: every frame solved alone (no warm
+                                start, no temporal filter)
   eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR]
                                 accuracy against ground truth (tau>1, tau>3, EPE, abs-rel)
   bench [--calib CAMCHAIN LEFT RIGHT | --size WxH] [--runs N]
@@ -64,7 +72,7 @@ int main(int argc, char** argv) {
     std::vector<char*> rest;
     std::string dashO = "--o";
     for (int i = 2; i < argc; ++i) rest.push_back(!std::strcmp(argv[i], "-o") ? dashO.data() : argv[i]);
-    const cs::cli::Args args(int(rest.size()), rest.data(), {"quiet", "scale-intrinsics"});
+    const cs::cli::Args args(int(rest.size()), rest.data(), {"quiet", "scale-intrinsics", "cold"});
     if (command == "run") return cs::cli::cmdRun(args);
     if (command == "demo") return cs::cli::cmdDemo(args);
     if (command == "synth") return cs::cli::cmdSynth(args);

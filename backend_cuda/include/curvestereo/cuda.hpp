@@ -6,6 +6,7 @@
 //   cs::cuda::DeviceStereo stereo(rig, cs::preset("realtime"), stream);
 //   cs::cuda::DeviceDepth d = stereo.compute(dLeft, dRight);  // enqueued on `stream`
 //   myKernel<<<..., stream>>>(d.radial, ...);                  // ordered after it
+//   d = stereo.next(dLeft, dRight, &pose);                     // a sequence's next frame (warm start)
 //
 // Only available when the library was built with CUDA (CS_HAVE_CUDA).
 #pragma once
@@ -17,14 +18,15 @@
 
 #include "curvestereo/image.hpp"
 #include "curvestereo/params.hpp"
+#include "curvestereo/pose.hpp"
 #include "curvestereo/rig.hpp"
 
 namespace cs::cuda {
 
 // Device pointers into buffers owned by the DeviceStereo, packed rows (width * channels
 // floats), channels interleaved. They stay valid for the object's lifetime; their
-// contents are those of the latest compute() once the stream has reached it, and are
-// overwritten by the next compute().
+// contents are those of the latest compute() or next() once the stream has reached it, and
+// are overwritten by the next one.
 struct DeviceDepth {
   int width = 0, height = 0;
   const float* valid = nullptr;      // 1 ch: 1 where the pixel was solved, else 0
@@ -35,6 +37,9 @@ struct DeviceDepth {
   // 1 ch: the plane-sweep initialiser's left-right confidence in [0, 1] (meaningful where
   // valid); nullptr when the parameters do not run the initialiser.
   const float* confidence = nullptr;
+  // next(): whether the frame started from the previous frame's estimate (warm) or was
+  // solved cold; false from compute().
+  bool warm = false;
 };
 
 // "" when CUDA device `device` can run the backend, else the reason (e.g. "no CUDA
@@ -66,6 +71,25 @@ class DeviceStereo {
   // rig's size on the device, rows pitchBytes apart (0: packed). They are read by the
   // time the stream reaches this frame's work; they are not checked for NaN.
   DeviceDepth compute(const float* left, const float* right, size_t pitchBytes = 0);
+
+  // --- sequences: frame after frame of one rig, as cs::Stereo::next ---
+  // Enqueues the next frame of a sequence and returns at once (inputs and outputs as
+  // compute()). From the second frame on it starts from the previous frame's estimate
+  // carried into this frame's view (Params::warmStart: with the band sweep of realtime) and
+  // its result is filtered over time (Params::temporalStrength); the carried state stays
+  // on the device. `pose` (optional): camera 0's T_world_cam0 for this frame; with the
+  // previous frame's, the carried estimate follows the rig's motion, without it is carried
+  // as it is. Each kind of frame (cold, warm) is recorded once and replayed with the
+  // frame's own motion.
+  // Unlike cs::Stereo::next, nothing is read back to the host, so there is no warm-failure
+  // check: Params::warmFailRatio is ignored and a warm frame is never solved again cold.
+  // Cold frames come only on the schedule: the first after construction or
+  // resetSequence(), then every Params::coldEvery-th frame (0: none after the first), which
+  // bounds how long a warm start can keep an error. DeviceDepth::warm says which it was.
+  // compute() between next() calls solves a pair and leaves the carried state as it is.
+  DeviceDepth next(const float* left, const float* right, const Pose* pose = nullptr, size_t pitchBytes = 0);
+  // A new sequence: the next frame is solved cold and nothing is carried into it.
+  void resetSequence();
 
   cudaStream_t stream() const;
   std::string deviceName() const;
