@@ -1,16 +1,25 @@
 // The synthetic renderer: determinism, exact ground-truth depth, consistency of the two
 // views with the camera models and the pose, sky / outside-the-disc conventions, other
-// camera models and fields of view beyond 180 degrees.
+// camera models and fields of view beyond 180 degrees; and the sequences of
+// `synth --sequence` (files, timestamps, poses, the mover, consistency across frames).
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <fstream>
 #include <limits>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include <Eigen/Dense>
 
+#include "cli_util.hpp"
 #include "curvestereo/camera.hpp"
+#include "curvestereo/image_io.hpp"
+#include "curvestereo/rig.hpp"
 #include "synth/random.hpp"
 #include "synth/scene.hpp"
+#include "synth/sequence.hpp"
 #include "test_util.hpp"
 
 using cs::BuiltCamera;
@@ -393,4 +402,318 @@ TEST_CASE("synth: supersampling keeps the image centred on the model's pixel cen
     }
   CHECK(n > 4000);
   CHECK(diff < 0.5 * contrast);
+}
+
+// ---------------------------------------------------------------- sequences
+
+namespace {
+
+namespace fs = std::filesystem;
+
+SequenceConfig tinySequence(int frames, int size) {
+  SequenceConfig seq;
+  seq.render.camera = defaultFisheye(size);
+  seq.render.samplesPerAxis = 1;
+  seq.frames = frames;
+  return seq;
+}
+
+std::vector<std::string> dataLines(const fs::path& file) {
+  std::ifstream in(file);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+struct TimedPose {
+  int64_t t = 0;
+  Pose pose;  // T_world_cam0
+};
+
+// poses_cam0.csv: "t,px,py,pz,qx,qy,qz,qw" after a '#' header.
+std::vector<TimedPose> readPoses(const fs::path& file) {
+  std::vector<TimedPose> poses;
+  for (const std::string& line : dataLines(file)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream in(line);
+    std::string field;
+    std::vector<double> v;
+    TimedPose p;
+    std::getline(in, field, ',');
+    p.t = std::stoll(field);
+    while (std::getline(in, field, ',')) v.push_back(std::stod(field));
+    REQUIRE(v.size() == 7);
+    p.pose.centre = Vector3d(v[0], v[1], v[2]);
+    p.pose.rotation = Eigen::Quaterniond(v[6], v[3], v[4], v[5]).normalized().toRotationMatrix();
+    poses.push_back(p);
+  }
+  return poses;
+}
+
+// Bilinear depth at (x, y) when its four pixels are finite surface depths within 5 % of
+// each other (no edge, no sky); else 0.
+double smoothDepthAt(const ImageF& depth, double x, double y) {
+  const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+  float lo = std::numeric_limits<float>::infinity(), hi = 0.f;
+  for (int dy = 0; dy <= 1; ++dy)
+    for (int dx = 0; dx <= 1; ++dx) {
+      if (!depth.inside(x0 + dx, y0 + dy)) return 0.0;
+      const float d = depth(x0 + dx, y0 + dy);
+      if (!(d > 0.f) || std::isinf(d)) return 0.0;
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+  return hi < 1.05f * lo ? bilinear(depth, x, y) : 0.0;
+}
+
+// Reprojects the surface pixels of depth a (camera pose a) into the camera of pose b and
+// compares the predicted radial distance with depth b there. Returns the share that agrees
+// within 1 % among those both see without an edge (count: how many were compared).
+double reprojectedAgreement(const Camera& camA, const Pose& a, const ImageF& depthA, const ImageF& maskA,
+                            const Camera& camB, const Pose& b, const ImageF& depthB, const ImageF& maskB, int& count) {
+  const BuiltCamera builtA(camA), builtB(camB);
+  int agree = 0;
+  count = 0;
+  for (int y = 0; y < depthA.height; ++y)
+    for (int x = 0; x < depthA.width; ++x) {
+      if (!maskA.empty() && maskA(x, y) > 0.f) continue;  // the mover moves
+      const double d = smoothDepthAt(depthA, x, y);
+      if (!(d > 0.0)) continue;
+      const Vector3d ray = pixelRay(builtA, x, y);
+      if (ray.z() < kRimCosine) continue;
+      const Vector3d world = a.centre + a.rotation * (d * ray);
+      const Vector3d inB = b.rotation.transpose() * (world - b.centre);
+      Vec2<double> px;
+      if (inB.normalized().z() < kRimCosine || !builtB.project(Vec3<double>(inB), px) || !builtB.inImage(px, 2.0))
+        continue;
+      if (!maskB.empty() && maskB(int(std::lround(px.x())), int(std::lround(px.y()))) > 0.f) continue;
+      const double dB = smoothDepthAt(depthB, px.x(), px.y());
+      if (!(dB > 0.0)) continue;
+      ++count;
+      agree += std::abs(dB - inB.norm()) < 0.01 * inB.norm();
+    }
+  return count ? double(agree) / count : 0.0;
+}
+
+// The eight corners of a box shape (world).
+std::vector<Vector3d> boxCorners(const Shape& box) {
+  std::vector<Vector3d> corners;
+  for (int i = 0; i < 8; ++i) {
+    const Vector3d local((i & 1 ? 1 : -1) * box.halfSize.x(), (i & 2 ? 1 : -1) * box.halfSize.y(),
+                         (i & 4 ? 1 : -1) * box.halfSize.z());
+    corners.push_back(box.centre + Vector3d(box.cosYaw * local.x() - box.sinYaw * local.y(),
+                                            box.sinYaw * local.x() + box.cosYaw * local.y(), local.z()));
+  }
+  return corners;
+}
+
+}  // namespace
+
+TEST_CASE("synth sequence: every file of the ASL layout, timestamps and the walk") {
+  const fs::path dir = cs::test::tempDir("synth_sequence_files");
+  SequenceConfig seq = tinySequence(3, 64);
+  const SequenceRenderer renderer(seq);
+  int reported = 0;
+  SequenceCallbacks callbacks;
+  callbacks.frameDone = [&](const SequenceFrameReport& r) { CHECK(r.index == reported++); };
+  const SequenceReport report = writeSequence(renderer, CameraPhotometry(), dir.string(), callbacks);
+  CHECK(reported == 3);
+  CHECK(report.frames == 3);
+
+  const std::vector<int64_t> stamps = {1000000000000, 1000033333333, 1000066666667};
+  for (int k = 0; k < 3; ++k) CHECK(sequenceTimestampNs(k, 30.0) == stamps[size_t(k)]);
+  CHECK(sequenceTimestampNs(14, 30.0) == 1000466666667);  // rounded, not truncated
+  for (const char* stream : {"cam0", "cam1", "depth0", "depth1", "mover0", "mover1"}) {
+    INFO(stream);
+    const std::string ext = std::string(stream).compare(0, 5, "depth") == 0 ? ".exr" : ".png";
+    const std::vector<std::string> lines = dataLines(dir / "mav0" / stream / "data.csv");
+    REQUIRE(lines.size() == 4);
+    CHECK(lines[0] == "#timestamp [ns],filename");
+    for (int k = 0; k < 3; ++k) {
+      const std::string name = std::to_string(stamps[size_t(k)]) + ext;
+      CHECK(lines[size_t(k) + 1] == std::to_string(stamps[size_t(k)]) + "," + name);
+      CHECK(fs::is_regular_file(dir / "mav0" / stream / "data" / name));
+    }
+  }
+  for (const char* file : {"mav0/cam0/sensor.yaml", "mav0/cam1/sensor.yaml", "camchain.yaml", "meta.json"})
+    CHECK(fs::is_regular_file(dir / file));
+  CHECK(!fs::exists(dir / "photometry.json"));  // no camera model
+
+  // Images and depth as the renderer made them; the mask is 0 / 255.
+  const ImageF image = cs::readPngGray((dir / "mav0/cam1/data/1000033333333.png").string());
+  CHECK(image.width == 64);
+  const ImageF depth = cs::readExr((dir / "mav0/depth0/data/1000000000000.exr").string());
+  const SequenceFrame frame0 = renderer.render(0);
+  CHECK(depth.data == frame0.pair.depthLeft.data);
+  const ImageF mask = cs::readPngGray((dir / "mav0/mover1/data/1000066666667.png").string());
+  for (float v : mask.data) CHECK((v == 0.f || v == 1.f));
+
+  // The camchain is the rig's; camera 1's sensor.yaml carries T_cam0_cam1.
+  const cs::Rig rig = cs::loadKalibr((dir / "camchain.yaml").string());
+  CHECK((rig.t - renderer.rig().t).norm() < 1e-12);
+  CHECK(cs::test::readFile(dir / "mav0/cam1/sensor.yaml").find("data: [1, 0, 0, 0.12,") != std::string::npos);
+
+  // Poses: T_world_cam0; frame 1 is speed / fps further along camera 0's z (plus the bob,
+  // along its y), turned by turn / fps about the world vertical, to the left.
+  const std::vector<TimedPose> poses = readPoses(dir / "poses_cam0.csv");
+  REQUIRE(poses.size() == 3);
+  for (int k = 0; k < 3; ++k) {
+    CHECK(poses[size_t(k)].t == stamps[size_t(k)]);
+    CHECK((poses[size_t(k)].pose.centre - renderer.pose0(k).centre).norm() < 1e-12);
+    CHECK((poses[size_t(k)].pose.rotation - renderer.pose0(k).rotation).norm() < 1e-12);
+  }
+  CHECK((poses[0].pose.centre - renderer.staticScene().viewpoint.centre).norm() < 1e-12);
+  const Pose &p0 = poses[0].pose, &p1 = poses[1].pose;
+  const Vector3d step = p0.rotation.transpose() * (p1.centre - p0.centre);
+  CHECK(step.z() == doctest::Approx(seq.speed / seq.fps).epsilon(1e-6));
+  CHECK(std::abs(step.x()) < 1e-5);  // the bob of frame 1 is along its own (turned) y axis
+  CHECK(std::abs(step.y()) <= seq.bobM);
+  const Vector3d forward0 = p0.rotation.col(2), forward1 = p1.rotation.col(2);
+  const double turned = std::atan2(forward0.x() * forward1.y() - forward0.y() * forward1.x(),
+                                   forward0.x() * forward1.x() + forward0.y() * forward1.y());
+  CHECK(turned * 180.0 / kPi == doctest::Approx(seq.turnDegPerS / seq.fps).epsilon(1e-9));  // > 0: left
+  CHECK(std::abs(p1.rotation.col(2).z() - p0.rotation.col(2).z()) < 1e-12);                 // no pitch change
+  CHECK(report.pathLength == doctest::Approx(2.0 * seq.speed / seq.fps).epsilon(0.05));
+}
+
+TEST_CASE("synth sequence: the mover is in both depth maps and exactly in its masks") {
+  SequenceConfig seq = tinySequence(3, 64);
+  seq.render.scene = "indoor";
+  seq.render.seed = 4;
+  const SequenceRenderer renderer(seq);
+  REQUIRE(renderer.mover());
+  const Mover& mover = *renderer.mover();
+  CHECK(mover.halfSize.minCoeff() >= 0.15);
+  CHECK(mover.halfSize.maxCoeff() <= 0.2);
+  CHECK(mover.velocity.norm() == doctest::Approx(1.0).epsilon(0.1));
+  CHECK(mover.velocity.z() == 0.0);
+  int seen[2] = {0, 0};
+  for (int k = 0; k < 3; ++k) {
+    const SequenceFrame f = renderer.render(k);
+    const Shape box = mover.shapeAt(renderer.seconds(k));
+    CHECK(box.centre.z() == doctest::Approx(box.halfSize.z()));  // on the ground
+    const ImageF* depths[2] = {&f.pair.depthLeft, &f.pair.depthRight};
+    const ImageF* masks[2] = {&f.moverLeft, &f.moverRight};
+    const Pose poses[2] = {f.pair.pose0, f.pair.pose1};
+    const Camera cams[2] = {f.pair.rig.cam0, f.pair.rig.cam1};
+    for (int c = 0; c < 2; ++c) {
+      const BuiltCamera cam(cams[c]);
+      const double nearest = signedDistance(box, poses[c].centre);
+      double farthest = 0.0;
+      for (const Vector3d& corner : boxCorners(box)) farthest = std::max(farthest, (corner - poses[c].centre).norm());
+      CHECK(nearest > 1.5);
+      CHECK(nearest < 3.0);
+      int pixels = 0;
+      for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+          const double d = (*depths[c])(x, y);
+          const Vector3d point = poses[c].centre + d * (poses[c].rotation * pixelRay(cam, x, y));
+          const bool onBox = d > 0.0 && std::isfinite(d) && std::abs(signedDistance(box, point)) < 1e-5 * d;
+          if ((*masks[c])(x, y) > 0.f) {
+            ++pixels;
+            CHECK(d >= nearest * (1 - 1e-6));
+            CHECK(d <= farthest * (1 + 1e-6));
+            CHECK(onBox);
+          } else {
+            CHECK(!onBox);  // every pixel whose depth lies on the mover is in the mask
+          }
+        }
+      if (pixels > 0) ++seen[c];
+    }
+  }
+  CHECK(seen[0] >= 1);
+  CHECK(seen[1] >= 1);
+
+  // Without the mover: no masks, no mover folders.
+  seq.mover = false;
+  const SequenceRenderer still(seq);
+  CHECK(!still.mover());
+  CHECK(still.render(0).moverLeft.empty());
+  const fs::path dir = cs::test::tempDir("synth_sequence_still");
+  seq.frames = 1;
+  writeSequence(SequenceRenderer(seq), CameraPhotometry(), dir.string());
+  CHECK(fs::is_regular_file(dir / "mav0/depth1/data.csv"));
+  CHECK(!fs::exists(dir / "mav0/mover0"));
+}
+
+TEST_CASE("synth sequence: static depth agrees across frames through the written poses") {
+  // A large step (0.3 m, 9 deg) so that a wrong pose convention cannot pass.
+  const fs::path dir = cs::test::tempDir("synth_sequence_reproject");
+  SequenceConfig seq = tinySequence(2, 96);
+  seq.render.scene = "indoor";
+  seq.render.seed = 7;
+  seq.fps = 10.0;
+  seq.speed = 3.0;
+  seq.turnDegPerS = 90.0;
+  writeSequence(SequenceRenderer(seq), photometryProfile("t265"), dir.string());
+  const std::vector<TimedPose> poses = readPoses(dir / "poses_cam0.csv");
+  REQUIRE(poses.size() == 2);
+  const cs::Rig rig = cs::loadKalibr((dir / "camchain.yaml").string());
+  auto read = [&](const char* stream, int k, const char* ext) {
+    const std::string file = (dir / "mav0" / stream / "data" / (std::to_string(poses[size_t(k)].t) + ext)).string();
+    return std::string(ext) == ".exr" ? cs::readExr(file) : cs::readPngGray(file);
+  };
+  const ImageF depth0 = read("depth0", 0, ".exr"), depth1 = read("depth0", 1, ".exr");
+  const ImageF mask0 = read("mover0", 0, ".png"), mask1 = read("mover0", 1, ".png");
+  int count = 0;
+  const double agree =
+      reprojectedAgreement(rig.cam0, poses[0].pose, depth0, mask0, rig.cam0, poses[1].pose, depth1, mask1, count);
+  INFO("camera 0, frame 0 -> 1: " << agree << " of " << count);
+  CHECK(count > 2000);
+  CHECK(agree > 0.97);
+
+  // Camera 1 of frame 1 from camera 0 of frame 0: T_world_cam1 = T_world_cam0 inv(T_cn_cnm1).
+  Pose cam1;
+  cam1.rotation = poses[1].pose.rotation * rig.R.transpose();
+  cam1.centre = poses[1].pose.centre - poses[1].pose.rotation * rig.R.transpose() * rig.t;
+  const ImageF depthRight = read("depth1", 1, ".exr"), maskRight = read("mover1", 1, ".png");
+  const double agreeRight =
+      reprojectedAgreement(rig.cam0, poses[0].pose, depth0, mask0, rig.cam1, cam1, depthRight, maskRight, count);
+  INFO("camera 0 frame 0 -> camera 1 frame 1: " << agreeRight << " of " << count);
+  CHECK(count > 2000);
+  CHECK(agreeRight > 0.97);
+
+  // The camera model's images: 8-bit, noisy, the same exposure in both frames.
+  CHECK(fs::is_regular_file(dir / "photometry.json"));
+  const ImageF left0 = read("cam0", 0, ".png"), left1 = read("cam0", 1, ".png");
+  double mean0 = 0.0, mean1 = 0.0;
+  for (size_t i = 0; i < left0.size(); ++i) {
+    mean0 += left0.data[i];
+    mean1 += left1.data[i];
+  }
+  CHECK(mean1 == doctest::Approx(mean0).epsilon(0.15));
+}
+
+TEST_CASE("synth sequence: bad settings are refused in one line") {
+  SequenceConfig seq = tinySequence(3, 32);
+  seq.frames = 0;
+  CHECK_THROWS_WITH_AS(seq.validate(), "synth: --frames must be 1..100000, got 0", cs::Error);
+  seq.frames = 3;
+  seq.fps = 0.0;
+  CHECK_THROWS_AS(SequenceRenderer{seq}, cs::Error);
+  seq.fps = 30.0;
+  seq.speed = -1.0;
+  CHECK_THROWS_AS(SequenceRenderer{seq}, cs::Error);
+  // A walk straight through the buildings is refused before anything is rendered.
+  seq.speed = 40.0;
+  seq.frames = 200;
+  CHECK_THROWS_WITH_AS(SequenceRenderer{seq}, doctest::Contains("the walk runs into the scene"), cs::Error);
+
+  // The command line.
+  const fs::path dir = cs::test::tempDir("synth_sequence_cli");
+  const cs::test::CliOutcome ok = cs::test::runCli(dir, "synth --sequence -o seq --frames 2 --size 32 --samples 1");
+  INFO(ok.err);
+  CHECK(ok.exitCode == 0);
+  CHECK(ok.out.find("rendered 2 frames") != std::string::npos);
+  CHECK(fs::is_regular_file(dir / "seq/mav0/mover1/data/1000033333333.png"));
+  CHECK(dataLines(dir / "seq/poses_cam0.csv").size() == 3);
+  for (const char* args :
+       {"synth --sequence -o seq --frames 0", "synth --sequence -o seq --mover maybe", "synth -o seq --frames 3",
+        "synth --sequence -o seq --fps -30", "synth --sequence=yes -o seq"}) {
+    const cs::test::CliOutcome bad = cs::test::runCli(dir, args);
+    INFO(args << ": " << bad.err);
+    CHECK(bad.exitCode != 0);
+    CHECK(bad.err.find("error: ") != std::string::npos);
+    CHECK(std::count(bad.err.begin(), bad.err.end(), '\n') == 1);
+  }
 }

@@ -3,17 +3,22 @@
 // depth_right.exr camchain.yaml), optionally through a camera model (--camera t265:
 // dark, vignetted, noisy, as a real low-cost fisheye camera), which also writes
 // photometry.json. Without camera options the output is the clean renderer's.
+// With --sequence it renders a walking rig's stereo sequence in the EuRoC / ASL layout
+// instead (tools/synth/sequence.hpp).
+#include <unistd.h>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <optional>
 
 #include "camera_options.hpp"
 #include "commands.hpp"
 #include "common.hpp"
 #include "curvestereo/image_io.hpp"
 #include "synth/scene.hpp"
+#include "synth/sequence.hpp"
 
 namespace cs::cli {
 namespace {
@@ -29,15 +34,21 @@ Rig scaledRig(Rig rig, int size) {
   return rig;
 }
 
-synth::SynthConfig configFromArgs(const Args& args) {
+// Sequences default to a smaller, faster render than pairs.
+struct RenderDefaults {
+  int size = 800;
+  int samples = 3;
+};
+
+synth::SynthConfig configFromArgs(const Args& args, RenderDefaults defaults = {}) {
   synth::SynthConfig cfg;
   cfg.scene = args.get("scene", "urban");
   const int seed = args.getInt("seed", 1);
   if (seed < 0) throw Error("option --seed expects a non-negative integer");
   cfg.seed = uint32_t(seed);
   cfg.nearest = args.getDouble("nearest", cfg.nearest);
-  cfg.samplesPerAxis = args.getInt("samples", cfg.samplesPerAxis);
-  const int size = args.getInt("size", 800);
+  cfg.samplesPerAxis = args.getInt("samples", defaults.samples);
+  const int size = args.getInt("size", defaults.size);
   if (size < 16 || size > 16384) throw Error("option --size expects 16..16384 pixels");
   if (args.has("calib")) {
     for (const char* option : kRigOptions)
@@ -104,13 +115,95 @@ void printSummary(const synth::SynthConfig& cfg, const synth::SynthPair& pair, d
               outDir.c_str(), camera.empty() ? "" : " photometry.json");
 }
 
+// ---------------------------------------------------------------- --sequence
+
+const char* const kSequenceOptions[] = {"frames", "fps", "speed", "turn", "mover"};
+
+synth::SequenceConfig sequenceFromArgs(const Args& args) {
+  synth::SequenceConfig seq;
+  seq.render = configFromArgs(args, RenderDefaults{400, 2});
+  seq.frames = args.getInt("frames", seq.frames);
+  seq.fps = args.getDouble("fps", seq.fps);
+  seq.speed = args.getDouble("speed", seq.speed);
+  seq.turnDegPerS = args.getDouble("turn", seq.turnDegPerS);
+  const std::string mover = args.get("mover", "on");
+  if (mover != "on" && mover != "off") throw Error("option --mover expects on or off, got '" + mover + "'");
+  seq.mover = mover == "on";
+  seq.validate();
+  return seq;
+}
+
+void printSequenceSummary(const synth::SequenceRenderer& renderer, const synth::SequenceReport& report,
+                          const std::string& outDir, const std::string& camera) {
+  const synth::SequenceConfig& seq = renderer.config();
+  const Camera& cam0 = renderer.rig().cam0;
+  std::printf("%s scene, seed %u, %d frames at %g fps (%.2f s), %s %dx%d, %d x %d samples per pixel\n",
+              seq.render.scene.c_str(), seq.render.seed, seq.frames, seq.fps, renderer.seconds(seq.frames - 1),
+              cam0.modelName().c_str(), cam0.width, cam0.height, seq.render.samplesPerAxis, seq.render.samplesPerAxis);
+  std::printf("walk: %.2f m at %g m/s along camera 0's z, turning %.1f deg (%g deg/s, > 0 left), bob %g cm\n",
+              report.pathLength, seq.speed, report.headingChangeDeg, seq.turnDegPerS, 100.0 * seq.bobM);
+  if (const auto& m = renderer.mover()) {
+    const Eigen::Vector3d size = 2.0 * m->halfSize;
+    std::printf("mover: box %.2f x %.2f x %.2f m at %.2f m/s, seen by camera 0 in %d/%d frames", size.x(), size.y(),
+                size.z(), m->velocity.norm(), report.moverFrames, report.frames);
+    if (report.moverFarthest > 0.0)
+      std::printf(" at %.2f .. %.2f m (up to %.2f %% of the image)", report.moverNearest, report.moverFarthest,
+                  100.0 * report.moverShareMax);
+    std::printf("\n");
+  }
+  if (!camera.empty()) std::printf("camera model %s\n", camera.c_str());
+  std::printf(
+      "rendered %d frames in %.1f s (%.2f s per frame); wrote %s/mav0/{%s} poses_cam0.csv camchain.yaml "
+      "meta.json%s\n",
+      report.frames, report.seconds, report.seconds / report.frames, outDir.c_str(),
+      renderer.mover() ? "cam0,cam1,depth0,depth1,mover0,mover1" : "cam0,cam1,depth0,depth1",
+      camera.empty() ? "" : " photometry.json");
+}
+
+int synthSequence(const Args& args) {
+  const std::string outDir = args.get("o", args.get("output", ""));
+  if (outDir.empty()) throw Error("synth: missing output folder (-o OUTDIR)");
+  const synth::SequenceConfig seq = sequenceFromArgs(args);
+  const synth::CameraPhotometry camera = cameraModelFromArgs(args, seq.render.seed);  // checked before the render
+  const synth::SequenceRenderer renderer(seq);  // plans the walk and the mover; throws before rendering
+
+  const bool quiet = args.has("quiet"), bar = !quiet && isatty(fileno(stderr));
+  std::optional<Progress> progress;
+  synth::SequenceCallbacks callbacks;
+  callbacks.rendering = [&](int frame, double fraction) {
+    if (!bar) return;
+    if (!progress) progress.emplace("frame " + std::to_string(frame + 1) + "/" + std::to_string(seq.frames));
+    (*progress)(fraction);
+  };
+  callbacks.frameDone = [&](const synth::SequenceFrameReport& r) {
+    if (progress) progress->done();
+    progress.reset();
+    if (quiet) return;
+    std::printf("frame %*d/%d  t %lld  %.2f s  nearest %.2f m", int(std::to_string(seq.frames).size()), r.index + 1,
+                seq.frames, (long long)r.timestampNs, r.seconds, r.nearest);
+    if (renderer.mover())
+      std::printf("  mover %.2f / %.2f %% of cameras 0 / 1", 100.0 * r.moverShare[0], 100.0 * r.moverShare[1]);
+    std::printf("\n");
+    std::fflush(stdout);
+  };
+  const synth::SequenceReport report = synth::writeSequence(renderer, camera, outDir, callbacks);
+  printSequenceSummary(renderer, report, outDir,
+                       camera.enabled() ? synth::describePhotometry(camera, report.exposureScale) : "");
+  return 0;
+}
+
 }  // namespace
 
-int cmdSynth(const Args& args) {
+int cmdSynth(const Args& given) {
   std::set<std::string> known = kCameraOptions;
   known.insert({"o", "output", "scene", "seed", "size", "calib", "motion", "baseline", "rotation", "nearest", "samples",
-                "fov", "quiet"});
-  args.allowOnly(known);
+                "fov", "quiet", "sequence"});
+  for (const char* option : kSequenceOptions) known.insert(option);
+  given.allowOnly(known);
+  if (given.has("sequence")) return synthSequence(given);
+  const Args& args = given;
+  for (const char* option : kSequenceOptions)
+    if (args.has(option)) throw Error(std::string("option --") + option + " needs --sequence");
   const std::string outDir = args.get("o", args.get("output", ""));
   if (outDir.empty()) throw Error("synth: missing output folder (-o OUTDIR)");
   const synth::SynthConfig cfg = configFromArgs(args);

@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <set>
 #include <string>
 
 #include "commands.hpp"
@@ -39,6 +40,9 @@ commands:
                                 calibration files between Kalibr, Basalt and OpenCV
   synth -o OUTDIR [--scene urban|indoor] [--motion binocular|forward|sideways] [--camera none|t265]
                                 render a synthetic pair with exact ground truth
+  synth --sequence -o OUTDIR [--frames 12] [--fps 30] [--speed 1] [--turn 20] [--mover on|off]
+                                render a walking rig's stereo sequence (ASL layout) with
+                                ground-truth depth, poses and a moving object's masks
 
 )";
 
@@ -72,7 +76,10 @@ int main(int argc, char** argv) {
     std::vector<char*> rest;
     std::string dashO = "--o";
     for (int i = 2; i < argc; ++i) rest.push_back(!std::strcmp(argv[i], "-o") ? dashO.data() : argv[i]);
-    const cs::cli::Args args(int(rest.size()), rest.data(), {"quiet", "scale-intrinsics", "cold"});
+    // Options without a value; --sequence is one for synth only (run and bench take a source).
+    std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold"};
+    if (command == "synth") flags.insert("sequence");
+    const cs::cli::Args args(int(rest.size()), rest.data(), flags);
     if (command == "run") return cs::cli::cmdRun(args);
     if (command == "demo") return cs::cli::cmdDemo(args);
     if (command == "synth") return cs::cli::cmdSynth(args);

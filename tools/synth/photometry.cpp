@@ -224,7 +224,7 @@ ImageF vignetting(const Camera& camera, double rim, VignetteMode mode) {
   return factor;
 }
 
-double applyPhotometry(const CameraPhotometry& model, SynthPair& pair) {
+double applyPhotometry(const CameraPhotometry& model, SynthPair& pair, double fixedScale) {
   if (!model.enabled()) return 1.0;
   model.validate();
   multiply(pair.left, vignetting(pair.rig.cam0, model.left.rim, model.vignetteMode));
@@ -232,7 +232,9 @@ double applyPhotometry(const CameraPhotometry& model, SynthPair& pair) {
   pair.left = gaussianBlur(pair.left, model.blur);
   pair.right = gaussianBlur(pair.right, model.blur);
   double scale = 1.0;
-  if (model.exposure > 0.0) {
+  if (fixedScale > 0.0) {
+    scale = fixedScale;
+  } else if (model.exposure > 0.0) {
     const double median = validMedian(pair.left, pair.depthLeft);
     if (!(median > 0.0)) throw Error("camera model: cannot set the exposure of a black image");
     scale = model.exposure / median;

@@ -79,6 +79,8 @@ ImageF vignetting(const Camera& camera, double rim, VignetteMode mode);
 // Passes the pair's images through the model (validated first); returns the exposure
 // scale used (1 when exposure is 0). Valid pixels are those with depth > 0. The depth
 // images are not changed. A disabled model leaves the pair untouched and returns 1.
-double applyPhotometry(const CameraPhotometry& model, SynthPair& pair);
+// fixedScale > 0 is used as the exposure scale instead of the one model.exposure would
+// set from this pair's median (a sequence keeps its first frame's, like a fixed exposure).
+double applyPhotometry(const CameraPhotometry& model, SynthPair& pair, double fixedScale = 0.0);
 
 }  // namespace cs::synth

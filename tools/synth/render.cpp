@@ -42,11 +42,13 @@ class RayGenerator {
   double minCosine_;
 };
 
-// Brightness seen along a ray; distance (optional) gets the hit distance, +inf for sky.
-double shade(const Scene& scene, const Ray& ray, double* distance = nullptr) {
+// Brightness seen along a ray; distance (optional) gets the hit distance, +inf for sky,
+// and shape (optional) the index of the shape hit, -1 for sky.
+double shade(const Scene& scene, const Ray& ray, double* distance = nullptr, int* shape = nullptr) {
   Hit hit;
   const bool surface = scene.intersect(ray, hit);
   if (distance) *distance = surface ? hit.distance : std::numeric_limits<double>::infinity();
+  if (shape) *shape = surface ? hit.shape : -1;
   return surface ? scene.radiance(hit) : scene.skyRadiance(ray.dir);
 }
 
@@ -55,15 +57,18 @@ double shade(const Scene& scene, const Ray& ray, double* distance = nullptr) {
 // at the model's pixel centre. Rays outside the valid region contribute black, which
 // darkens the rim of a fisheye disc like a real lens does.
 template <class Rays>
-void renderRow(const Scene& scene, const Rays& rays, int samples, int y, ImageF& image, ImageF& depth) {
+void renderRow(const Scene& scene, const Rays& rays, int samples, int y, ImageF& image, ImageF& depth,
+               Image<int>* shapeIds) {
   const bool centreIsSample = samples % 2 == 1;  // then the centre ray is reused
   const double weight = 1.0 / double(samples * samples);
   for (int x = 0; x < image.width; ++x) {
     Ray centre;
     if (!rays.ray(x, y, centre)) continue;  // image and depth stay 0
     double distance;
-    const double centreValue = shade(scene, centre, &distance);
+    int shape;
+    const double centreValue = shade(scene, centre, &distance, &shape);
     depth(x, y) = float(distance);
+    if (shapeIds) (*shapeIds)(x, y) = shape;
     double sum = 0.0;
     for (int j = 0; j < samples; ++j)
       for (int i = 0; i < samples; ++i) {
@@ -79,7 +84,25 @@ void renderRow(const Scene& scene, const Rays& rays, int samples, int y, ImageF&
   }
 }
 
-// Angular size (rad) of one pixel at the principal point: sets the texture detail.
+Vector3d motionCentre(const SynthConfig& cfg) {
+  const double b = cfg.baseline;
+  if (cfg.motion == "binocular") return Vector3d(b, 0.0, 0.0);
+  if (cfg.motion == "forward") return Vector3d(0.2 * b, 0.0, b);
+  if (cfg.motion == "sideways") return Vector3d(b, 0.0, 0.3 * b);
+  throw Error("synth: unknown motion '" + cfg.motion + "' (expected binocular, forward or sideways)");
+}
+
+}  // namespace
+
+void checkSynthConfig(const SynthConfig& cfg) {
+  if (cfg.samplesPerAxis < 1 || cfg.samplesPerAxis > 16)
+    throw Error("synth: samples per axis must be in 1..16, got " + std::to_string(cfg.samplesPerAxis));
+  if (!(cfg.nearest > 0.0)) throw Error("synth: the nearest object distance must be positive");
+  if (!(cfg.maxFovDeg >= 0.0 && cfg.maxFovDeg <= 360.0))
+    throw Error("synth: the field of view must be in 0..360 degrees (0: the model's own)");
+  if (!cfg.rig && !(cfg.baseline > 0.0)) throw Error("synth: the baseline must be positive");
+}
+
 double pixelAngle(const Camera& cam) {
   const double cx = cam.params.at(2), cy = cam.params.at(3);
   const BuiltCamera camera(cam);
@@ -89,31 +112,13 @@ double pixelAngle(const Camera& cam) {
   return 1.0 / cam.params.at(0);
 }
 
-Vector3d motionCentre(const SynthConfig& cfg) {
-  const double b = cfg.baseline;
-  if (cfg.motion == "binocular") return Vector3d(b, 0.0, 0.0);
-  if (cfg.motion == "forward") return Vector3d(0.2 * b, 0.0, b);
-  if (cfg.motion == "sideways") return Vector3d(b, 0.0, 0.3 * b);
-  throw Error("synth: unknown motion '" + cfg.motion + "' (expected binocular, forward or sideways)");
-}
-
-void checkConfig(const SynthConfig& cfg) {
-  if (cfg.samplesPerAxis < 1 || cfg.samplesPerAxis > 16)
-    throw Error("synth: samples per axis must be in 1..16, got " + std::to_string(cfg.samplesPerAxis));
-  if (!(cfg.nearest > 0.0)) throw Error("synth: the nearest object distance must be positive");
-  if (!(cfg.maxFovDeg >= 0.0 && cfg.maxFovDeg <= 360.0))
-    throw Error("synth: the field of view must be in 0..360 degrees (0: the model's own)");
-  if (!cfg.rig && !(cfg.baseline > 0.0)) throw Error("synth: the baseline must be positive");
-}
-
-}  // namespace
-
 void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options, ImageF& image,
-                ImageF& depth, const ProgressCallback& progress) {
+                ImageF& depth, const ProgressCallback& progress, Image<int>* shapeIds) {
   if (camera.width <= 0 || camera.height <= 0) throw Error("synth: the camera has no image size");
   const int samples = std::max(1, options.samplesPerAxis);
   image = ImageF(camera.width, camera.height, 0.f);
   depth = ImageF(camera.width, camera.height, 0.f);
+  if (shapeIds) *shapeIds = Image<int>(camera.width, camera.height, -1);
   camera.validate();
   const BuiltCamera built(camera);
   std::visit(
@@ -124,7 +129,7 @@ void renderView(const Scene& scene, const Camera& camera, const Pose& pose, cons
         std::atomic<int> nextRow{0}, rowsDone{0};
         auto work = [&](bool reports) {
           for (int y = nextRow++; y < camera.height; y = nextRow++) {
-            renderRow(scene, rays, samples, y, image, depth);
+            renderRow(scene, rays, samples, y, image, depth, shapeIds);
             const int done = ++rowsDone;
             if (reports && progress) progress(double(done) / camera.height);
           }
@@ -157,7 +162,7 @@ Rig makeRig(const SynthConfig& cfg) {
 }
 
 SynthPair renderPair(const SynthConfig& cfg, const ProgressCallback& progress) {
-  checkConfig(cfg);
+  checkSynthConfig(cfg);
   SynthPair pair;
   pair.rig = makeRig(cfg);
   const Vector3d centre1 = -pair.rig.R.transpose() * pair.rig.t;

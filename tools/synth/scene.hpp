@@ -122,8 +122,10 @@ struct RenderOptions {
 // image: average brightness of the sub-pixel rays (those outside the valid region count
 // as black), 0 where the pixel centre is invalid. depth: radial distance of the surface
 // hit by the ray through the pixel centre; +inf for sky; 0 where the centre is invalid.
+// shapeIds (optional): the index in scene.shapes() of the surface that ray hits, -1 for
+// sky and invalid pixels (e.g. to mask one object exactly where the depth shows it).
 void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options, ImageF& image,
-                ImageF& depth, const ProgressCallback& progress = {});
+                ImageF& depth, const ProgressCallback& progress = {}, Image<int>* shapeIds = nullptr);
 
 // Equidistant Kannala-Brandt (k = 0), size x size, f = size / pi, c = (size - 1) / 2:
 // a 180 deg image circle touching the borders, like the dev data set.
@@ -153,6 +155,13 @@ struct SynthPair {
 //   binocular: camera 1 centre (B, 0, 0); forward: (0.2B, 0, B); sideways: (B, 0, 0.3B)
 // in camera-0 coordinates, camera 1's axes rotated by rotationDeg about camera 0's y axis.
 Rig makeRig(const SynthConfig& cfg);
+
+// Throws cs::Error (one line) for samples outside 1..16, a non-positive nearest distance
+// or baseline, or a field of view outside 0..360 degrees.
+void checkSynthConfig(const SynthConfig& cfg);
+
+// Angular size (rad) of one pixel at the camera's principal point (sets texture detail).
+double pixelAngle(const Camera& camera);
 
 // Builds the scene and renders both views. progress: left in [0, 0.5], right in [0.5, 1].
 SynthPair renderPair(const SynthConfig& cfg, const ProgressCallback& progress = {});
