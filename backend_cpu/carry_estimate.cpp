@@ -23,7 +23,7 @@ Sample lookUp(const View& src, const BuiltCamera& cam, const Vec3<double>& d) {
   Sample s;
   Vec2<double> px;
   if (!cam.project(d, px)) return s;
-  const double nx = std::floor(px.x() + 0.5), ny = std::floor(px.y() + 0.5);
+  const double nx = std::floor(px.x() + 0.5 - kCarryTie), ny = std::floor(px.y() + 0.5 - kCarryTie);
   if (!(nx >= 0 && ny >= 0 && nx < src.width && ny < src.height)) return s;
   const int ix = int(nx), iy = int(ny);
   s.q = src.at(ix, iy, 0);

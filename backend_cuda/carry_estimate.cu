@@ -20,7 +20,7 @@ __device__ Sample lookUp(const Img& src, const CamDev& cam, const V3& d) {
   Sample s{-1.f, 0.f, {0, 0, 0}, false};
   V2 px;
   if (!cameraProject(cam, d, px)) return s;
-  const double nx = floor(px.x + 0.5), ny = floor(px.y + 0.5);
+  const double nx = floor(px.x + 0.5 - kCarryTie), ny = floor(px.y + 0.5 - kCarryTie);
   if (!(nx >= 0 && ny >= 0 && nx < src.width && ny < src.height)) return s;
   const int ix = int(nx), iy = int(ny);
   s.q = at(src, ix, iy, 0);

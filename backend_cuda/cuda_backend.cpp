@@ -69,6 +69,7 @@ static_assert(cudak::kBandMargin == kBandMargin, "sweepBandWarp's contract");
 static_assert(cudak::kMaxTaps == 2 * kMaxTensorRadius + 1, "structure tensor taps");
 static_assert(cudak::kMaxNormaliseTaps == 2 * kMaxNormaliseRadius + 1, "normalise taps");
 static_assert(cudak::kMotionFloats == kMotionFloats, "the motion buffer");
+static_assert(cudak::kCarryTie == kCarryTie, "kernels.hpp mirrors backend.hpp");
 static_assert(cudak::kMaxInlineFloats >= kMotionFloats, "the motion is uploaded by its launch");
 
 }  // namespace

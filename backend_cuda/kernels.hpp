@@ -126,7 +126,8 @@ cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img
 // Sequences (carry_estimate.cu, temporal_filter.cu; backend.hpp carryEstimate,
 // temporalFilter). motion: kMotionFloats floats on the device (R row-major, then t), read
 // by the kernel, so that a recorded frame uses each frame's upload.
-constexpr int kMotionFloats = 12;  // = cs::kMotionFloats
+constexpr int kMotionFloats = 12;   // = cs::kMotionFloats
+constexpr double kCarryTie = 1e-3;  // = cs::kCarryTie
 struct CarryDev {                  // cs::CarryParams
   CamDev srcCam, dstCam;
   double extraT[3];

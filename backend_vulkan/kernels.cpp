@@ -44,6 +44,21 @@ struct VkTriangulateParams {
   S tPrime[3];
 };
 
+// carry_estimate.comp's block: the two grids' cameras and the translation added to the
+// motion's (the motion itself is a buffer, read at run time).
+template <class S>
+struct VkCarryParams {
+  VkCam<S> srcCam, dstCam;
+  S extraT[3];
+};
+
+// temporal_filter.comp's block.
+template <class S>
+struct VkTemporalParams {
+  VkCam<S> cam;
+  S tPrime[3];
+};
+
 template <class S>
 struct VkSweepParams {
   VkCam<S> cam;
@@ -195,6 +210,16 @@ struct PcSweepBandSelect {
   Addr best, aggregated, costs, first, mask, params;
   int32_t width, height, planes, band;
 };
+struct PcCarryEstimate {
+  Addr dst, src, guess, motion, mask, params;  // guess: mask when absent
+  int32_t width, height, srcWidth, srcHeight, iterations, hasGuess;
+};
+struct PcTemporalFilter {
+  Addr state, u, w, prior, radial, confidence, mask, params;  // confidence: mask when absent
+  int32_t width, height, hasConfidence;
+  float strength, gate, sigmaPx, processPx, minConfidence;
+};
+static_assert(sizeof(PcTemporalFilter) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 static_assert(sizeof(PcPrimalDual) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 static_assert(sizeof(PcSweepBandWarp) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 
@@ -587,6 +612,46 @@ void VulkanBackend::doSweepBandSelect(const Buffer& best, const Buffer& aggregat
   PcSweepBandSelect pc{addr(best),         addr(aggregated), addr(costs), addr(first), addr(mask),
                        sweepParamBlock(p), best.width,       best.height, p.planes,    p.band};
   dispatch(float64_ ? kSweepBandSelectF64 : kSweepBandSelectF32, pc, best.width, best.height);
+}
+
+// ---- sequences ----
+
+// The motion stays in its buffer (uploaded each frame outside the recorded frame): only the
+// cameras and extraT, constant over a sequence, are in the parameter block.
+void VulkanBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
+                                    const Buffer& mask, const CarryParams& p) {
+  auto store = [&](auto prm) {
+    using S = std::remove_reference_t<decltype(prm.extraT[0])>;
+    prm.srcCam = toVkCam<S>(p.srcCam);
+    prm.dstCam = toVkCam<S>(p.dstCam);
+    for (int i = 0; i < 3; ++i) prm.extraT[i] = S(p.extraT[i]);
+    return paramBlock(&prm, sizeof(prm));
+  };
+  const Addr block = float64_ ? store(VkCarryParams<double>{}) : store(VkCarryParams<float>{});
+  const bool hasGuess = guess.id >= 0;
+  PcCarryEstimate pc{addr(dst),    addr(src),    addr(hasGuess ? guess : mask),
+                     addr(motion), addr(mask),   block,
+                     dst.width,    dst.height,   src.width,
+                     src.height,   p.iterations, hasGuess ? 1 : 0};
+  dispatch(float64_ ? kCarryEstimateF64 : kCarryEstimateF32, pc, dst.width, dst.height);
+}
+
+void VulkanBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
+                                     const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                                     const TemporalParams& p) {
+  auto store = [&](auto prm) {
+    using S = std::remove_reference_t<decltype(prm.tPrime[0])>;
+    prm.cam = toVkCam<S>(p.cam);
+    for (int i = 0; i < 3; ++i) prm.tPrime[i] = S(p.tPrime[i]);
+    return paramBlock(&prm, sizeof(prm));
+  };
+  const Addr block = float64_ ? store(VkTemporalParams<double>{}) : store(VkTemporalParams<float>{});
+  const bool weighted = confidence.id >= 0;
+  PcTemporalFilter pc{
+      addr(state), addr(u),   addr(w),     addr(prior),    addr(radial),     addr(weighted ? confidence : mask),
+      addr(mask),  block,     state.width, state.height,   weighted ? 1 : 0, p.strength,
+      p.gate,      p.sigmaPx, p.processPx, p.minConfidence};
+  dispatch(float64_ ? kTemporalFilterF64 : kTemporalFilterF32, pc, state.width, state.height);
 }
 
 }  // namespace cs::vk

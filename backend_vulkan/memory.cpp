@@ -213,9 +213,10 @@ Buffer VulkanBackend::scratch(int slot, int w, int h, int channels) {
   auto key = std::make_tuple(slot, w, h, channels);
   auto it = scratch_.find(key);
   if (it != scratch_.end()) return it->second;
-  const Frame was = frame_;  // a scratch buffer does not invalidate the frame
+  Frame was[kFrameSlots];  // a scratch buffer invalidates no recorded frame: they do not use it
+  for (int i = 0; i < kFrameSlots; ++i) was[i] = frames_[i].state;
   Buffer b = create(w, h, channels);
-  frame_ = was;
+  for (int i = 0; i < kFrameSlots; ++i) frames_[i].state = was[i];
   scratch_[key] = b;
   return b;
 }

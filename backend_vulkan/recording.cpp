@@ -33,7 +33,7 @@ VkPipeline VulkanBackend::pipeline(Shader s) {
 
 VkCommandBuffer VulkanBackend::recorder() {
   ensureUsable();
-  if (recordingFrame()) return frameCmd_;
+  if (recordingFrame()) return frameCmd();
   if (imm_ == Immediate::InFlight) {  // submitted by replayFrame: done before it is recorded again
     imm_ = Immediate::Idle;
     waitFence(immFence_, "queued work");
@@ -56,7 +56,7 @@ VkCommandBuffer VulkanBackend::recorder() {
 // buffer (the first barrier already ordered everything earlier), compute after compute
 // alone in the usual case.
 void VulkanBackend::barrier(VkCommandBuffer cb, Cmd next) {
-  Cmd& last = cb == frameCmd_ ? lastFrame_ : lastImm_;
+  Cmd& last = cb == immCmd_ ? lastImm_ : lastFrame_;
   auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
   VkPipelineStageFlags src = 0, dst = 0;
   if (last == Cmd::None || last == Cmd::Transfer) {
@@ -97,10 +97,12 @@ void VulkanBackend::abortFrameRecording() {
   // Something needs the results of the frame before endFrame(): run what was recorded
   // as ordinary work and do not replay it.
   if (!recordingFrame()) return;
-  frame_ = Frame::Empty;  // until submitted
-  check(inst_.fn.vkEndCommandBuffer(frameCmd_), "vkEndCommandBuffer");
-  submit(frameCmd_, frameFence_);
-  frame_ = Frame::RunningOnce;
+  FrameSlot& f = frames_[recordingSlot_];
+  recordingSlot_ = -1;
+  f.state = Frame::Empty;  // until submitted
+  check(inst_.fn.vkEndCommandBuffer(f.cmd), "vkEndCommandBuffer");
+  submit(f.cmd, f.fence);
+  f.state = Frame::RunningOnce;
 }
 
 void VulkanBackend::submit(VkCommandBuffer cb, VkFence fence) {
@@ -120,9 +122,10 @@ void VulkanBackend::flush() {
     submit(immCmd_, immFence_);
     imm_ = Immediate::InFlight;
   }
-  if (frame_ == Frame::Running || frame_ == Frame::RunningOnce) {
-    frame_ = frame_ == Frame::Running ? Frame::Ready : Frame::Empty;
-    waitFence(frameFence_, "the frame");
+  for (FrameSlot& f : frames_) {
+    if (f.state != Frame::Running && f.state != Frame::RunningOnce) continue;
+    f.state = f.state == Frame::Running ? Frame::Ready : Frame::Empty;
+    waitFence(f.fence, "the frame");
   }
   if (imm_ == Immediate::InFlight) {
     imm_ = Immediate::Idle;
@@ -134,47 +137,65 @@ void VulkanBackend::flush() {
 
 void VulkanBackend::synchronize() { flush(); }
 
-void VulkanBackend::beginFrame() {
+// Every slot's command buffer starts with a full barrier (the first command's, lastFrame_
+// None): it waits on the device for everything submitted before it to the one queue, the
+// other slots' frames and the immediate work alike. On the host, a slot is resubmitted only
+// after its own previous submission finished (its fence); beginFrame waits for all.
+void VulkanBackend::beginFrame(int slot) {
+  if (slot < 0 || slot >= kFrameSlots)
+    throw Error("vulkan backend: frame slot " + std::to_string(slot) + " is not in 0.." +
+                std::to_string(kFrameSlots - 1));
   // A profiled frame's uploads end here: the host's recording of the frame, which a
   // replayed frame does not do, is no stage's time.
   if (queryCount_ > 0 && imm_ == Immediate::Recording) beginStage("");
-  flush();
-  check(inst_.fn.vkResetCommandBuffer(frameCmd_, 0), "vkResetCommandBuffer");
+  flush();  // no slot in flight: the slot's command buffer may be reset
+  FrameSlot& f = frames_[slot];
+  f.state = Frame::Empty;
+  check(inst_.fn.vkResetCommandBuffer(f.cmd, 0), "vkResetCommandBuffer");
   auto bi = vkStruct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
-  check(inst_.fn.vkBeginCommandBuffer(frameCmd_, &bi), "vkBeginCommandBuffer");
+  check(inst_.fn.vkBeginCommandBuffer(f.cmd, &bi), "vkBeginCommandBuffer");
   lastFrame_ = Cmd::None;
-  frame_ = Frame::Recording;
+  f.state = Frame::Recording;
+  recordingSlot_ = slot;
 }
 
 void VulkanBackend::endFrame() {
   if (!recordingFrame()) return;  // aborted: already submitted
+  FrameSlot& f = frames_[recordingSlot_];
+  recordingSlot_ = -1;
   // A profiled frame holds timestamp writes (queries reset once per profiled frame): it
   // is run, not replayed.
-  const bool timed = frame_ == Frame::RecordingTimed;
-  frame_ = Frame::Empty;  // until submitted
-  check(inst_.fn.vkEndCommandBuffer(frameCmd_), "vkEndCommandBuffer");
-  submit(frameCmd_, frameFence_);
-  frame_ = timed ? Frame::RunningOnce : Frame::Running;
+  const bool timed = f.state == Frame::RecordingTimed;
+  f.state = Frame::Empty;  // until submitted
+  check(inst_.fn.vkEndCommandBuffer(f.cmd), "vkEndCommandBuffer");
+  submit(f.cmd, f.fence);
+  f.state = timed ? Frame::RunningOnce : Frame::Running;
 }
 
-void VulkanBackend::replayFrame() {
-  if (!canReplayFrame()) throw Error("vulkan backend: no recorded frame to replay");
+void VulkanBackend::replayFrame(int slot) {
+  if (!canReplayFrame(slot))
+    throw Error("vulkan backend: no recorded frame in slot " + std::to_string(slot) + " to replay");
   ensureUsable();
-  // The previous run of the command buffer has finished before it is submitted again.
-  if (frame_ == Frame::Running) {
-    frame_ = Frame::Ready;
-    waitFence(frameFence_, "the frame");
+  abortFrameRecording();  // another slot's frame being recorded runs first, once
+  FrameSlot& f = frames_[slot];
+  // The slot's previous run has finished before its command buffer is submitted again
+  // (other slots still in flight need no wait: queue order and the barrier at the start of
+  // the command buffer keep this frame behind them on the device).
+  if (f.state == Frame::Running) {
+    f.state = Frame::Ready;
+    waitFence(f.fence, "the frame");
   }
-  // The uploads go first and are not waited for: queue order and the barrier before the
-  // frame's first command keep the frame behind them (a download's flush waits for both).
+  // The work issued since (uploads, fills, copies: the sequence's state and motion) goes
+  // first and is not waited for: queue order and the barrier before the frame's first
+  // command keep the frame behind it (a download's flush waits for both).
   if (imm_ == Immediate::Recording) {
     imm_ = Immediate::Idle;
     check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
     submit(immCmd_, immFence_);
     imm_ = Immediate::InFlight;
   }
-  submit(frameCmd_, frameFence_);
-  frame_ = Frame::Running;
+  submit(f.cmd, f.fence);
+  f.state = Frame::Running;
 }
 
 // ---- stage timing with timestamp queries ----
@@ -185,7 +206,8 @@ void VulkanBackend::beginStage(const std::string& name) {
     return;
   }
   VkCommandBuffer cb = recorder();
-  if (frame_ == Frame::Recording) frame_ = Frame::RecordingTimed;
+  if (recordingFrame() && frames_[recordingSlot_].state == Frame::Recording)
+    frames_[recordingSlot_].state = Frame::RecordingTimed;
   if (queryCount_ == 0) inst_.fn.vkCmdResetQueryPool(cb, queryPool_, 0, queryCapacity_);
   if (queryCount_ >= queryCapacity_) return;  // beyond capacity the rest of the batch goes to the last stage
   inst_.fn.vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, queryPool_, queryCount_++);

@@ -98,10 +98,12 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
   cai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
   cai.commandBufferCount = 1;
   check(inst_.fn.vkAllocateCommandBuffers(dev_, &cai, &immCmd_), "vkAllocateCommandBuffers");
-  check(inst_.fn.vkAllocateCommandBuffers(dev_, &cai, &frameCmd_), "vkAllocateCommandBuffers");
   auto fci = vkStruct<VkFenceCreateInfo>(VK_STRUCTURE_TYPE_FENCE_CREATE_INFO);
   check(inst_.fn.vkCreateFence(dev_, &fci, nullptr, &immFence_), "vkCreateFence");
-  check(inst_.fn.vkCreateFence(dev_, &fci, nullptr, &frameFence_), "vkCreateFence");
+  for (FrameSlot& f : frames_) {  // one recorded frame per slot (beginFrame)
+    check(inst_.fn.vkAllocateCommandBuffers(dev_, &cai, &f.cmd), "vkAllocateCommandBuffers");
+    check(inst_.fn.vkCreateFence(dev_, &fci, nullptr, &f.fence), "vkCreateFence");
+  }
 
   VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, kPushBytes};
   auto lci = vkStruct<VkPipelineLayoutCreateInfo>(VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO);
@@ -139,7 +141,8 @@ VulkanBackend::~VulkanBackend() {
   if (queryPool_) inst_.fn.vkDestroyQueryPool(dev_, queryPool_, nullptr);
   if (layout_) inst_.fn.vkDestroyPipelineLayout(dev_, layout_, nullptr);
   if (immFence_) inst_.fn.vkDestroyFence(dev_, immFence_, nullptr);
-  if (frameFence_) inst_.fn.vkDestroyFence(dev_, frameFence_, nullptr);
+  for (FrameSlot& f : frames_)
+    if (f.fence) inst_.fn.vkDestroyFence(dev_, f.fence, nullptr);
   if (pool_) inst_.fn.vkDestroyCommandPool(dev_, pool_, nullptr);
   inst_.fn.vkDestroyDevice(dev_, nullptr);
 }

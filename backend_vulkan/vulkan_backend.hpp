@@ -1,8 +1,9 @@
 // The Vulkan backend: every kernel of cs::Backend as a GLSL compute shader (../shaders),
 // run on any conformant Vulkan 1.2 device with bufferDeviceAddress (Mesa lavapipe in CI,
 // NVIDIA/AMD/Intel GPUs). Buffers live in device-local arenas and are reached by device
-// address from push constants; a frame is recorded once into a command buffer and
-// resubmitted; per-stage times come from timestamp queries.
+// address from push constants; each kind of frame (a slot of beginFrame: cold or warm,
+// filtered or not) is recorded once into a command buffer of its own and resubmitted;
+// per-stage times come from timestamp queries.
 //
 // Device selection ("--device"): "" picks the best device (discrete > integrated >
 // virtual > CPU), a number the device of that index, anything else the first device

@@ -39,10 +39,13 @@ class VulkanBackend final : public Backend {
   unsigned long long memoryBytes() const override;
 
   void synchronize() override;
-  void beginFrame() override;
+  void beginFrame(int slot) override;
   void endFrame() override;
-  bool canReplayFrame() const override { return frame_ == Frame::Running || frame_ == Frame::Ready; }
-  void replayFrame() override;
+  bool canReplayFrame(int slot) const override {
+    return slot >= 0 && slot < kFrameSlots &&
+           (frames_[slot].state == Frame::Running || frames_[slot].state == Frame::Ready);
+  }
+  void replayFrame(int slot) override;
   void beginStage(const std::string& name) override;
   std::vector<StageTime> takeStageTimes() override;
 
@@ -96,6 +99,11 @@ class VulkanBackend final : public Backend {
                          const Buffer& mask, const SweepParams& p) override;
   void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                      const CameraParams& cam0, const double tPrime[3]) override;
+  void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
+                       const Buffer& mask, const CarryParams& p) override;
+  void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
+                        const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                        const TemporalParams& p) override;
 
  private:
   struct Arena {
@@ -162,8 +170,8 @@ class VulkanBackend final : public Backend {
   VkQueue queue_ = VK_NULL_HANDLE;
   uint32_t queueFamily_ = 0;
   VkCommandPool pool_ = VK_NULL_HANDLE;
-  VkCommandBuffer immCmd_ = VK_NULL_HANDLE, frameCmd_ = VK_NULL_HANDLE;
-  VkFence immFence_ = VK_NULL_HANDLE, frameFence_ = VK_NULL_HANDLE;
+  VkCommandBuffer immCmd_ = VK_NULL_HANDLE;
+  VkFence immFence_ = VK_NULL_HANDLE;
   VkPipelineLayout layout_ = VK_NULL_HANDLE;
   VkPipeline pipelines_[kShaderCount] = {};
   VkQueryPool queryPool_ = VK_NULL_HANDLE;
@@ -180,7 +188,8 @@ class VulkanBackend final : public Backend {
   std::map<std::string, VkDeviceSize> paramCache_;
   std::map<std::tuple<int, int, int, int>, Buffer> scratch_;
 
-  // The recorded frame's command buffer (recording.cpp), one state at a time.
+  // The recorded frames' command buffers (recording.cpp), one per slot (beginFrame), each
+  // with its fence and its own state.
   enum class Frame {
     Empty,           // nothing to replay, nothing in flight
     Recording,       // between beginFrame() and endFrame()
@@ -189,20 +198,29 @@ class VulkanBackend final : public Backend {
     Running,         // submitted, replayable
     Ready,           // finished, replayable
   };
+  struct FrameSlot {
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    VkFence fence = VK_NULL_HANDLE;  // signalled by the slot's last submission
+    Frame state = Frame::Empty;
+  };
   // The immediate command buffer (uploads, downloads, kernels outside a frame).
   enum class Immediate { Idle, Recording, InFlight };
   // Hung (a fence timed out) outranks Lost (VK_ERROR_DEVICE_LOST): work may still run.
   enum class Health { Ok, Lost, Hung };
-  Cmd lastImm_ = Cmd::None, lastFrame_ = Cmd::None;  // the last command of immCmd_, frameCmd_
-  Frame frame_ = Frame::Empty;
+  Cmd lastImm_ = Cmd::None, lastFrame_ = Cmd::None;  // the last command of immCmd_, of the slot being recorded
+  FrameSlot frames_[kFrameSlots];
+  int recordingSlot_ = -1;  // the slot between beginFrame() and endFrame(), -1 when none
   Immediate imm_ = Immediate::Idle;
   Health health_ = Health::Ok;
-  bool recordingFrame() const { return frame_ == Frame::Recording || frame_ == Frame::RecordingTimed; }
-  // New buffers, a new pose or reused parameter blocks: the recorded frame must not be
-  // replayed (a frame being recorded is unaffected: it records the new state).
+  bool recordingFrame() const { return recordingSlot_ >= 0; }
+  VkCommandBuffer frameCmd() const { return frames_[recordingSlot_].cmd; }
+  // New buffers, a new pose or reused parameter blocks: no recorded frame may be replayed
+  // (every slot; a frame being recorded is unaffected: it records the new state).
   void invalidateFrame() {
-    if (frame_ == Frame::Ready) frame_ = Frame::Empty;
-    if (frame_ == Frame::Running) frame_ = Frame::RunningOnce;
+    for (FrameSlot& f : frames_) {
+      if (f.state == Frame::Ready) f.state = Frame::Empty;
+      if (f.state == Frame::Running) f.state = Frame::RunningOnce;
+    }
   }
   uint64_t timeoutNs_ = 120ull * 1000 * 1000 * 1000;
 };

@@ -4,12 +4,15 @@
 // after each one); outputs are finite where the oracle's are; errors (bad device
 // selectors, memory exhaustion) are cs::Error, not crashes; auto skips lavapipe. Without
 // a usable Vulkan device the suite is reported to ctest as skipped (gpu_suite.hpp).
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
 
+#include "curvestereo/camera.hpp"
 #include "curvestereo/stereo.hpp"
 #include "forwarding_backend.hpp"
 #include "golden_cases.hpp"
@@ -473,6 +476,172 @@ TEST_CASE("vulkan: a plane-sweep solve, replayed, matches the oracle with zero v
   for (int f = 0; f < 2; ++f) frames.push_back(stereo.compute(pair.left, pair.right));  // recorded, replayed
   checkFramesAgainstOracle(frames, ref);  // the replayed frame sweeps again, reading the same parameter blocks
   for (const DepthResult& r : frames) CHECK(r.confidence.size() == r.valid.size());  // the initialiser ran
+  if (vulkanValidationLayerActive())
+    CHECK_MESSAGE(vulkanValidationMessageCount() == before, "last: " << vulkanValidationLastMessage());
+}
+
+namespace {
+
+// Kernel outputs of a few frames of a sequence issued in slots (beginFrame): the motion
+// changes each frame (uploaded outside the frame), the filtered state is committed after
+// each (copied outside the frame) and is what the next frame carries, as in the pipeline.
+// The outputs are copied aside outside the frames and downloaded at the end, so that no
+// host wait separates one frame from the next.
+std::vector<std::vector<float> > runSlots(Backend& b, bool useReplay) {
+  const Camera cam = synth::defaultFisheye(45);
+  const CameraParams cp = toCameraParams(cam);
+  const int w = cam.width, h = cam.height;
+  std::vector<float> state(size_t(w) * h * 2), radial(size_t(w) * h), ones(size_t(w) * h, 1.f);
+  for (size_t i = 0; i < radial.size(); ++i) {
+    state[2 * i] = (i % 13 == 0) ? -1.f : 0.2f + 0.6f * golden::hash01(uint32_t(i) * 2654435761U + 1);
+    state[2 * i + 1] = 0.1f + golden::hash01(uint32_t(i) * 2246822519U + 2);
+    radial[i] = 1.5f + golden::hash01(uint32_t(i) * 3266489917U + 3);
+  }
+  Buffer st = b.create(w, h, 2), carried = b.create(w, h, 2), other = b.create(w, h, 2), filtered = b.create(w, h, 2),
+         motion = b.create(kMotionFloats, 1, 1), rad = b.create(w, h, 1), mask = b.create(w, h, 1),
+         u = b.create(w, h, 1), wf = b.create(w, h, 2);
+  constexpr int kFrames = 8;
+  const Buffer outputs[] = {carried, other, filtered, u, wf};
+  std::vector<Buffer> aside;  // per frame, a copy of each output
+  for (int f = 0; f < kFrames; ++f)
+    for (const Buffer& o : outputs) aside.push_back(b.create(o.width, o.height, o.channels));
+  b.upload(st, state.data());
+  b.upload(rad, radial.data());
+  b.upload(mask, ones.data());
+  b.fill(u, 1.f);
+  b.fill(wf, 0.5f);
+  b.fill(other, 5.f);
+  const TemporalParams tp{cp, {-0.1, 0.002, 0.001}, 0.8f, 3.f, 0.5f, 0.1f, 0.1f};
+  // Slot 1: the prior from the radial guess, filtered into `filtered`. Slot 2: the state
+  // carried into camera 1' by three steps. Slot 3: both. (Into the same grid: a coarser
+  // grid's first lookup lands on rounding ties, which backends may break either way.)
+  auto issue = [&](int slot) {
+    if (slot & 1) {
+      b.carryEstimate(carried, st, rad, motion, mask, {cp, cp, {0, 0, 0}, 1});
+      b.temporalFilter(filtered, u, wf, carried, rad, Buffer{}, mask, tp);
+    }
+    if (slot & 2) b.carryEstimate(other, st, Buffer{}, motion, mask, {cp, cp, {-0.1, 0.002, 0.001}, 3});
+  };
+  const int slots[kFrames] = {1, 2, 3, 1, 3, 2, 1, 3};
+  for (int f = 0; f < kFrames; ++f) {
+    const int slot = slots[f];
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.01 * (f + 1), Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(-0.007 * f, Eigen::Vector3d::UnitX()))
+                                  .toRotationMatrix();
+    float m[kMotionFloats];
+    for (int i = 0; i < 9; ++i) m[i] = float(R(i / 3, i % 3));
+    m[9] = 0.01f * float(f), m[10] = -0.004f, m[11] = 0.02f - 0.003f * float(f);
+    b.upload(motion, m);
+    b.fill(carried, 3.f);  // outside the frame: overwritten by the frames of slots 1 and 3
+    if (useReplay && b.canReplayFrame(slot)) {
+      b.replayFrame(slot);
+    } else {
+      b.beginFrame(slot);
+      issue(slot);
+      b.endFrame();
+    }
+    if (slot & 1) b.copy(st, filtered);  // committed: the next frame carries from it
+    for (size_t k = 0; k < 5; ++k) b.copy(aside[size_t(f) * 5 + k], outputs[k]);
+  }
+  std::vector<std::vector<float> > out;
+  for (const Buffer& buf : aside) {
+    std::vector<float> host(buf.count());
+    b.download(buf, host.data());
+    out.push_back(host);
+  }
+  return out;
+}
+
+}  // namespace
+
+// Each slot of beginFrame is recorded and replayed on its own; the uploads, fills and
+// copies issued between frames run before the next replay, whatever slot ran before.
+TEST_CASE("vulkan: frame slots replay each recorded frame with the frame's motion, in order with the work between") {
+  auto vk = vulkanOrSkip();
+  if (!vk) return;
+  const long long before = vulkanValidationMessageCount();
+  auto cpu = createBackend("cpu");
+  const auto expected = runSlots(*cpu, false);
+  const auto recorded = runSlots(*vk, false);  // every frame recorded again
+  const auto replayed = runSlots(*vk, true);   // each slot recorded once, then replayed
+  REQUIRE(expected.size() == replayed.size());
+  REQUIRE(recorded.size() == replayed.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    INFO("frame " << i / 5 << ", output " << i % 5);
+    CHECK(std::memcmp(recorded[i].data(), replayed[i].data(), replayed[i].size() * sizeof(float)) == 0);
+    double maxAbs = 0;
+    long long carriedValues = 0;
+    for (size_t k = 0; k < expected[i].size(); ++k) {
+      maxAbs = std::max(maxAbs, double(std::abs(replayed[i][k] - expected[i][k])));
+      carriedValues += expected[i][k] >= 0.f;
+    }
+    CHECK(maxAbs <= 1e-4);
+    CHECK(carriedValues > 0);
+  }
+  if (vulkanValidationLayerActive())
+    CHECK_MESSAGE(vulkanValidationMessageCount() == before, "last: " << vulkanValidationLastMessage());
+}
+
+// A sequence through Stereo::next: cold and warm frames (slots 1 and 3) and single pairs
+// (slot 0) interleaved, each recorded once and replayed, with a new pose every frame: the
+// same bits as the same calls issued afresh (profiled frames are never replayed), and the
+// oracle's solution.
+TEST_CASE(
+    "vulkan: a sequence's cold, warm and single frames, replayed from their slots, match a fresh run and the oracle") {
+  auto probe = vulkanOrSkip();
+  if (!probe) return;
+  probe.reset();
+  const long long before = vulkanValidationMessageCount();
+  const synth::SynthPair pair = smallPair();
+  Params params = preset("realtime");
+  params.minWidth = 20;
+  params.warps = 4;
+  params.warpsTaper = 1;
+  params.coldEvery = 3;
+  params.warmFailRatio = 0.f;  // no frame solved again: the same calls on every backend
+  auto run = [&](Stereo& stereo, bool twice) {
+    std::vector<DepthResult> frames;
+    for (int pass = 0; pass < (twice ? 2 : 1); ++pass) {
+      stereo.resetSequence();
+      for (int f = 0; f < 5; ++f) {
+        Pose pose;
+        pose.R = Eigen::AngleAxisd(0.002 * f, Eigen::Vector3d::UnitY()).toRotationMatrix();
+        pose.t = Eigen::Vector3d(0.001 * f, 0, 0.002 * f);
+        frames.push_back(stereo.next(pair.left, pair.right, &pose));
+        if (f == 1 || f == 3) frames.push_back(stereo.compute(pair.left, pair.right));
+      }
+    }
+    return frames;
+  };
+  Stereo oracle(pair.rig, params, "cpu");
+  const std::vector<DepthResult> ref = run(oracle, false);
+  Stereo stereo(pair.rig, params, "vulkan");
+  const std::vector<DepthResult> replayed = run(stereo, true);  // the second pass replays every frame
+  Stereo fresh(pair.rig, params, "vulkan");
+  fresh.setProfiling(true);
+  const std::vector<DepthResult> issued = run(fresh, false);
+  REQUIRE(replayed.size() == 2 * ref.size());
+  long long warm = 0;
+  for (size_t f = 0; f < replayed.size(); ++f) {
+    INFO("frame " << f);
+    const DepthResult &r = replayed[f], &e = ref[f % ref.size()], &i = issued[f % ref.size()];
+    CHECK(r.warm == e.warm);
+    warm += r.warm;
+    // NaN where no depth: bits, not values.
+    REQUIRE(r.disparity.data.size() == i.disparity.data.size());
+    CHECK(std::memcmp(r.disparity.data.data(), i.disparity.data.data(), r.disparity.data.size() * sizeof(float)) == 0);
+    CHECK(r.valid.data == i.valid.data);
+    CHECK(r.valid.data == e.valid.data);
+    long long valid = 0, close = 0;
+    for (size_t k = 0; k < r.valid.size(); ++k) {
+      if (!e.valid.data[k]) continue;
+      ++valid;
+      close += std::abs(r.disparity.data[k] - e.disparity.data[k]) <= 0.05f;
+    }
+    CHECK(valid > 0);
+    CHECK(double(close) >= 0.99 * double(valid));
+  }
+  CHECK(warm > 0);
   if (vulkanValidationLayerActive())
     CHECK_MESSAGE(vulkanValidationMessageCount() == before, "last: " << vulkanValidationLastMessage());
 }

@@ -2,6 +2,11 @@
 //   accuracy of our method and of the paper's baselines on pairs with ground truth
 //   (DESIGN.md "Evaluation definitions"), or, with --sweep, the paper's two parameter
 //   studies (eval_study.cpp). Tables: eval_report.cpp; pictures: eval_sheet.cpp.
+// curvestereo eval --sequence DIR [DIR...] [--cold | --compare] [--frames N] [--calib FILE]
+//                  [--csv FILE] [--md FILE]
+//   a sequence with ground truth frame after frame: per-frame tau, the moving object's tau
+//   and the flicker (eval_sequence.cpp). --cold / --compare take no value where main.cpp
+//   lists them as flags; --cold=on / --compare=on work either way.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -198,8 +203,12 @@ int cmdEval(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert({"csv", "md", "maps", "methods", "fov", "sgbm-fov", "ps-scale", "ps-window", "ps-step", "min-depth",
                 "sweep", "warps-list", "step", "plot", "replot"});
+  known.insert({"sequence", "cold", "compare", "frames", "calib"});
   args.allowOnly(known);
-  if (args.positional().empty()) throw Error("eval needs at least one pair folder");
+  if (args.has("sequence")) return runSequences(args, paramsFromArgs(args), backendFromArgs(args));
+  for (const char* sequenceOnly : {"cold", "compare", "frames", "calib"})
+    if (args.has(sequenceOnly)) throw Error(std::string("--") + sequenceOnly + " is for --sequence folders");
+  if (args.positional().empty()) throw Error("eval needs at least one pair folder (or --sequence DIR)");
   const Params params = paramsFromArgs(args);
   const std::string backend = backendFromArgs(args);
   if (args.has("sweep")) return runStudy(args, params, backend);

@@ -200,6 +200,8 @@ int cmdSynth(const Args& given) {
                 "fov", "quiet", "sequence"});
   for (const char* option : kSequenceOptions) known.insert(option);
   given.allowOnly(known);
+  if (!given.get("sequence", "").empty())
+    throw Error("option --sequence takes no value, got '" + given.get("sequence", "") + "'");
   if (given.has("sequence")) return synthSequence(given);
   const Args& args = given;
   for (const char* option : kSequenceOptions)

@@ -1,7 +1,7 @@
 // The pieces of `curvestereo eval` shared by its files: a pair with ground truth and a
 // result row (cmd_eval.cpp: the command, its methods and pairs), the CSV and Markdown
 // tables (eval_report.cpp), the per-pair picture sheet (eval_sheet.cpp) and the paper's
-// warps / du_max parameter study (eval_study.cpp).
+// warps / du_max parameter study (eval_study.cpp); sequences (eval_sequence.cpp).
 #pragma once
 #include <string>
 #include <vector>
@@ -58,5 +58,12 @@ void writeSheet(const std::string& dir, const Pair& p, const std::vector<SheetEn
 
 // --sweep warps=A..B | dumax=A..B: the paper's two parameter studies as CSV and a plot.
 int runStudy(const Args& args, const Params& base, const std::string& backend);
+
+// --sequence DIR [DIR...]: sequences with ground truth (ASL folders: mav0/cam0, cam1, depth0
+// [, depth1, mover0], poses_cam0.csv, camchain.yaml) run through Stereo::next, warm (the
+// default), --cold (warm start and temporal filter off) or --compare (cold, then warm):
+// per-frame tau, the moving object's tau>1 and the flicker (metrics.hpp), a summary per run,
+// --csv / --md when asked (eval_sequence.cpp).
+int runSequences(const Args& args, const Params& params, const std::string& backend);
 
 }  // namespace cs::cli::eval

@@ -1,7 +1,9 @@
 #include "curvestereo/metrics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "curvestereo/triangulate.hpp"
 
@@ -117,6 +119,73 @@ Metrics evaluate(const Rig& rig, const FlowImage& est, const ImageF& estDepth, c
   m.absRel = depthCount ? absRelSum / double(depthCount) : 0.0;
   m.density = pct(estimated, all.n);
   return m;
+}
+
+double maskedTau(const ImageF& errorMap, const ImageU8& mask, double k, long long* pixels) {
+  if (mask.width != errorMap.width || mask.height != errorMap.height)
+    throw Error("evaluation: mask and error map differ in size");
+  long long n = 0, bad = 0;
+  for (size_t i = 0; i < errorMap.size(); ++i) {
+    const float e = errorMap.data[i];
+    if (!mask.data[i] || std::isnan(e)) continue;
+    ++n;
+    bad += e > k;  // +inf (no estimate) included
+  }
+  if (pixels) *pixels = n;
+  return n ? 100.0 * double(bad) / double(n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+namespace {
+
+// An estimate of radial depth: finite and positive, or +inf (a point at infinity).
+bool isEstimate(float depth) { return depth > 0 && !std::isnan(depth); }
+
+// The signed relative error of an estimate, capped at 1 (as absRel is).
+double relativeError(float est, float gt) { return std::isfinite(est) ? std::min(1.0, (double(est) - gt) / gt) : 1.0; }
+
+}  // namespace
+
+double flicker(const Camera& cam0, const ImageF& estPrev, const ImageF& gtPrev, const ImageF& est, const ImageF& gt,
+               const ImageU8* moverPrev, const ImageU8* mover, const Motion& prevToCurrent, long long* points) {
+  const int w = cam0.width, h = cam0.height;
+  auto check = [&](int iw, int ih, const char* what) {
+    if (iw != w || ih != h)
+      throw Error(std::string("flicker: ") + what + " is " + std::to_string(iw) + "x" + std::to_string(ih) +
+                  ", camera 0 " + std::to_string(w) + "x" + std::to_string(h));
+  };
+  check(estPrev.width, estPrev.height, "the previous estimate");
+  check(gtPrev.width, gtPrev.height, "the previous ground truth");
+  check(est.width, est.height, "the estimate");
+  check(gt.width, gt.height, "the ground truth");
+  if (moverPrev) check(moverPrev->width, moverPrev->height, "the previous mover mask");
+  if (mover) check(mover->width, mover->height, "the mover mask");
+
+  const BuiltCamera cam(cam0);
+  // Frame k's camera coordinates into frame k-1's: the inverse of prevToCurrent.
+  const Eigen::Matrix3d Rback = prevToCurrent.R.transpose();
+  const Eigen::Vector3d tback = -(Rback * prevToCurrent.t);
+  long long n = 0;
+  double sum = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float g = gt(x, y), e = est(x, y);
+      if (!hasGroundTruth(g) || !isEstimate(e) || (mover && (*mover)(x, y))) continue;
+      Vec3<double> ray;
+      if (!cam.unproject(Vec2<double>(x, y), ray)) continue;
+      const Eigen::Vector3d Xprev = Rback * (double(g) * ray) + tback;
+      Vec2<double> px;
+      if (!cam.project(Xprev, px) || !cam.inImage(px)) continue;
+      const int xp = int(std::lround(px.x())), yp = int(std::lround(px.y()));
+      if (!gtPrev.inside(xp, yp)) continue;
+      const float gp = gtPrev(xp, yp), ep = estPrev(xp, yp);
+      if (!hasGroundTruth(gp) || !isEstimate(ep) || (moverPrev && (*moverPrev)(xp, yp))) continue;
+      const double range = Xprev.norm();
+      if (std::abs(double(gp) - range) > 0.02 * range) continue;  // occluded in frame k-1
+      sum += std::abs(relativeError(e, g) - relativeError(ep, gp));
+      ++n;
+    }
+  if (points) *points = n;
+  return n ? sum / double(n) : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace cs

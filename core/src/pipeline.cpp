@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 
 namespace cs {
@@ -173,7 +174,23 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
     // tangent buffer (overwritten by every warp) to receive theirs.
     backend_.fields(L.mask, l == 0 ? calibration_ : L.tangent, L.trajectory, fp);
   }
+  if (initialising()) {
+    const Level& S = levels_[sweep_.level];
+    std::vector<float> mask(S.mask.count());
+    backend_.download(S.mask, mask.data());
+    sweepMaskPixels_ = std::count_if(mask.begin(), mask.end(), [](float m) { return m != 0.f; });
+  }
   backend_.synchronize();
+}
+
+double Pipeline::consistentShare(float accept) {
+  if (!initialising()) return std::numeric_limits<double>::quiet_NaN();
+  const Buffer& confidence = levels_[sweep_.level].confidence;
+  sweepConfidence_.resize(confidence.count());
+  backend_.download(confidence, sweepConfidence_.data());
+  const long long consistent =
+      std::count_if(sweepConfidence_.begin(), sweepConfidence_.end(), [&](float c) { return c >= accept; });
+  return sweepMaskPixels_ ? double(consistent) / double(sweepMaskPixels_) : 0.0;
 }
 
 void Pipeline::stage(const char* name) {

@@ -73,6 +73,10 @@ class Pipeline {
   // Makes the frame just solved the one the next frame carries (a failed warm frame is not
   // committed: it is solved again cold from the same state).
   void commitSequenceFrame();
+  // The share of the sweep level's valid pixels whose left-right check passed in the frame
+  // just solved (NaN without the initialiser): a warm frame's health, read at the sweep's
+  // resolution (a sixteenth of the full frame's transfer with realtime).
+  double consistentShare(float accept);
 
   // For callers whose images are already on the backend's device (cs::cuda::DeviceStereo):
   // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
@@ -150,6 +154,8 @@ class Pipeline {
   // frame's, `next` this frame's filtered result, `prior` the state carried into this
   // frame's view; `motion` the kMotionFloats of camera 0's motion. Created by resetSequence.
   Buffer state_, next_, prior_, motion_;
+  long long sweepMaskPixels_ = 0;     // valid pixels at the sweep's level (setPose)
+  std::vector<float> sweepConfidence_;  // consistentShare's download
 };
 
 }  // namespace cs

@@ -105,17 +105,6 @@ void finish(DepthResult& r) {
     finishAll(r);
 }
 
-// The share of solved pixels whose left-right check passed (a warm frame's health).
-double consistentShare(const DepthResult& r, float accept) {
-  if (r.confidence.empty()) return std::numeric_limits<double>::quiet_NaN();
-  size_t solved = 0, consistent = 0;
-  for (size_t i = 0; i < r.valid.size(); ++i) {
-    solved += r.valid.data[i];
-    consistent += r.valid.data[i] && r.confidence.data[i] >= accept;
-  }
-  return solved ? double(consistent) / double(solved) : 0.0;
-}
-
 }  // namespace
 
 Stereo::Stereo(const Rig& rig, const Params& params, const std::string& backend)
@@ -148,7 +137,7 @@ void Stereo::compute(const ImageF& left, const ImageF& right, DepthResult& resul
     core_->pipeline().run(left, right, profiling_, progress_, result);
     finish(result);
     result.warm = result.redone = false;
-    result.consistentShare = consistentShare(result, core_->params().initAccept);
+    result.consistentShare = std::numeric_limits<double>::quiet_NaN();
   } catch (const std::bad_alloc&) {
     throw Error("out of memory computing a " + sizeText(left.width, left.height) + " frame (host result images)");
   }
@@ -160,14 +149,12 @@ void Stereo::next(const ImageF& left, const ImageF& right, DepthResult& result, 
   checkImage(right, core_->rig().cam1, "right");
   const auto t0 = std::chrono::steady_clock::now();
   Pipeline& pipeline = core_->pipeline();
-  // The check needs the confidence whatever the caller selected.
-  pipeline.select({outputs_.disparity, outputs_.warp, outputs_.points, true});
   try {
     detail::StereoCore::SequenceFrame frame = core_->beginSequenceFrame(pose);
     auto solve = [&] {
       pipeline.run(left, right, profiling_, progress_, result, {frame.warm, frame.filter});
       finish(result);
-      result.consistentShare = consistentShare(result, core_->params().initAccept);
+      result.consistentShare = pipeline.consistentShare(core_->params().initAccept);
     };
     solve();
     result.redone = false;
@@ -181,8 +168,6 @@ void Stereo::next(const ImageF& left, const ImageF& right, DepthResult& result, 
   } catch (const std::bad_alloc&) {
     throw Error("out of memory computing a " + sizeText(left.width, left.height) + " frame (host result images)");
   }
-  pipeline.select({outputs_.disparity, outputs_.warp, outputs_.points, outputs_.confidence});
-  if (!outputs_.confidence) result.confidence = ImageF();
   result.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 

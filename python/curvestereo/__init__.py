@@ -7,6 +7,14 @@ view, without rectifying or undistorting the images.
     r = stereo.compute(cs.read_image("left.png"), cs.read_image("right.png"))
     r.depth   # float32 H x W, radial metres, NaN where invalid
 
+A recording, frame after frame (warm start and temporal filter; poses optional):
+
+    seq = cs.Sequence("seq/")                 # an ASL / EuRoC folder, or ("left/", "right/")
+    stereo = cs.Stereo(cs.load_calibration("seq/camchain.yaml"))
+    for f in seq:                             # Frame: images read when first used
+        r = stereo.next(f.left, f.right, pose=f.pose)   # pose: 4 x 4 T_world_cam0 or None
+        print(f.timestamp_ns, r.warm, r.consistent_share)
+
 Every failure raises curvestereo.Error (a RuntimeError) with the library's one-line
 message. See help(curvestereo.Stereo) and the README's "Python" section.
 """
@@ -24,8 +32,10 @@ except ImportError as e:  # e.g. python/curvestereo itself on sys.path, not the 
 
 from ._curvestereo import (  # noqa: F401
     Error,
+    Frame,
     Result,
     Rig,
+    Sequence,
     Stereo,
     __version__,
     available_backends,
@@ -43,8 +53,10 @@ from ._curvestereo import (  # noqa: F401
 
 __all__ = [
     "Error",
+    "Frame",
     "Result",
     "Rig",
+    "Sequence",
     "Stereo",
     "available_backends",
     "build_info",

@@ -1,7 +1,9 @@
 """Type stubs for curvestereo (the extension is python/src/*.cpp)."""
 
 from os import PathLike
-from typing import Any, Callable, Literal, Protocol, Sequence
+from collections.abc import Iterator
+from typing import Any, Callable, Literal, Protocol
+from typing import Sequence as _Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -24,6 +26,9 @@ class _DLPackArray(Protocol):
 
 _Image = _HostImage | _CudaArray | _DLPackArray
 _F32 = npt.NDArray[np.float32]
+# Stereo.next's pose, T_world_cam0 (X_world = R X_cam0 + t): a 4 x 4 array (last row
+# 0 0 0 1), or an (R, t) pair (3 x 3, 3 values). R must be a rotation.
+_Pose = npt.ArrayLike | tuple[npt.ArrayLike, npt.ArrayLike]
 
 class Error(RuntimeError):
     """Every failure of the library: a one-line message naming the file or value."""
@@ -105,6 +110,16 @@ class Result:
         """Milliseconds per stage ({} when profiling is off)."""
     @property
     def total_ms(self) -> float: ...
+    @property
+    def warm(self) -> bool:
+        """next(): the frame started from the previous frame's estimate (False from compute())."""
+    @property
+    def redone(self) -> bool:
+        """next(): a warm frame failed its check (warm_fail_ratio) and was solved again cold."""
+    @property
+    def consistent_share(self) -> float:
+        """next(): share of the valid pixels at the sweep's level that passed its left-right
+        check; NaN from compute(), without the initialiser and on the GPU-array path."""
 
 class Stereo:
     """The solver for one rig: set up once, then compute() per frame. Not for two threads
@@ -117,7 +132,7 @@ class Stereo:
         backend: str = "auto",
         *,
         device: int | str = ...,
-        outputs: Sequence[Literal["disparity", "warp", "points", "depth", "valid", "z"]] | None = None,
+        outputs: _Sequence[Literal["disparity", "warp", "points", "depth", "valid", "z"]] | None = None,
         profile: bool | None = None,
         # Solver parameters (Stereo.params lists them all; CLI spellings such as
         # max_fov, median, init_parallax and dashes are accepted too).
@@ -155,6 +170,12 @@ class Stereo:
         init_band: int = ...,
         max_fov_deg: float = ...,
         epipole_deg: float = ...,
+        # Sequences (next()): warm start, cold schedule, warm-failure check, temporal filter.
+        warm_start: bool = ...,
+        cold_every: int = ...,
+        warm_fail_ratio: float = ...,
+        temporal_strength: float = ...,
+        temporal_gate: float = ...,
         **more: Any,
     ) -> None: ...
     def compute(
@@ -166,6 +187,20 @@ class Stereo:
         return_device: bool = False,
     ) -> Result:
         """Solve one pair (the GIL is released meanwhile). GPU arrays need the CUDA backend."""
+    def next(
+        self,
+        left: _Image,
+        right: _Image,
+        pose: _Pose | None = None,
+        *,
+        progress: Callable[[float], object] | None = None,
+        return_device: bool = False,
+    ) -> Result:
+        """The next frame of a sequence: warm-started from the previous frame (moved by the
+        change of pose when both have one), filtered over time; Result.warm tells. Raises
+        Error on a pose of another shape or a non-rotation."""
+    def reset_sequence(self) -> None:
+        """A new sequence: the next next() is solved cold, nothing carried into it."""
     def set_pose(self, R: npt.ArrayLike, t: npt.ArrayLike) -> None:
         """A moving camera: the second view's pose relative to the first (X1 = R X0 + t)."""
     def set_mask(self, mask: npt.ArrayLike) -> None:
@@ -184,6 +219,59 @@ class Stereo:
     def params(self) -> dict[str, Any]: ...
     @property
     def outputs(self) -> list[str]: ...
+
+class Frame:
+    """One stereo frame of a Sequence; left / right are read on first use, then kept."""
+
+    @property
+    def index(self) -> int: ...
+    @property
+    def timestamp_ns(self) -> int:
+        """Camera 0's timestamp."""
+    @property
+    def left(self) -> _F32:
+        """Camera 0's image, float32 H x W in [0, 1] (as read_image)."""
+    @property
+    def right(self) -> _F32: ...
+    @property
+    def pose(self) -> npt.NDArray[np.float64] | None:
+        """T_world_cam0, 4 x 4 (what Stereo.next takes), or None."""
+    @property
+    def left_path(self) -> str: ...
+    @property
+    def right_path(self) -> str: ...
+
+class Sequence:
+    """A recorded stereo sequence, images read one frame at a time.
+
+        seq = curvestereo.Sequence("seq/")               # an ASL / EuRoC folder
+        stereo = curvestereo.Stereo(curvestereo.load_calibration("seq/camchain.yaml"))
+        for f in seq:
+            r = stereo.next(f.left, f.right, pose=f.pose)
+    """
+
+    def __init__(
+        self,
+        source: _Path | tuple[_Path, _Path],
+        poses: _Path | None = None,
+        pair_tolerance_ms: float = 1.0,
+        pose_tolerance_ms: float = 5.0,
+    ) -> None:
+        """source: an ASL / EuRoC folder (holding mav0/, or mav0/ itself), or two image
+        folders / globs as "LEFT,RIGHT" or (left, right). poses: EuRoC CSV or TUM text of
+        T_world_cam0 (default: the ASL folder's poses_cam0.csv)."""
+    def __len__(self) -> int: ...
+    def __getitem__(self, index: int) -> Frame: ...
+    def __iter__(self) -> Iterator[Frame]: ...
+    @property
+    def warnings(self) -> list[str]:
+        """Unpaired frames, frames without a pose, mismatched names: one line each."""
+    @property
+    def summary(self) -> str: ...
+    @property
+    def timestamps_ns(self) -> npt.NDArray[np.int64]: ...
+    @property
+    def source(self) -> str: ...
 
 def load_calibration(path: _Path) -> Rig:
     """Read a stereo calibration: Kalibr camchain.yaml, Basalt calibration.json or OpenCV

@@ -294,6 +294,7 @@ Result resultFromDepth(DepthResult&& r, const std::shared_ptr<ResultPool>& pool)
   out.confidence = orNone(floatArray(std::move(r.confidence), pool), has.confidence);
   for (const StageTime& s : r.stages) out.stages[pb::str(s.name)] = s.ms;
   out.totalMs = r.totalMs;
+  out.warm = r.warm, out.redone = r.redone, out.consistentShare = r.consistentShare;
   return out;
 }
 

@@ -7,11 +7,13 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "curvestereo/image.hpp"
 #include "curvestereo/params.hpp"
+#include "curvestereo/pose.hpp"
 #include "curvestereo/stereo.hpp"
 #include "pixels.hpp"
 
@@ -99,6 +101,9 @@ struct Result {
   pb::object depth, z, points, disparity, warp, valid, confidence;
   pb::dict stages;
   double totalMs = 0;
+  // Sequences (Stereo.next): DepthResult's warm, redone and consistentShare.
+  bool warm = false, redone = false;
+  double consistentShare = 0;
 };
 Result resultFromDepth(DepthResult&& r, const std::shared_ptr<ResultPool>& pool = nullptr);
 
@@ -136,7 +141,14 @@ std::vector<std::string> paramNames();
 
 // ---------------------------------------------------------------- the module's parts
 
-void bindDevice(pb::module_& m);  // DeviceArray (an empty stub without CUDA)
+void bindDevice(pb::module_& m);    // DeviceArray (an empty stub without CUDA)
+void bindSequence(pb::module_& m);  // Sequence and Frame (sequence.cpp)
+
+// A frame's pose for Stereo.next (T_world_cam0): None (nullopt), a 4 x 4 array, or an
+// (R, t) pair. Throws cs::Error naming the accepted forms on anything else.
+std::optional<Pose> poseFrom(pb::handle obj);
+// T_world_cam0 as a 4 x 4 float64 array.
+pb::array poseArray(const Pose& pose);
 
 #ifdef CS_PY_CUDA
 // The CUDA device path of one Stereo (created on first use): device or host inputs,
@@ -152,6 +164,10 @@ void devicePathSetMask(DevicePath& d, const ImageU8& mask);
 // Host outputs (returnDevice false) are NumPy arrays over `pool`'s recycled storage.
 Result devicePathCompute(DevicePath& d, pb::handle left, pb::handle right, bool returnDevice,
                          const Stereo::Outputs& outputs, const std::shared_ptr<ResultPool>& pool);
+// DeviceStereo::next: as devicePathCompute, one frame of the device path's sequence.
+Result devicePathNext(DevicePath& d, pb::handle left, pb::handle right, const Pose* pose, bool returnDevice,
+                      const Stereo::Outputs& outputs, const std::shared_ptr<ResultPool>& pool);
+void devicePathResetSequence(DevicePath& d);
 #endif
 
 }  // namespace cs::py

@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstring>
 #include <exception>
+#include <limits>
 #include <mutex>
 
 #include "binding.hpp"
@@ -227,8 +228,14 @@ class DevicePath {
     stereo_->setMask(mask);
   }
 
+  void resetSequence() {
+    DeviceGuard guard(ctx_->device);
+    stereo_->resetSequence();
+  }
+
+  // sequence: DeviceStereo::next (with `pose`), else DeviceStereo::compute.
   Result compute(pb::handle left, pb::handle right, bool returnDevice, const Stereo::Outputs& sel,
-                 const std::shared_ptr<ResultPool>& pool) {
+                 const std::shared_ptr<ResultPool>& pool, bool sequence = false, const Pose* pose = nullptr) {
     const auto t0 = std::chrono::steady_clock::now();
     const uintptr_t ours = reinterpret_cast<uintptr_t>(ctx_->stream);
     // With the GIL: the protocols and host conversions are Python calls. Host inputs are
@@ -289,7 +296,8 @@ class DevicePath {
         check(launchToGray(src, type, width_, height_, dst[k], static_cast<unsigned*>(flag_->ptr), 1u << k, s),
               "input conversion");
       }
-      const cuda::DeviceDepth d = stereo_->compute(dst[0], dst[1]);
+      const cuda::DeviceDepth d = sequence ? stereo_->next(dst[0], dst[1], pose) : stereo_->compute(dst[0], dst[1]);
+      result.warm = d.warm;
       fa.radial = d.radial, fa.disparity = d.disparity, fa.warp = d.warp, fa.points = d.points;
       fa.confidence = d.confidence;
       // valid, radial, z, points, disparity, warp, confidence: FinishArgs' outputs.
@@ -350,6 +358,9 @@ class DevicePath {
     result.disparity = take(fa.outDisparity, {h, w}, false);
     result.warp = take(fa.outWarp, {h, w, 2}, false);
     result.confidence = take(fa.outConfidence, {h, w}, false);
+    // Nothing is read back to judge a frame by (DeviceStereo::next has no warm-failure check).
+    result.redone = false;
+    result.consistentShare = std::numeric_limits<double>::quiet_NaN();
     result.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return result;
   }
@@ -430,6 +441,11 @@ Result devicePathCompute(DevicePath& d, pb::handle left, pb::handle right, bool 
                          const Stereo::Outputs& outputs, const std::shared_ptr<ResultPool>& pool) {
   return d.compute(left, right, returnDevice, outputs, pool);
 }
+Result devicePathNext(DevicePath& d, pb::handle left, pb::handle right, const Pose* pose, bool returnDevice,
+                      const Stereo::Outputs& outputs, const std::shared_ptr<ResultPool>& pool) {
+  return d.compute(left, right, returnDevice, outputs, pool, true, pose);
+}
+void devicePathResetSequence(DevicePath& d) { d.resetSequence(); }
 
 void bindDevice(pb::module_& m) {
   pb::class_<DeviceArray>(m, "DeviceArray",

@@ -278,48 +278,23 @@ class PyStereo {
 
   Result compute(pb::handle left, pb::handle right, pb::object progress, bool returnDevice) {
     auto lock = claim();
-    if (returnDevice || isDeviceArray(left) || isDeviceArray(right)) return computeOnDevice(left, right, returnDevice);
-    // Into this object's input images (claimed above): no allocation after the first frame.
-    imageFromArray(left, "left image", left_);
-    imageFromArray(right, "right image", right_);
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw Error("progress must be callable");
-    // The callback runs on this thread with the GIL taken back. If it raises, the exception
-    // is re-raised from compute(); on the CPU backend the frame also stops at once (GPU
-    // frames are recorded as a whole and short: they finish first).
-    std::optional<pb::error_already_set> raised;
-    const bool abortable = stereo_->backendName() == "cpu";
-    if (!progress.is_none())
-      stereo_->setProgress([&](double fraction) {
-        if (raised) return;
-        pb::gil_scoped_acquire gil;
-        try {
-          progress(fraction);
-        } catch (pb::error_already_set& e) {
-          raised.emplace(std::move(e));
-          if (abortable) throw ProgressAbort{};
-        }
-      });
-    struct Reset {
-      Stereo& s;
-      ~Reset() { s.setProgress(nullptr); }
-    } reset{*stereo_};
-    // The library computes into recycled storage (what earlier results' arrays gave back when
-    // they were dropped), and the arrays below take it over without a copy.
-    DepthResult out;
-    pool_->lend(out);
-    {
-      pb::gil_scoped_release nogil;
-      try {
-        stereo_->compute(left_, right_, out);
-      } catch (const ProgressAbort&) {
-      }
-    }
-    if (raised) {
-      pb::error_already_set e = std::move(*raised);
-      raised.reset();
-      throw e;
-    }
-    return resultFromDepth(std::move(out), pool_);
+    return solve(left, right, progress, returnDevice, Kind::Single, nullptr);
+  }
+
+  // Stereo::next: one frame of a sequence (pose: T_world_cam0, see poseFrom).
+  Result next(pb::handle left, pb::handle right, pb::handle poseObj, pb::object progress, bool returnDevice) {
+    const std::optional<Pose> pose = poseFrom(poseObj);
+    auto lock = claim();
+    return solve(left, right, progress, returnDevice, Kind::Sequence, pose ? &*pose : nullptr);
+  }
+
+  void resetSequence() {
+    auto lock = claim();
+    stereo_->resetSequence();
+#ifdef CS_PY_CUDA
+    if (device_) devicePathResetSequence(*device_);
+#endif
+    sequencePath_ = SequenceOn::None;
   }
 
   void setPose(pb::handle Robj, pb::handle tobj) {
@@ -349,6 +324,74 @@ class PyStereo {
   Stereo::Outputs outputs() const { return outputs_; }
 
  private:
+  enum class Kind { Single, Sequence };
+  // Which pipeline the sequence's frames went through: the host Stereo and the device path
+  // each carry their own previous frame.
+  enum class SequenceOn { None, Host, Device };
+
+  // compute() and next(), with the claim held.
+  Result solve(pb::handle left, pb::handle right, pb::object progress, bool returnDevice, Kind kind, const Pose* pose) {
+    if (returnDevice || isDeviceArray(left) || isDeviceArray(right))
+      return computeOnDevice(left, right, returnDevice, kind, pose);
+    // Into this object's input images (claimed above): no allocation after the first frame.
+    imageFromArray(left, "left image", left_);
+    imageFromArray(right, "right image", right_);
+    if (kind == Kind::Sequence) enterSequencePath(SequenceOn::Host);
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw Error("progress must be callable");
+    // The callback runs on this thread with the GIL taken back. If it raises, the exception
+    // is re-raised from compute(); on the CPU backend the frame also stops at once (GPU
+    // frames are recorded as a whole and short: they finish first).
+    std::optional<pb::error_already_set> raised;
+    const bool abortable = stereo_->backendName() == "cpu";
+    if (!progress.is_none())
+      stereo_->setProgress([&](double fraction) {
+        if (raised) return;
+        pb::gil_scoped_acquire gil;
+        try {
+          progress(fraction);
+        } catch (pb::error_already_set& e) {
+          raised.emplace(std::move(e));
+          if (abortable) throw ProgressAbort{};
+        }
+      });
+    struct Reset {
+      Stereo& s;
+      ~Reset() { s.setProgress(nullptr); }
+    } reset{*stereo_};
+    // The library computes into recycled storage (what earlier results' arrays gave back when
+    // they were dropped), and the arrays below take it over without a copy.
+    DepthResult out;
+    pool_->lend(out);
+    {
+      pb::gil_scoped_release nogil;
+      try {
+        if (kind == Kind::Sequence)
+          stereo_->next(left_, right_, out, pose);
+        else
+          stereo_->compute(left_, right_, out);
+      } catch (const ProgressAbort&) {
+      }
+    }
+    if (raised) {
+      pb::error_already_set e = std::move(*raised);
+      raised.reset();
+      throw e;
+    }
+    return resultFromDepth(std::move(out), pool_);
+  }
+
+  // A sequence that moves from one pipeline to the other (host arrays, then GPU arrays)
+  // must not warm-start from the stale frame the other one last saw: it starts cold there.
+  void enterSequencePath(SequenceOn path) {
+    if (sequencePath_ != path && sequencePath_ != SequenceOn::None) {
+      if (path == SequenceOn::Host) stereo_->resetSequence();
+#ifdef CS_PY_CUDA
+      if (path == SequenceOn::Device && device_) devicePathResetSequence(*device_);
+#endif
+    }
+    sequencePath_ = path;
+  }
+
   // One Stereo is not thread-safe, and compute() runs without the GIL: a second thread
   // using the same object gets an error instead of corrupting it.
   std::unique_lock<std::mutex> claim() {
@@ -357,7 +400,7 @@ class PyStereo {
     return lock;
   }
 
-  Result computeOnDevice(pb::handle left, pb::handle right, bool returnDevice) {
+  Result computeOnDevice(pb::handle left, pb::handle right, bool returnDevice, Kind kind, const Pose* pose) {
 #ifdef CS_PY_CUDA
     if (stereo_->backendName() != "cuda")
       throw Error("GPU arrays and return_device need the CUDA backend; this Stereo runs on " + stereo_->backendName() +
@@ -368,9 +411,13 @@ class PyStereo {
       device_ = makeDevicePath(stereo_->rig(), params_, backendSpec_);
       if (!mask_.empty()) devicePathSetMask(*device_, mask_);
     }
+    if (kind == Kind::Sequence) {
+      enterSequencePath(SequenceOn::Device);
+      return devicePathNext(*device_, left, right, pose, returnDevice, outputs_, pool_);
+    }
     return devicePathCompute(*device_, left, right, returnDevice, outputs_, pool_);
 #else
-    (void)left, (void)right, (void)returnDevice;
+    (void)left, (void)right, (void)returnDevice, (void)kind, (void)pose;
     throw Error(
         "GPU arrays and return_device need the CUDA backend, which this build does not have (build with nvcc "
         "installed)");
@@ -384,6 +431,7 @@ class PyStereo {
   std::unique_ptr<Stereo> stereo_;
   ImageU8 mask_;
   ImageF left_, right_;  // the last frame's converted inputs, reused (compute() holds the claim)
+  SequenceOn sequencePath_ = SequenceOn::None;
   std::shared_ptr<ResultPool> pool_ = std::make_shared<ResultPool>();
 #ifdef CS_PY_CUDA
   DevicePathPtr device_;
@@ -501,13 +549,25 @@ PYBIND11_MODULE(_curvestereo, m) {
           "stages", [](const Result& r) { return r.stages; },
           "Milliseconds per stage of this frame ({} when profiling is off).")
       .def_property_readonly(
-          "total_ms", [](const Result& r) { return r.totalMs; }, "Wall time of compute(), ms.")
+          "total_ms", [](const Result& r) { return r.totalMs; }, "Wall time of compute() or next(), ms.")
+      .def_property_readonly(
+          "warm", [](const Result& r) { return r.warm; },
+          "next(): whether the frame started from the previous frame's estimate (False for a cold frame and "
+          "from compute()).")
+      .def_property_readonly(
+          "redone", [](const Result& r) { return r.redone; },
+          "next(): whether a warm frame failed its check (warm_fail_ratio) and was solved again cold.")
+      .def_property_readonly(
+          "consistent_share", [](const Result& r) { return r.consistentShare; },
+          "next(): share of the valid pixels at the sweep's level that passed its left-right check, in [0, 1] (what "
+          "a warm frame is judged by); NaN from compute(), without the initialiser and on the GPU-array path.")
       .def("__repr__", [](const Result& r) {
         const std::string shape = pb::str(r.depth.attr("shape"));
         return "<curvestereo.Result " + shape + ", " + std::to_string(r.totalMs) + " ms>";
       });
 
-  pb::class_<PyStereo>(m, "Stereo", R"doc(The solver for one rig: set up once, then compute() per frame.
+  pb::class_<PyStereo>(m, "Stereo", R"doc(The solver for one rig: set up once, then compute() per frame
+(or next() per frame of a sequence).
 
 Stereo(rig, preset="realtime", backend="auto", *, outputs=None, profile=None, **overrides)
 
@@ -533,6 +593,24 @@ the results on the GPU as DeviceArray objects. progress: called with the fractio
 also stops the frame). GPU frames replay a recorded graph and report little in between;
 the GPU-array path (device inputs or return_device) reports nothing and leaves stages
 empty. The GIL is released while the frame is solved.)doc")
+      .def("next", &PyStereo::next, pb::arg("left"), pb::arg("right"), pb::arg("pose") = pb::none(), pb::kw_only(),
+           pb::arg("progress") = pb::none(), pb::arg("return_device") = false,
+           R"doc(Solve the next frame of a sequence and return a Result (images as in compute()).
+
+From the second frame on it starts from the previous frame's estimate carried into this
+frame's view (warm_start, with the band sweep of preset "realtime") and filters the
+result over time (temporal_strength). pose: camera 0's pose for this frame, T_world_cam0
+(a point X in camera 0's frame is R X + t in the world): None, a 4 x 4 array, or an
+(R, t) pair (3 x 3, 3); with the previous frame's pose the carried estimate follows the
+rig's motion, without it is carried as it is. Every cold_every-th frame is solved cold,
+and a warm frame whose consistent share falls below warm_fail_ratio x the last cold
+frame's is solved again cold. Result.warm / .redone / .consistent_share tell which.
+GPU arrays and return_device use the CUDA device path, which has no warm-failure check
+(redone is always False there). A sequence that switches between host and GPU arrays
+starts cold on the side it switches to. compute() in between does not disturb the
+sequence.)doc")
+      .def("reset_sequence", &PyStereo::resetSequence,
+           "Start a new sequence: the next next() is solved cold and nothing is carried into it.")
       .def("set_pose", &PyStereo::setPose, pb::arg("R"), pb::arg("t"),
            "For a moving camera: the pose of the second view relative to the first (X1 = R X0 + t).")
       .def("set_mask", &PyStereo::setMask, pb::arg("mask"),
@@ -617,4 +695,5 @@ empty. The GIL is released while the frame is solved.)doc")
       },
       "What this build contains: version, backends, whether GPU arrays are accepted, parameter names.");
   bindDevice(m);
+  bindSequence(m);
 }

@@ -247,3 +247,39 @@ def test_host_results_of_device_inputs_stay_valid(cp, pair):
             assert same_bits(getattr(r1, n), v), n
     # NumPy inputs through the device path (return_device=True): pinned upload, same results.
     assert_same(stereo.compute(left, right, return_device=True), ref)
+
+
+def test_next_on_the_device_path_equals_host_next(pair):
+    # Stereo.next through the device path (DeviceStereo::next; here host inputs with
+    # return_device=True, no array library needed) against cs::Stereo::next on the same
+    # backend: the same kernels, so the same bits, and the same cold / warm schedule. The
+    # device path has no warm-failure check: with warm_fail_ratio 0 neither redoes a frame.
+    rig, left, right = pair
+    params = dict(cold_every=3, warm_fail_ratio=0.0, min_width=20)
+    on_host, on_device = cs.Stereo(rig, "realtime", "cuda", **params), cs.Stereo(rig, "realtime", "cuda", **params)
+    pose = np.eye(4)  # a static camera
+    for k, warm in enumerate([False, True, True, False, True]):
+        ref = on_host.next(left, right, pose=pose)
+        r = on_device.next(left, right, pose=pose, return_device=True)
+        assert isinstance(r.depth, cs.DeviceArray)
+        assert (ref.warm, r.warm) == (warm, warm), k
+        assert not ref.redone and not r.redone
+        assert np.isnan(r.consistent_share) and 0 < ref.consistent_share <= 1
+        assert_same(r, ref)
+    on_device.reset_sequence()
+    assert [on_device.next(left, right, return_device=True).warm for _ in range(2)] == [False, True]
+    # Switching between host and device arrays: each pipeline carries its own previous
+    # frame, so the side switched to starts cold.
+    assert [on_device.next(left, right).warm for _ in range(2)] == [False, True]
+    assert not on_device.next(left, right, return_device=True).warm
+
+
+def test_next_with_cupy_inputs(cp, pair):
+    rig, left, right = pair
+    stereo = cs.Stereo(rig, "realtime", "cuda", min_width=20)
+    ref = cs.Stereo(rig, "realtime", "cuda", min_width=20, warm_fail_ratio=0.0)
+    for _ in range(2):
+        r = stereo.next(cp.asarray(left), cp.asarray(right), pose=(np.eye(3), np.zeros(3)))
+        assert isinstance(r.depth, np.ndarray)
+        assert_same(r, ref.next(left, right))
+    assert r.warm

@@ -1,6 +1,7 @@
 // The evaluation of DESIGN.md "Evaluation definitions".
 #pragma once
 #include "curvestereo/image.hpp"
+#include "curvestereo/pose.hpp"
 #include "curvestereo/rig.hpp"
 
 namespace cs {
@@ -26,5 +27,29 @@ ImageU8 nonOccludedMask(const Rig& rig, const ImageF& depthLeft, const ImageF* d
 // +inf where evaluated without an estimate).
 Metrics evaluate(const Rig& rig, const FlowImage& est, const ImageF& estDepth, const ImageF& depthLeft,
                  const ImageF* depthRight, ImageF* errorMap = nullptr);
+
+// --- sequences (DESIGN.md "Evaluation definitions", *sequences*) ---
+
+// tau>k in percent over the pixels where mask != 0 that errorMap (evaluate()'s) evaluates
+// (not NaN); a pixel without an estimate (+inf) counts as an error. NaN when there is no
+// such pixel. pixels (optional) receives their number. For the moving-object pixels of a
+// sequence frame (its mover mask).
+double maskedTau(const ImageF& errorMap, const ImageU8& mask, double k, long long* pixels = nullptr);
+
+// Flicker between frames k-1 (prev) and k of a sequence: the mean of |e_k(x) - e_{k-1}(x')|
+// over the static surface points seen in both frames, e = (est - gt) / gt the relative error
+// of radial depth (capped at 1 as evaluate()'s absRel caps it: an estimate of more than twice
+// the true depth, or +inf, counts as e = 1).
+// For each pixel x of frame k with finite positive gt, an estimate (finite or +inf, > 0) and
+// mover(x) == 0: the point gt(x) * ray(x) is moved into frame k-1's camera 0 (the inverse of
+// prevToCurrent = motionBetween(pose_{k-1}, pose_k)) and projected with cam0; x' is the
+// nearest pixel. The point counts when x' lies in the image, moverPrev(x') == 0, estPrev(x')
+// is an estimate and gtPrev(x') agrees with the moved point's distance within 2 % (else the
+// point is occluded in frame k-1, or off its image). Movers may be null (no moving object).
+// Returns NaN when no point counts; points (optional) receives how many did. Throws
+// cs::Error when the images' sizes differ from each other or from cam0's.
+double flicker(const Camera& cam0, const ImageF& estPrev, const ImageF& gtPrev, const ImageF& est, const ImageF& gt,
+               const ImageU8* moverPrev, const ImageU8* mover, const Motion& prevToCurrent,
+               long long* points = nullptr);
 
 }  // namespace cs

@@ -46,8 +46,8 @@ struct DepthResult {
   double totalMs = 0;
   // Sequences (Stereo::next): whether this frame started from the previous one's estimate,
   // whether it was a warm frame that failed its check and was solved again cold, and the
-  // share of solved pixels that passed the sweep's left-right check (NaN without the
-  // initialiser): the figure a warm frame is judged by.
+  // share of valid pixels at the sweep's level that passed its left-right check: the figure
+  // a warm frame is judged by (NaN for compute() and without the initialiser).
   bool warm = false;
   bool redone = false;
   double consistentShare = 0;

@@ -137,6 +137,7 @@ struct EstimateUpsampleParams {
 // sequence's warm start and the temporal filter's prior.
 constexpr int kMotionFloats = 12;  // the motion buffer: R row-major, then t
 constexpr int kFrameSlots = 4;     // recorded frames a backend keeps (beginFrame)
+constexpr double kCarryTie = 1e-3;  // px: positions this close to halfway go to the lower pixel
 struct CarryParams {
   CameraParams srcCam;  // the grid of src (the previous view's camera 0)
   CameraParams dstCam;  // the grid of dst: the same lens, at src's scale or another level's
@@ -347,9 +348,11 @@ class Backend {
   // backward fixed point: T = t + extraT, ray = dstCam.unproject(x); the first q is 1 /
   // guess(x) (guess 1 ch on dst's grid, radial depth: +inf gives 0; NaN or <= 0 gives
   // none) or, without a guess (id -1), src's q at the nearest src pixel to
-  // srcCam.project(ray); then p.iterations times: s = src at the nearest pixel (floor(c +
-  // 0.5) per coordinate, in double) to srcCam.project(R^T (ray - q T)), ray_s =
-  // srcCam.unproject(that pixel), q = q_s / |R ray_s + q_s T|, v = v_s. (-1, 0) where x is
+  // srcCam.project(ray); then p.iterations times: s = src at the nearest pixel to
+  // srcCam.project(R^T (ray - q T)), ray_s = srcCam.unproject(that pixel), q = q_s / |R ray_s
+  // + q_s T|, v = v_s. The nearest pixel is floor(c + 0.5 - kCarryTie) per coordinate, in
+  // double: a coarser grid's pixel centres fall exactly halfway between a finer grid's, and
+  // rounding must not pick a side differently on each backend. (-1, 0) where x is
   // not masked or not unprojectable, or a step finds no estimate (the pixel outside src's
   // image, an invalid projection or unprojection, q_s < 0). mask 1 ch on dst's grid.
   void carryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,

@@ -1,0 +1,254 @@
+// Sequences in the Python module: curvestereo.Sequence (a recording's frame list, images
+// read one frame at a time) and Frame, and the pose argument of Stereo.next.
+//
+//   seq = curvestereo.Sequence("seq/")       # cs::Sequence::open
+//   for f in seq:                             # a Frame; f.left / f.right read on first use
+//       r = stereo.next(f.left, f.right, pose=f.pose)
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "binding.hpp"
+#include "curvestereo/sequence.hpp"
+
+namespace cs::py {
+
+namespace {
+
+using Path = std::filesystem::path;
+
+std::string shapeText(const pb::array& a) {
+  std::string s = "(";
+  for (pb::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+using DoubleArray = pb::array_t<double, pb::array::c_style | pb::array::forcecast>;
+
+// Numbers only (not strings, objects or booleans), as float64; nullopt otherwise.
+std::optional<DoubleArray> numbers(pb::handle obj) {
+  const pb::array raw = pb::array::ensure(obj);
+  if (!raw || std::string("iuf").find(raw.dtype().kind()) == std::string::npos) return std::nullopt;
+  DoubleArray a = DoubleArray::ensure(raw);
+  if (!a) return std::nullopt;
+  return a;
+}
+
+std::string typeName(pb::handle v) { return Py_TYPE(v.ptr())->tp_name; }
+
+// R must be a rotation: a pose from another convention (a 3 x 4 projection, a scaled or
+// transposed matrix) would be silently wrong for the motion between frames.
+void checkRotation(const Eigen::Matrix3d& R) {
+  const double orthogonality = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (!(orthogonality < 1e-3) || !(R.determinant() > 0))
+    throw Error("pose: R is not a rotation (R^T R must be the identity within 1e-3 and det R = +1)");
+}
+
+constexpr const char* kPoseForms = "None, a 4 x 4 array (T_world_cam0) or an (R, t) pair (3 x 3, 3)";
+
+}  // namespace
+
+std::optional<Pose> poseFrom(pb::handle obj) {
+  if (obj.is_none()) return std::nullopt;
+  Pose pose;
+  if ((pb::isinstance<pb::tuple>(obj) || pb::isinstance<pb::list>(obj)) && pb::len(obj) == 2) {
+    const pb::sequence pair = pb::reinterpret_borrow<pb::sequence>(obj);
+    const std::optional<DoubleArray> Ra = numbers(pair[0]), ta = numbers(pair[1]);
+    if (!Ra || Ra->ndim() != 2 || Ra->shape(0) != 3 || Ra->shape(1) != 3)
+      throw Error("pose: R of an (R, t) pair must be a 3 x 3 array of numbers" +
+                  (Ra ? ", got shape " + shapeText(*Ra) : ", got " + typeName(pair[0])));
+    if (!ta || ta->size() != 3 || ta->ndim() > 2)
+      throw Error("pose: t of an (R, t) pair must hold 3 numbers" +
+                  (ta ? ", got shape " + shapeText(*ta) : ", got " + typeName(pair[1])));
+    const DoubleArray &R = *Ra, &t = *ta;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) pose.R(r, c) = R.at(r, c);
+      pose.t[r] = t.data()[r];
+    }
+  } else {
+    const std::optional<DoubleArray> Ta = numbers(obj);
+    if (!Ta) throw Error(std::string("pose must be ") + kPoseForms + ", got " + typeName(obj));
+    const DoubleArray& T = *Ta;
+    if (T.ndim() != 2 || T.shape(0) != 4 || T.shape(1) != 4)
+      throw Error(std::string("pose must be ") + kPoseForms + ", got an array of shape " + shapeText(T));
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) pose.R(r, c) = T.at(r, c);
+      pose.t[r] = T.at(r, 3);
+    }
+    if (T.at(3, 0) != 0 || T.at(3, 1) != 0 || T.at(3, 2) != 0 || T.at(3, 3) != 1)
+      throw Error("pose: the last row of a 4 x 4 pose (T_world_cam0) must be [0, 0, 0, 1]");
+  }
+  if (!pose.R.allFinite() || !pose.t.allFinite()) throw Error("pose: contains NaN or infinite values");
+  checkRotation(pose.R);
+  return pose;
+}
+
+pb::array poseArray(const Pose& pose) {
+  pb::array a = pb::array_t<double>({4, 4});
+  double* o = static_cast<double*>(a.mutable_data());
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) o[4 * r + c] = r < 3 ? (c < 3 ? pose.R(r, c) : pose.t[r]) : (c == 3 ? 1.0 : 0.0);
+  return a;
+}
+
+namespace {
+
+// One frame of a PySequence: the sequence's frame list is shared, the images are read on
+// first use of left or right (both at once) and kept by this object.
+struct PyFrame {
+  std::shared_ptr<const Sequence> sequence;
+  size_t index = 0;
+  pb::object left = pb::none(), right = pb::none();
+
+  const SequenceFrame& frame() const { return sequence->frames()[index]; }
+  void load() {
+    if (!left.is_none()) return;
+    ImageF l, r;
+    {
+      pb::gil_scoped_release nogil;  // PNG decoding
+      sequence->load(index, l, r);
+    }
+    left = floatArray(std::move(l));
+    right = floatArray(std::move(r));
+  }
+};
+
+class PySequence {
+ public:
+  PySequence(pb::handle source, pb::object poses, double pairToleranceMs, double poseToleranceMs) {
+    SequenceOptions options;
+    options.pairToleranceMs = pairToleranceMs;
+    options.poseToleranceMs = poseToleranceMs;
+    if (!poses.is_none()) options.poses = poses.cast<Path>().string();
+    if (!(pairToleranceMs >= 0) || !(poseToleranceMs >= 0))
+      throw Error("Sequence: pair_tolerance_ms and pose_tolerance_ms must be >= 0");
+    // A (left, right) pair of folders or globs: the library's "LEFT,RIGHT".
+    if (pb::isinstance<pb::tuple>(source) || pb::isinstance<pb::list>(source)) {
+      if (pb::len(source) != 2) throw Error("Sequence: source must be a path or a (left, right) pair of folders");
+      const pb::sequence pair = pb::reinterpret_borrow<pb::sequence>(source);
+      source_ = pair[0].cast<Path>().string() + "," + pair[1].cast<Path>().string();
+    } else {
+      source_ = source.cast<Path>().string();
+    }
+    pb::gil_scoped_release nogil;  // a long recording's listing takes a moment
+    sequence_ = std::make_shared<const Sequence>(Sequence::open(source_, options));
+  }
+
+  size_t size() const { return sequence_->frames().size(); }
+  PyFrame at(long long i) const {
+    const long long n = (long long)size();
+    if (i < 0) i += n;
+    if (i < 0 || i >= n) throw pb::index_error("frame index out of range (the sequence has " + std::to_string(n) + ")");
+    return PyFrame{sequence_, size_t(i)};
+  }
+  const Sequence& sequence() const { return *sequence_; }
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+  std::shared_ptr<const Sequence> sequence_;
+};
+
+struct FrameIterator {
+  PySequence sequence;
+  size_t next = 0;
+};
+
+}  // namespace
+
+void bindSequence(pb::module_& m) {
+  pb::class_<PyFrame>(m, "Frame",
+                      "One stereo frame of a Sequence. left and right are read from their files on first use "
+                      "(float32 gray in [0, 1], as read_image), then kept by this object.")
+      .def_property_readonly(
+          "index", [](const PyFrame& f) { return f.index; }, "Position in the sequence.")
+      .def_property_readonly(
+          "timestamp_ns", [](const PyFrame& f) { return f.frame().timestampNs; }, "Camera 0's timestamp, nanoseconds.")
+      .def_property_readonly(
+          "left",
+          [](PyFrame& f) {
+            f.load();
+            return f.left;
+          },
+          "Camera 0's image, float32 H x W in [0, 1] (read on first use).")
+      .def_property_readonly(
+          "right",
+          [](PyFrame& f) {
+            f.load();
+            return f.right;
+          },
+          "Camera 1's image, float32 H x W in [0, 1] (read on first use).")
+      .def_property_readonly(
+          "pose",
+          [](const PyFrame& f) -> pb::object {
+            if (!f.frame().hasPose) return pb::none();
+            return poseArray(f.frame().pose);
+          },
+          "T_world_cam0 as a 4 x 4 float64 array (what Stereo.next takes), or None when the frame has no pose.")
+      .def_property_readonly(
+          "left_path", [](const PyFrame& f) { return f.frame().leftPath; }, "Camera 0's image file.")
+      .def_property_readonly(
+          "right_path", [](const PyFrame& f) { return f.frame().rightPath; }, "Camera 1's image file.")
+      .def("__repr__", [](const PyFrame& f) {
+        return "<curvestereo.Frame " + std::to_string(f.index) + " t=" + std::to_string(f.frame().timestampNs) + " ns" +
+               (f.frame().hasPose ? ", posed" : "") + ">";
+      });
+
+  pb::class_<FrameIterator>(m, "_FrameIterator")
+      .def("__iter__", [](FrameIterator& it) -> FrameIterator& { return it; })
+      .def("__next__", [](FrameIterator& it) {
+        if (it.next >= it.sequence.size()) throw pb::stop_iteration();
+        return it.sequence.at((long long)it.next++);
+      });
+
+  pb::class_<PySequence>(m, "Sequence",
+                         R"doc(A recorded stereo sequence: its frame list, images read one frame at a time.
+
+Sequence(source, poses=None, pair_tolerance_ms=1.0, pose_tolerance_ms=5.0)
+
+source: an ASL / EuRoC folder (the folder holding mav0/, or mav0/ itself: cam0/data.csv,
+cam0/data/, cam1 alike; its poses_cam0.csv is used unless poses is given), or two folders
+of PNG images (or glob patterns) as "LEFT,RIGHT" or a (left, right) pair, paired by
+sorted name. poses: a poses file, T_world_cam0 per timestamp (EuRoC CSV
+"t_ns,px,py,pz,qx,qy,qz,qw" or TUM "t_s tx ty tz qx qy qz qw"). pair_tolerance_ms: the
+largest left/right timestamp difference of an ASL pair. pose_tolerance_ms: how near a
+pose must be to a frame's timestamp to be attached (no interpolation).
+
+len(seq), seq[i] (negative from the end) and iteration give Frame objects; their
+images are read when first used. Frames that could not be paired, or were left without a
+pose, are listed in .warnings. Raises curvestereo.Error naming the file and the line.
+
+    seq = curvestereo.Sequence("seq/")
+    stereo = curvestereo.Stereo(curvestereo.load_calibration("seq/camchain.yaml"))
+    for f in seq:
+        r = stereo.next(f.left, f.right, pose=f.pose))doc")
+      .def(pb::init<pb::handle, pb::object, double, double>(), pb::arg("source"), pb::arg("poses") = pb::none(),
+           pb::arg("pair_tolerance_ms") = 1.0, pb::arg("pose_tolerance_ms") = 5.0)
+      .def("__len__", &PySequence::size)
+      .def("__getitem__", &PySequence::at, pb::arg("index"))
+      .def("__iter__", [](const PySequence& s) { return FrameIterator{s}; })
+      .def_property_readonly(
+          "warnings", [](const PySequence& s) { return s.sequence().warnings(); },
+          "Notes to show, one line each: frames that could not be paired, frames without a pose although poses "
+          "were given, folder pairs whose names differ.")
+      .def_property_readonly(
+          "summary", [](const PySequence& s) { return s.sequence().summary(); },
+          "One line, e.g. '16 stereo frames (ASL, 16 with poses); 0 unpaired'.")
+      .def_property_readonly(
+          "timestamps_ns",
+          [](const PySequence& s) {
+            const auto& frames = s.sequence().frames();
+            pb::array_t<int64_t> a(pb::ssize_t(frames.size()));
+            for (size_t i = 0; i < frames.size(); ++i) a.mutable_data()[i] = frames[i].timestampNs;
+            return a;
+          },
+          "Every frame's timestamp (int64 nanoseconds), without reading an image.")
+      .def_property_readonly(
+          "source", [](const PySequence& s) { return s.source(); }, "The source as opened.")
+      .def("__repr__", [](const PySequence& s) { return "<curvestereo.Sequence " + s.sequence().summary() + ">"; });
+}
+
+}  // namespace cs::py
