@@ -166,10 +166,10 @@ void CpuBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Buf
 }
 
 void CpuBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                                  const Buffer& radial, const Buffer& confidence, const Buffer& mask,
-                                  const TemporalParams& p) {
+                                  const Buffer& radial, const Buffer& points, const Buffer& confidence,
+                                  const Buffer& mask, const TemporalParams& p) {
   const View confidenceView = confidence.id >= 0 ? view(confidence) : View{};
-  cpu::temporalFilter(view(state), view(u), view(w), view(prior), view(radial),
+  cpu::temporalFilter(view(state), view(u), view(w), view(prior), view(radial), view(points),
                       confidence.id >= 0 ? &confidenceView : nullptr, view(mask), p);
 }
 

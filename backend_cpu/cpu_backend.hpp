@@ -47,7 +47,7 @@ void sweepBandSelect(const View& best, const View& aggregated, const View& costs
 void carryEstimate(const View& dst, const View& src, const View* guess, const float motion[kMotionFloats],
                    const View& mask, const CarryParams& p);
 void temporalFilter(const View& state, const View& u, const View& w, const View& prior, const View& radial,
-                    const View* confidence, const View& mask, const TemporalParams& p);
+                    const View& points, const View* confidence, const View& mask, const TemporalParams& p);
 
 // Physical memory, or the container's memory limit when lower (0 if unknown): create()
 // refuses buffers beyond it with a cs::Error naming the size instead of being OOM-killed.
@@ -109,7 +109,7 @@ class CpuBackend final : public Backend {
   void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
                        const Buffer& mask, const CarryParams& p) override;
   void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                        const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                        const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
                         const TemporalParams& p) override;
 
  private:

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "cpu_backend.hpp"
 #include "curvestereo/camera.hpp"
@@ -11,7 +12,7 @@
 namespace cs::cpu {
 
 void temporalFilter(const View& state, const View& u, const View& w, const View& prior, const View& radial,
-                    const View* confidence, const View& mask, const TemporalParams& p) {
+                    const View& points, const View* confidence, const View& mask, const TemporalParams& p) {
   const BuiltCamera cam(toCamera(p.cam));
   const Eigen::Vector3d tPrime(p.tPrime[0], p.tPrime[1], p.tPrime[2]);
   parallelRows(state.height, [&](int y) {
@@ -47,6 +48,10 @@ void temporalFilter(const View& state, const View& u, const View& w, const View&
       w.at(x, y, 0) = float(wx);
       w.at(x, y, 1) = float(wy);
       u.at(x, y) = float(std::sqrt(wx * wx + wy * wy));
+      // The depth triangulate() would give from the new w, without a second pass.
+      radial.at(x, y) = q > 0.0 ? float(1.0 / q) : std::numeric_limits<float>::infinity();
+      for (int c = 0; c < 3; ++c)
+        points.at(x, y, c) = q > 0.0 ? float(ray[c] / q) : std::numeric_limits<float>::quiet_NaN();
     }
   });
 }

@@ -366,7 +366,7 @@ void CudaBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Bu
 }
 
 void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                                   const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                                   const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
                                    const TemporalParams& p) {
   flush();
   cudak::TemporalDev d{};
@@ -379,7 +379,8 @@ void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const B
   d.minConfidence = p.minConfidence;
   const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
   check(cudak::launchTemporalFilter(stream_, img(slot(state).dev, state), img(slot(u).dev, u), img(slot(w).dev, w),
-                                    img(slot(prior).dev, prior), img(slot(radial).dev, radial), weight,
+                                    img(slot(prior).dev, prior), img(slot(radial).dev, radial),
+                                    img(slot(points).dev, points), weight,
                                     img(slot(mask).dev, mask), d),
         "temporalFilter");
 }

@@ -129,7 +129,7 @@ class CudaBackend final : public Backend {
   void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
                        const Buffer& mask, const CarryParams& p) override;
   void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                        const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                        const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
                         const TemporalParams& p) override;
 
  private:

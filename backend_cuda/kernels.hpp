@@ -142,7 +142,7 @@ struct TemporalDev {  // cs::TemporalParams
   float strength, gate, sigmaPx, processPx, minConfidence;
 };
 // confidence.data null: 1 everywhere.
-cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img confidence,
+cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img points, Img confidence,
                                  Img mask, const TemporalDev& p);
 cudaError_t launchWarp(cudaStream_t s, Img dst, Img src, Img flow);
 cudaError_t launchDownsample(cudaStream_t s, Img dst, Img src, float scale);

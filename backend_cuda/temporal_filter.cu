@@ -11,8 +11,8 @@ namespace {
 // std::max's choice (the first unless it is less), NaN included.
 __device__ __forceinline__ double stdMax(double a, double b) { return a < b ? b : a; }
 
-__global__ void temporalFilterKernel(Img state, Img u, Img w, Img prior, Img radial, Img confidence, Img mask,
-                                     TemporalDev p) {
+__global__ void temporalFilterKernel(Img state, Img u, Img w, Img prior, Img radial, Img points, Img confidence,
+                                     Img mask, TemporalDev p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= state.width || y >= state.height) return;
@@ -48,6 +48,12 @@ __global__ void temporalFilterKernel(Img state, Img u, Img w, Img prior, Img rad
         at(w, x, y, 0) = float(wx);
         at(w, x, y, 1) = float(wy);
         at(u, x, y) = float(sqrt(wx * wx + wy * wy));
+        // The depth triangulate() would give from the new w, without a second pass.
+        const float nan = __int_as_float(0x7fc00000);
+        at(radial, x, y) = q > 0.0 ? float(1.0 / q) : __int_as_float(0x7f800000);
+        at(points, x, y, 0) = q > 0.0 ? float(ray.x / q) : nan;
+        at(points, x, y, 1) = q > 0.0 ? float(ray.y / q) : nan;
+        at(points, x, y, 2) = q > 0.0 ? float(ray.z / q) : nan;
       }
     }
   }
@@ -57,11 +63,11 @@ __global__ void temporalFilterKernel(Img state, Img u, Img w, Img prior, Img rad
 
 }  // namespace
 
-cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img confidence,
-                                 Img mask, const TemporalDev& p) {
+cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img points,
+                                 Img confidence, Img mask, const TemporalDev& p) {
   const dim3 block(16, 8);
   CS_LAUNCH(temporalFilterKernel, grid2d(state.width, state.height, block), block, 0, s, state, u, w, prior, radial,
-            confidence, mask, p);
+            points, confidence, mask, p);
   return cudaGetLastError();
 }
 

@@ -7,7 +7,7 @@
 // processPx^2; g = |J t'| converts inverse depth into px. Where the prior has none or the
 // innovation exceeds the gate, state = (q_m, R) and u, w are kept; else the gain K =
 // max(P / (P + R), 1 - strength) blends them and, with strength > 0, w and u move to the
-// filtered q. Elsewhere state = (-1, 0). Geometry and the update in `real`, compiled twice:
+// filtered q, radial to 1 / q and points to ray / q. Elsewhere state = (-1, 0). Geometry and the update in `real`, compiled twice:
 // double (-DCS_DOUBLE, the oracle's precision) and float.
 #ifdef CS_DOUBLE
 #extension GL_ARB_gpu_shader_fp64 : require
@@ -22,7 +22,7 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer TemporalPara
 };
 
 layout(push_constant) uniform PC {
-  FBuf state, u, w, prior, radial, confidence, mask;  // state, prior, w 2 ch; confidence mask when absent
+  FBuf state, u, w, prior, radial, points, confidence, mask;  // state, prior, w 2 ch; points 3; confidence mask when absent
   TemporalParamsRef prm;
   int width, height, hasConfidence;
   float strength, gate, sigmaPx, processPx, minConfidence;
@@ -77,4 +77,10 @@ void main() {
   pc.w.v[2 * i] = float(wx);
   pc.w.v[2 * i + 1] = float(wy);
   pc.u.v[i] = float(un);
+  // The depth triangulate() would give from the new w, without a second pass.
+  pc.radial.v[i] = q > R(0.0) ? float(R(1.0) / q) : uintBitsToFloat(0x7f800000u);
+  const float nan = uintBitsToFloat(0x7fc00000u);
+  pc.points.v[3 * i] = q > R(0.0) ? float(ray.x / q) : nan;
+  pc.points.v[3 * i + 1] = q > R(0.0) ? float(ray.y / q) : nan;
+  pc.points.v[3 * i + 2] = q > R(0.0) ? float(ray.z / q) : nan;
 }

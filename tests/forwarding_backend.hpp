@@ -95,8 +95,8 @@ class ForwardingBackend : public Backend {
     b_.carryEstimate(d, s, g, mo, m, p);
   }
   void doTemporalFilter(const Buffer& st, const Buffer& u, const Buffer& w, const Buffer& pr, const Buffer& r,
-                        const Buffer& c, const Buffer& m, const TemporalParams& p) override {
-    b_.temporalFilter(st, u, w, pr, r, c, m, p);
+                        const Buffer& pt, const Buffer& c, const Buffer& m, const TemporalParams& p) override {
+    b_.temporalFilter(st, u, w, pr, r, pt, c, m, p);
   }
 
  protected:

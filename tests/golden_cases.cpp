@@ -440,9 +440,10 @@ std::vector<Output> temporalFilterCase(Backend& b) {
     }
   const FieldsParams fp = fieldsParams();
   TemporalParams p{fp.cam0, {-0.064, 0.001, 0.002}, 0.8f, 3.f, 0.5f, 0.1f, 0.1f};
-  Buffer state = s.make(kW, kH, 2), ub = s.put(u), wb = s.put(w);
-  b.temporalFilter(state, ub, wb, s.put(prior), s.put(radial), s.put(confidence), s.put(mask), p);
-  return {s.get("temporal_state", state), s.get("temporal_u", ub), s.get("temporal_w", wb)};
+  Buffer state = s.make(kW, kH, 2), ub = s.put(u), wb = s.put(w), rb = s.put(radial), points = s.make(kW, kH, 3);
+  b.temporalFilter(state, ub, wb, s.put(prior), rb, points, s.put(confidence), s.put(mask), p);
+  return {s.get("temporal_state", state), s.get("temporal_u", ub), s.get("temporal_w", wb),
+          s.get("temporal_radial", rb), s.get("temporal_points", points)};
 }
 
 // --- plane sweep ---

@@ -347,7 +347,7 @@ TEST_CASE("CUDA frame slots: each kind of frame replays with the frame's motion 
     };
     const Buffer state = b.create(w, h, 2), next = put(stateAt(0), w, h, 2), motion = b.create(kMotionFloats, 1, 1);
     const Buffer mask = put(ones, w, h, 1), maskHalf = put(onesHalf, half.width, half.height, 1);
-    const Buffer guess = put(radial, w, h, 1), weight = put(confidence, w, h, 1);
+    const Buffer guess = put(radial, w, h, 1), weight = put(confidence, w, h, 1), points = b.create(w, h, 3);
     const Buffer carried = b.create(w, h, 2), carriedHalf = b.create(half.width, half.height, 2);
     const Buffer prior = b.create(w, h, 2), filtered = b.create(w, h, 2), u = b.create(w, h, 1),
                  flow = b.create(w, h, 2);
@@ -373,7 +373,7 @@ TEST_CASE("CUDA frame slots: each kind of frame replays with the frame's motion 
                           {cam, half, {tPrime.x(), tPrime.y(), tPrime.z()}, 3});
         } else {
           b.carryEstimate(prior, state, guess, motion, mask, {cam, cam, {0, 0, 0}, 1});
-          b.temporalFilter(filtered, u, flow, prior, guess, weight, mask,
+          b.temporalFilter(filtered, u, flow, prior, guess, points, weight, mask,
                            {cam, {tPrime.x(), tPrime.y(), tPrime.z()}, 0.8f, 3.f, 0.5f, 0.1f, 0.1f});
         }
         b.endFrame();

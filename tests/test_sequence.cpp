@@ -121,7 +121,8 @@ TEST_CASE("temporalFilter: agreeing estimates average, a jump resets at once") {
   Buffer state = g.b->create(kSize, kSize, 2), u = g.make(1, constant(1, {nan})), w = g.make(2, constant(2, {nan}));
   Buffer mask = g.make(1, constant(1, {1.f})), radial = g.make(1, constant(1, {2.f}));
   TemporalParams p{cam, {tPrime[0], tPrime[1], tPrime[2]}, 0.8f, 3.f, 0.5f, 0.1f, 0.1f};
-  g.b->temporalFilter(state, u, w, g.make(2, prior), radial, Buffer{}, mask, p);
+  Buffer points = g.b->create(kSize, kSize, 3);
+  g.b->temporalFilter(state, u, w, g.make(2, prior), radial, points, Buffer{}, mask, p);
   const std::vector<float> s = g.get(state), us = g.get(u);
   const int y = kSize / 2;
   const size_t left = size_t(y) * kSize + kSize / 2 - 6, right = size_t(y) * kSize + kSize / 2 + 6;

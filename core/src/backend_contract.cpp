@@ -419,11 +419,12 @@ void Backend::carryEstimate(const Buffer& dst, const Buffer& src, const Buffer& 
 }
 
 void Backend::temporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                             const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                             const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
                              const TemporalParams& p) {
   const BackendContract c(*this, "temporalFilter");
   c.buffer(mask, "mask", 1).sameGrid(state, "state", 2, mask, "mask").sameGrid(prior, "prior", 2, mask, "mask");
   c.sameGrid(u, "u", 1, mask, "mask").sameGrid(w, "w", 2, mask, "mask").sameGrid(radial, "radial", 1, mask, "mask");
+  c.sameGrid(points, "points", 3, mask, "mask");
   if (confidence.id >= 0) c.sameGrid(confidence, "confidence", 1, mask, "mask");
   c.camera(p.cam, "cam", &mask, "mask");
   c.require(state.id != prior.id, "state and prior are the same buffer");
@@ -432,7 +433,7 @@ void Backend::temporalFilter(const Buffer& state, const Buffer& u, const Buffer&
             "gate and sigmaPx must be > 0 and processPx >= 0");
   c.require(p.minConfidence > 0.f && p.minConfidence <= 1.f,
             "minConfidence must be in (0, 1], got " + std::to_string(p.minConfidence));
-  doTemporalFilter(state, u, w, prior, radial, confidence, mask, p);
+  doTemporalFilter(state, u, w, prior, radial, points, confidence, mask, p);
 }
 
 }  // namespace cs

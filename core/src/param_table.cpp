@@ -169,6 +169,8 @@ std::vector<ParamInfo> buildTable() {
       grouped("sequences (run --sequence, Stereo::next)",
               {
                   warm,
+                  intParam("warm_band", &Params::warmBand, closed(0, 32),
+                           "hypotheses a pixel of a warm frame's band sweep (0: init_band's)", Shown::Never),
                   intParam("cold_every", &Params::coldEvery, closed(0, 1000000),
                            "solve every N-th frame cold (0: only the first and failed ones)", Shown::Never),
                   floatParam("warm_fail_ratio", &Params::warmFailRatio, closed(0, 1),

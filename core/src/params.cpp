@@ -25,6 +25,7 @@ void Params::validate() const {
   }
   require(initP1 >= 0 && initP2 >= initP1, "initP1, initP2 must satisfy 0 <= initP1 <= initP2");
   require(initBand != 1, "initBand must be 0 (a full sweep) or 2 to 32 hypotheses, got 1");
+  require(warmBand != 1, "warmBand must be 0 (initBand's) or 2 to 32 hypotheses, got 1");
 }
 
 Params preset(const std::string& name) {

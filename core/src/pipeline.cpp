@@ -38,7 +38,8 @@ std::vector<float> levelMask(const ImageU8& userMask, const LevelSize& size) {
 // level 0 (rawRight 1, calibration 2, radial 1, points 3); with the initialiser, a
 // confidence (1) at the sweep level and every finer one (and the coarser one with a band), and the volume and the costs
 // (planes each) and two sweep results (2 + 2) at the sweep level; with a band, those at the coarser level and, at the
-// sweep's, a volume and costs of band channels each, two results and `first` (1).
+// sweep's, a volume and costs of band channels each, two results and `first` (1), and a warm frame's volume and
+// costs of warmBand channels where narrower. A sequence adds 6 more at level 0 (resetSequence: three states).
 unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
   const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
   auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
@@ -54,7 +55,9 @@ unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
     if (banded) {
       const int coarsePlanes = sweepPlanes(levelCamera(rig.cam0, plan[level + 1]), tPrime, params);
       floats += (unsigned long long)(2 * coarsePlanes + 4) * pixels(plan[level + 1]);
-      floats += (unsigned long long)(2 * std::min(planes, params.initBand) + 5) * pixels(plan[level]);
+      const int band = std::min(planes, params.initBand);
+      floats += (unsigned long long)(2 * band + 5) * pixels(plan[level]);
+      if (params.warmBand > 0 && params.warmBand < band) floats += 2ull * params.warmBand * pixels(plan[level]);
     } else {
       floats += (unsigned long long)(2 * planes + 4) * pixels(plan[level]);
     }
@@ -139,6 +142,15 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
     }
     sweep_.volume = backend_.create(S.size.width, S.size.height, channels);
     sweep_.costs = backend_.create(S.size.width, S.size.height, channels);
+    // A warm frame's band (Params::warmBand): its own volumes when narrower (a backend may
+    // refuse a buffer used smaller than created).
+    sweep_.warmParams = sweep_.params;
+    if (sweep_.banded && params_.warmBand > 0 && params_.warmBand < channels) {
+      sweep_.warmBanded = true;
+      sweep_.warmParams.band = params_.warmBand;
+      sweep_.warmVolume = backend_.create(S.size.width, S.size.height, params_.warmBand);
+      sweep_.warmCosts = backend_.create(S.size.width, S.size.height, params_.warmBand);
+    }
     sweep_.best = backend_.create(S.size.width, S.size.height, 2);
     sweep_.other = backend_.create(S.size.width, S.size.height, 2);
   }
@@ -156,7 +168,7 @@ void Pipeline::setUserMask(const ImageU8& userMask) {
 
 void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   tPrime_ = R.transpose() * t;
-  for (SweepParams* p : {&sweep_.params, &sweep_.coarseParams}) {
+  for (SweepParams* p : {&sweep_.params, &sweep_.coarseParams, &sweep_.warmParams}) {
     std::copy(tPrime_.data(), tPrime_.data() + 3, p->t);
     p->qMax = sweepQMax(tPrime_, params_);
   }
@@ -281,7 +293,12 @@ void Pipeline::runSweep() {
   Level& L = levels_[sweep_.level];
   if (sweep_.banded) {
     const Level& C = levels_[sweep_.level + 1];
-    bandSweep(L, sweep_.coarseBest, sweep_.coarseOther, float(C.size.scale / L.size.scale));
+    const float coarseScale = float(C.size.scale / L.size.scale);
+    if (warmFrame_ && sweep_.warmBanded)
+      bandSweep(L, sweep_.coarseBest, sweep_.coarseOther, coarseScale, sweep_.warmParams, sweep_.warmVolume,
+                sweep_.warmCosts);
+    else
+      bandSweep(L, sweep_.coarseBest, sweep_.coarseOther, coarseScale, sweep_.params, sweep_.volume, sweep_.costs);
   } else {
     fullSweep(L, sweep_.params, sweep_.volume, sweep_.costs, sweep_.best, sweep_.other);
   }
@@ -318,20 +335,21 @@ void Pipeline::fullSweep(const Level& L, const SweepParams& p, const Buffer& vol
   sweep(other, L.i1, L.i0, reversed(p));
 }
 
-void Pipeline::bandSweep(const Level& L, const Buffer& coarseBest, const Buffer& coarseOther, float coarseScale) {
+void Pipeline::bandSweep(const Level& L, const Buffer& coarseBest, const Buffer& coarseOther, float coarseScale,
+                         const SweepParams& p, const Buffer& volume, const Buffer& costs) {
   auto sweep = [&](const Buffer& result, const Buffer& proposal, const Buffer& reference, const Buffer& image,
                    const SweepParams& q) {
     stage("sweep: band warp");
-    backend_.sweepBandWarp(sweep_.volume, sweep_.first, image, proposal, L.mask, q, coarseScale);
+    backend_.sweepBandWarp(volume, sweep_.first, image, proposal, L.mask, q, coarseScale);
     stage("sweep: band cost");
-    backend_.sweepBandCost(sweep_.costs, reference, sweep_.volume, sweep_.first, L.mask, q);
+    backend_.sweepBandCost(costs, reference, volume, sweep_.first, L.mask, q);
     stage("sweep: band aggregate");
-    backend_.sweepBandAggregate(sweep_.volume, sweep_.costs, sweep_.first, L.mask, q);
+    backend_.sweepBandAggregate(volume, costs, sweep_.first, L.mask, q);
     stage("sweep: band select");
-    backend_.sweepBandSelect(result, sweep_.volume, sweep_.costs, sweep_.first, L.mask, q);
+    backend_.sweepBandSelect(result, volume, costs, sweep_.first, L.mask, q);
   };
-  sweep(sweep_.best, coarseBest, L.i0, L.i1, sweep_.params);
-  sweep(sweep_.other, coarseOther, L.i1, L.i0, reversed(sweep_.params));
+  sweep(sweep_.best, coarseBest, L.i0, L.i1, p);
+  sweep(sweep_.other, coarseOther, L.i1, L.i0, reversed(p));
 }
 
 PrimalDualParams Pipeline::primalDualParams() const {
@@ -422,10 +440,7 @@ void Pipeline::filterResult() {
   backend_.carryEstimate(prior_, state_, radial_, motion_, L0.mask, {cam, cam, {0, 0, 0}, 1});
   TemporalParams tp{cam, {tPrime_.x(), tPrime_.y(), tPrime_.z()}, params_.temporalStrength, params_.temporalGate,
                     kMeasurementPx, kDriftPx, kConfidenceFloor};
-  backend_.temporalFilter(next_, L0.pd.u, L0.w, prior_, radial_, L0.confidence, L0.mask, tp);
-  // The filtered disparities' depth and points (the state keeps the filtered inverse depth
-  // whatever the strength; at 0 the disparities are the measurement's).
-  if (params_.temporalStrength > 0.f) triangulate();
+  backend_.temporalFilter(next_, L0.pd.u, L0.w, prior_, radial_, points_, L0.confidence, L0.mask, tp);
 }
 
 void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind kind) {
@@ -444,6 +459,7 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
   // A warm frame starts at the band sweep's level, its coarser neighbour initialised by the
   // carried estimate instead of a sweep and warps.
   const bool warm = kind.warm && canWarmStart();
+  warmFrame_ = warm;
   const size_t levels = warm ? sweep_.level + 1 : levels_.size();
   if (warm) coarseSweepWork = 0;
   double total = sweepWork + coarseSweepWork, done = 0;

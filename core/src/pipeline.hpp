@@ -117,6 +117,9 @@ class Pipeline {
     Buffer first;                // each pixel's first hypothesis (band sweep)
     SweepParams coarseParams{};  // the full sweep one level coarser (band sweep)
     Buffer coarseVolume, coarseCosts, coarseBest, coarseOther;
+    bool warmBanded = false;  // a warm frame sweeps a narrower band (Params::warmBand)
+    SweepParams warmParams{};
+    Buffer warmVolume, warmCosts;
   };
   static double sweepQMax(const Eigen::Vector3d& tPrime, const Params& params);
   static int sweepPlanes(const Camera& cam, const Eigen::Vector3d& tPrime, const Params& params);
@@ -124,7 +127,8 @@ class Pipeline {
   void runSweep();
   void fullSweep(const Level& L, const SweepParams& p, const Buffer& volume, const Buffer& costs, const Buffer& best,
                  const Buffer& other);
-  void bandSweep(const Level& L, const Buffer& coarseBest, const Buffer& coarseOther, float coarseScale);
+  void bandSweep(const Level& L, const Buffer& coarseBest, const Buffer& coarseOther, float coarseScale,
+                 const SweepParams& p, const Buffer& volume, const Buffer& costs);
   void checkSweep(Level& L, const SweepParams& p, const Buffer& best, const Buffer& other);
   bool normalising() const { return params_.dataTerm == Params::DataTerm::Normalised; }
   bool initialising() const { return params_.init == Params::Init::PlaneSweep; }
@@ -149,6 +153,7 @@ class Pipeline {
   Sweep sweep_;
   Buffer rawRight_, calibration_, radial_, points_;
   bool profiling_ = false;
+  bool warmFrame_ = false;  // the frame being issued is warm (issueFrame)
   Selection selection_;
   // A sequence's state at level 0 (Backend::carryEstimate): `state` is the committed
   // frame's, `next` this frame's filtered result, `prior` the state carried into this

@@ -141,6 +141,10 @@ struct Params {
   // solved again, cold.
   bool warmStart = true;
   int coldEvery = 30;
+  // Hypotheses a pixel of a warm frame's band sweep (0: initBand's). The carried estimate is
+  // the previous frame's solution, so the band needs to span only a frame's change of depth
+  // plus its coarse neighbourhood's spread, not a cold coarse sweep's errors.
+  int warmBand = 16;
   float warmFailRatio = 0.8f;
   // The temporal filter of a sequence's result (Backend::temporalFilter): the previous
   // frame's filtered depth, carried into the new view, is averaged with the new estimate

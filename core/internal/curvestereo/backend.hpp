@@ -364,11 +364,13 @@ class Backend {
   // p.processPx^2. Where the prior has no estimate or (g (q_m - q_p))^2 > p.gate^2 (P + R),
   // state = (q_m, R) and u, w are kept (the new value at once: a moving object leaves no
   // trail). Else K = max(P / (P + R), 1 - p.strength), q = q_p + K (q_m - q_p), state = (q,
-  // (1 - K)^2 P + K^2 R), and, with p.strength > 0, w = cam.project(ray + q t') - x, u = |w|
-  // (kept where that projection is invalid; at strength 0 q is the measurement's). Elsewhere state = (-1, 0), u and w kept. state, prior 2 ch;
-  // u, radial, mask 1 ch; w 2 ch; state is not prior.
+  // (1 - K)^2 P + K^2 R), and, with p.strength > 0, where cam.project(ray + q t') is valid: w =
+  // that projection - x, u = |w|, radial = 1 / q (+inf at q = 0) and points = ray / q (NaN at
+  // q = 0), as triangulate() would give from the new w (at strength 0 q is the measurement's
+  // and nothing else changes). Elsewhere state = (-1, 0) and the rest is kept. state, prior
+  // 2 ch; u, radial, mask 1 ch; w 2 ch; points 3 ch; state is not prior.
   void temporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior, const Buffer& radial,
-                      const Buffer& confidence, const Buffer& mask, const TemporalParams& p);
+                      const Buffer& points, const Buffer& confidence, const Buffer& mask, const TemporalParams& p);
 
   // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w (2 ch) where
   // mask is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.
@@ -458,8 +460,8 @@ class Backend {
   virtual void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
                                const Buffer& mask, const CarryParams& p) = 0;
   virtual void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                                const Buffer& radial, const Buffer& confidence, const Buffer& mask,
-                                const TemporalParams& p) = 0;
+                                const Buffer& radial, const Buffer& points, const Buffer& confidence,
+                                const Buffer& mask, const TemporalParams& p) = 0;
 
  private:
   friend class BackendContract;  // core/src/backend_contract.cpp: the checks
