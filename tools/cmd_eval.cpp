@@ -203,7 +203,7 @@ int cmdEval(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert({"csv", "md", "maps", "methods", "fov", "sgbm-fov", "ps-scale", "ps-window", "ps-step", "min-depth",
                 "sweep", "warps-list", "step", "plot", "replot"});
-  known.insert({"sequence", "cold", "compare", "frames", "calib"});
+  known.insert({"sequence", "cold", "compare", "frames", "calib", "blind"});
   args.allowOnly(known);
   if (args.has("sequence")) return runSequences(args, paramsFromArgs(args), backendFromArgs(args));
   for (const char* sequenceOnly : {"cold", "compare", "frames", "calib"})

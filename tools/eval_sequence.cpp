@@ -249,7 +249,9 @@ Run runSequence(const SequenceInput& in, Params params, const std::string& backe
     const SequenceFrame& f = in.seq.frames()[i];
     in.seq.load(i, left, right);
     FrameTruth gt = loadTruth(in, i);
-    stereo.next(left, right, r, f.hasPose ? &f.pose : nullptr);
+    // --blind: the solver gets no poses (a live camera without odometry); flicker still
+    // finds its points from the ground-truth poses.
+    stereo.next(left, right, r, f.hasPose && !args.has("blind") ? &f.pose : nullptr);
 
     FrameRow row;
     row.timestampNs = f.timestampNs;

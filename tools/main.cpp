@@ -32,10 +32,11 @@ commands:
                                 start, no temporal filter)
   eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR]
                                 accuracy against ground truth (tau>1, tau>3, EPE, abs-rel)
-  eval --sequence DIR... [--cold | --compare] [--frames N] [--csv FILE] [--md FILE]
+  eval --sequence DIR... [--cold | --compare] [--blind] [--frames N] [--csv FILE] [--md FILE]
                                 a sequence with ground truth (synth --sequence's layout):
                                 tau per frame, on the moving object, and flicker; --compare
-                                runs cold then warm and prints the ratios
+                                runs cold then warm and prints the ratios; --blind: the
+                                solver gets no poses (a camera without odometry)
   bench [--calib CAMCHAIN LEFT RIGHT | --size WxH] [--runs N]
                                 time per frame and per stage
   fields --calib CAMCHAIN -o OUTDIR
@@ -81,7 +82,7 @@ int main(int argc, char** argv) {
     std::string dashO = "--o";
     for (int i = 2; i < argc; ++i) rest.push_back(!std::strcmp(argv[i], "-o") ? dashO.data() : argv[i]);
     // Options without a value; --sequence is one for synth only (run and bench take a source).
-    std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold", "compare"};
+    std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold", "compare", "blind"};
     if (command == "synth") flags.insert("sequence");
     const cs::cli::Args args(int(rest.size()), rest.data(), flags);
     if (command == "run") return cs::cli::cmdRun(args);
