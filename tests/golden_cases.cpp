@@ -377,9 +377,9 @@ Host sequenceState(int w, int h) {
 
 // Camera 0 turns 6 degrees about y and 3 about x and moves 12 cm, mostly forward.
 Host sequenceMotion() {
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.105, Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(0.052, Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
+  const Eigen::Matrix3d R =
+      (Eigen::AngleAxisd(0.105, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.052, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
   Host m(kMotionFloats, 1, 1);
   for (int i = 0; i < 9; ++i) m.v[size_t(i)] = float(R(i / 3, i % 3));
   m.v[9] = 0.04f, m.v[10] = -0.02f, m.v[11] = 0.11f;

@@ -126,9 +126,10 @@ int benchSequence(const Args& args, Stereo& stereo, const Sequence& sequence, in
       continue;
     }
     const Summary s = summarize(*times);
-    std::printf("%s:     median %.2f ms  min %.2f  max %.2f  (%.1f fps) over %zu frames, end to end into a reused "
-                "DepthResult\n",
-                name, s.median, s.min, s.max, 1000.0 / s.median, times->size());
+    std::printf(
+        "%s:     median %.2f ms  min %.2f  max %.2f  (%.1f fps) over %zu frames, end to end into a reused "
+        "DepthResult\n",
+        name, s.median, s.min, s.max, 1000.0 / s.median, times->size());
   }
   std::printf("redone:   %d warm frames failed their check and were solved again cold\n", redone);
   std::printf("warm frames, profiled (synchronised at each stage):\n");
@@ -150,8 +151,7 @@ int cmdBench(const Args& args) {
     options.poses = args.get("poses", "");
     const Sequence sequence = Sequence::open(args.get("sequence", ""), options);
     for (const std::string& w : sequence.warnings()) std::fprintf(stderr, "curvestereo: warning: %s\n", w.c_str());
-    Stereo stereo(loadCalibration(sequenceCalibration(args, args.get("sequence", ""))), params,
-                  backendFromArgs(args));
+    Stereo stereo(loadCalibration(sequenceCalibration(args, args.get("sequence", ""))), params, backendFromArgs(args));
     if (args.get("outputs", "depth") == "depth") stereo.setOutputs({false, false, false, false});
     std::printf("device:   %s (backend %s)\n", stereo.deviceName().c_str(), stereo.backendName().c_str());
     std::printf("settings: %s\n", describe(params).c_str());

@@ -2,12 +2,12 @@
 //                 [--pinhole FOV[,WxH]] [--equirect W] [--sampling nearest|bilinear]
 // curvestereo run --calib CALIB --sequence SRC -o OUTDIR [--poses FILE] [--cold] [...]:
 //                 each frame's outputs into OUTDIR/<t_ns>/
+#include <unistd.h>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <unistd.h>
-#include <chrono>
 #include <filesystem>
 
 #include "commands.hpp"
@@ -123,9 +123,7 @@ struct SequenceTally {
     (r.warm ? warmMs : coldMs) += r.totalMs;
     redone += r.redone;
   }
-  double wallSeconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  }
+  double wallSeconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
 };
 
 // run --sequence: every frame through Stereo::next (warm start and temporal filter unless
@@ -159,16 +157,21 @@ int runSequence(const Args& args, const std::string& outDir) {
   for (size_t i = 0; i < frames.size(); ++i) {
     const SequenceFrame& f = frames[i];
     const std::string name = std::to_string(f.timestampNs);
+    const std::string written = " (" + std::to_string(tally.frames) + " frames before it are written)";
     try {
-      sequence.load(i, left, right);
+      sequence.load(i, left, right);  // its errors name the frame
+    } catch (const Error& e) {
+      if (tty) std::fputc('\n', stderr);
+      throw Error(e.what() + written);
+    }
+    try {
       stereo.next(left, right, r, f.hasPose ? &f.pose : nullptr);
       const std::string dir = (std::filesystem::path(outDir) / name).string();
       writeOutputs(dir, r, left, minConfidence);
       writeViews(dir, views, rig.cam0, r, minConfidence);
     } catch (const Error& e) {
       if (tty) std::fputc('\n', stderr);
-      throw Error("frame " + std::to_string(i) + " (t " + name + " ns): " + e.what() + " (" +
-                  std::to_string(tally.frames) + " frames before it are written)");
+      throw Error("frame " + std::to_string(i) + " (t " + name + " ns): " + e.what() + written);
     }
     tally.add(r);
     const double fps = tally.frames / std::max(1e-9, tally.wallSeconds());
@@ -179,10 +182,11 @@ int runSequence(const Args& args, const std::string& outDir) {
   }
   if (tty) std::fputc('\n', stderr);
   auto mean = [](double ms, int n) { return n ? ms / n : 0.0; };
-  std::printf("%d frames in %.1f s: %.2f ms a frame solved (warm %d, %.2f ms; cold %d, %.2f ms; %d warm frames "
-              "redone cold); outputs in %s/<t_ns>/\n",
-              tally.frames, tally.wallSeconds(), mean(tally.solveMs, tally.frames), tally.warm,
-              mean(tally.warmMs, tally.warm), tally.cold, mean(tally.coldMs, tally.cold), tally.redone, outDir.c_str());
+  std::printf(
+      "%d frames in %.1f s: %.2f ms a frame solved (warm %d, %.2f ms; cold %d, %.2f ms; %d warm frames "
+      "redone cold); outputs in %s/<t_ns>/\n",
+      tally.frames, tally.wallSeconds(), mean(tally.solveMs, tally.frames), tally.warm, mean(tally.warmMs, tally.warm),
+      tally.cold, mean(tally.coldMs, tally.cold), tally.redone, outDir.c_str());
   return 0;
 }
 

@@ -443,8 +443,13 @@ void Pipeline::filterResult() {
   stage("temporal filter");
   const CameraParams cam = toCameraParams(L0.cam0);
   backend_.carryEstimate(prior_, state_, radial_, motion_, L0.mask, {cam, cam, {0, 0, 0}, 1});
-  TemporalParams tp{cam, {tPrime_.x(), tPrime_.y(), tPrime_.z()}, params_.temporalStrength, params_.temporalGate,
-                    kMeasurementPx, kDriftPx, kConfidenceFloor};
+  TemporalParams tp{cam,
+                    {tPrime_.x(), tPrime_.y(), tPrime_.z()},
+                    params_.temporalStrength,
+                    params_.temporalGate,
+                    kMeasurementPx,
+                    kDriftPx,
+                    kConfidenceFloor};
   backend_.temporalFilter(next_, L0.pd.u, L0.w, prior_, radial_, points_, L0.confidence, L0.mask, tp);
 }
 

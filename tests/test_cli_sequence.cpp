@@ -1,0 +1,94 @@
+// run --sequence end to end on a sequence synth renders: the outputs of every frame, the
+// summary, and bad input mid-sequence (one line naming the frame, the frames before it kept).
+#include <filesystem>
+
+#include "cli_util.hpp"
+#include "test_util.hpp"
+
+namespace fs = std::filesystem;
+using namespace cs::test;
+
+namespace {
+
+// 4 frames of 96 px; solved on the CPU with 3 levels (the band sweep at level 1 below a
+// full sweep at 2), so the warm frames happen.
+const char* kSolve = "--backend cpu --levels 3 --min-width 16";
+
+fs::path renderSequence(const fs::path& dir) {
+  const CliOutcome synth = runCli(dir, "synth --sequence -o seq --frames 4 --size 96 --samples 1 --quiet");
+  REQUIRE(synth.exitCode == 0);
+  return dir / "seq";
+}
+
+// The i-th frame's image of camera `cam`.
+fs::path frameImage(const fs::path& seq, int cam, int i) {
+  std::vector<fs::path> images;
+  for (const auto& e : fs::directory_iterator(seq / "mav0" / ("cam" + std::to_string(cam)) / "data"))
+    images.push_back(e.path());
+  std::sort(images.begin(), images.end());
+  return images.at(size_t(i));
+}
+
+size_t folders(const fs::path& dir) {
+  size_t n = 0;
+  for (const auto& e : fs::directory_iterator(dir)) n += e.is_directory();
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("run --sequence: every frame's outputs under its timestamp, warm after the first") {
+  const fs::path dir = tempDir("cli_sequence");
+  renderSequence(dir);
+  const CliOutcome r = runCli(dir, std::string("run --sequence seq -o out ") + kSolve);
+  INFO(r.err);
+  REQUIRE(r.exitCode == 0);
+  CHECK(r.out.find("4 stereo frames (ASL, 4 with poses)") != std::string::npos);
+  CHECK(r.out.find("(warm 3,") != std::string::npos);
+  CHECK(r.out.find("cold 1,") != std::string::npos);
+  CHECK(folders(dir / "out") == 4);
+  CHECK(fs::is_regular_file(dir / "out/1000033333333/depth.exr"));
+  CHECK(fs::is_regular_file(dir / "out/1000033333333/depth.png"));
+  // --cold: the baseline, every frame alone.
+  const CliOutcome cold = runCli(dir, std::string("run --sequence seq -o cold --cold ") + kSolve);
+  CHECK(cold.exitCode == 0);
+  CHECK(cold.out.find("(warm 0,") != std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("run --sequence: a missing or resized frame stops the run in one line, earlier frames kept") {
+  const fs::path dir = tempDir("cli_sequence_bad");
+  const fs::path seq = renderSequence(dir);
+  fs::remove(frameImage(seq, 1, 2));
+  CliOutcome r = runCli(dir, std::string("run --sequence seq -o out ") + kSolve);
+  CHECK(r.exitCode == 1);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 2);  // the calibration note and the error
+  CHECK(r.err.find("frame 2 (t 1000066666667 ns), right image: cannot open image") != std::string::npos);
+  CHECK(r.err.find("(2 frames before it are written)") != std::string::npos);
+  CHECK(folders(dir / "out") == 2);
+
+  // Both images of frame 2 at another size than the calibration's.
+  const CliOutcome big = runCli(dir, "synth -o big --size 128 --samples 1 --quiet");
+  REQUIRE(big.exitCode == 0);
+  fs::copy_file(dir / "big/left.png", frameImage(seq, 0, 2), fs::copy_options::overwrite_existing);
+  fs::copy_file(dir / "big/right.png", frameImage(seq, 0, 2).parent_path().parent_path().parent_path() / "cam1/data" /
+                                           frameImage(seq, 0, 2).filename());
+  fs::remove_all(dir / "out");
+  r = runCli(dir, std::string("run --sequence seq -o out ") + kSolve);
+  CHECK(r.exitCode == 1);
+  CHECK(r.err.find("frame 2 (t 1000066666667 ns): left image is 128x128 but the calibration says 96x96") !=
+        std::string::npos);
+  CHECK(folders(dir / "out") == 2);
+
+  // A corrupt data.csv is refused before any frame is solved.
+  {
+    std::ofstream csv(seq / "mav0/cam0/data.csv", std::ios::app);
+    csv << "not-a-time,x.png\n";
+  }
+  fs::remove_all(dir / "out");
+  r = runCli(dir, std::string("run --sequence seq -o out ") + kSolve);
+  CHECK(r.exitCode == 1);
+  CHECK(r.err.find("data.csv line 6: timestamp 'not-a-time' is not an integer") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "out/1000000000000"));
+  fs::remove_all(dir);
+}
