@@ -215,7 +215,7 @@ struct PcCarryEstimate {
   int32_t width, height, srcWidth, srcHeight, iterations, hasGuess;
 };
 struct PcTemporalFilter {
-  Addr state, u, w, prior, radial, confidence, mask, params;  // confidence: mask when absent
+  Addr state, u, w, prior, radial, points, confidence, mask, params;  // confidence: mask when absent
   int32_t width, height, hasConfidence;
   float strength, gate, sigmaPx, processPx, minConfidence;
 };
@@ -525,13 +525,22 @@ void VulkanBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& cos
                                      const SweepParams& p) {
   // The four directions at once (+x into `aggregated`, -x, +y, -y into a scratch of
   // three volumes), then their sum in the oracle's order. A scanline per subgroup where
-  // the device has subgroup arithmetic (a work group per scanline and direction covers
-  // every line whatever the subgroup size; the groups past the last line return at once),
-  // else a work group per scanline. dispatchGroups puts a full barrier before each dispatch.
+  // the device has subgroup arithmetic and shuffles and a lane holds at most 8 planes (the
+  // variant of J = ceil(planes / subgroup size) planes a lane; a work group per scanline
+  // and direction covers every line whatever the subgroup size, the groups past the last
+  // line return at once, and a device whose subgroups are not the size it reports walks
+  // with whole groups), else a work group per scanline. dispatchGroups puts a full
+  // barrier before each dispatch.
+  static_assert(kSweepAggregateJ8 == kSweepAggregateJ1 + 7, "SHADER_VARIANTS lists sweep_aggregate_j1 .. j8 in order");
+  constexpr uint32_t kSweepAggregateGroup = 64;  // mirrors kGroupSize in sweep_aggregate.comp with CS_J
   const int w = aggregated.width, h = aggregated.height;
   const Buffer spare = scratch(2, w, h, 3 * p.planes);
   PcSweepAggregate pc{addr(aggregated), addr(spare), addr(costs), addr(mask), w, h, p.planes, p.p1, p.p2};
-  dispatchGroups(subgroupArithmetic_ ? kSweepAggregateSubgroup : kSweepAggregate, pc, uint32_t(std::max(w, h)), 4);
+  const uint32_t lines = uint32_t(std::max(w, h)), S = subgroupSize_;
+  const uint32_t J = (uint32_t(p.planes) + S - 1) / S;
+  const bool subgroupWalk =
+      subgroupArithmetic_ && J >= 1 && J <= 8 && S <= kSweepAggregateGroup && kSweepAggregateGroup % S == 0;
+  dispatchGroups(subgroupWalk ? Shader(kSweepAggregateJ1 + int(J) - 1) : kSweepAggregate, pc, lines, 4);
   const int64_t count = int64_t(w) * h * p.planes;
   PcSweepCombine sum{addr(aggregated), addr(spare), int32_t(count)};
   dispatchGroups(kSweepCombine, sum, uint32_t((count + 255) / 256), 1);
@@ -592,16 +601,39 @@ void VulkanBackend::doSweepBandCost(const Buffer& costs, const Buffer& reference
 void VulkanBackend::doSweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first,
                                          const Buffer& mask, const SweepParams& p) {
   // As doSweepAggregate: the four directions at once (+x into `aggregated`, the others
-  // into a scratch of three band volumes), kSweepBandAggregateLines lines per work group,
-  // then sweep_combine.comp's sum in the oracle's order.
+  // into a scratch of three band volumes), then sweep_combine.comp's sum in the oracle's
+  // order. A line per subgroup (a work group of one) where the device has subgroup
+  // arithmetic and shuffles and subgroups of 32, 16, 8 or 4 (the variant of 32 / size
+  // hypotheses a lane), else kSweepBandAggregateLines lines per work group of 32.
   constexpr int kSweepBandAggregateLines = 1;  // mirrors kLines in sweep_band_aggregate.comp
   const int w = aggregated.width, h = aggregated.height;
   const Buffer spare = scratch(2, w, h, 3 * p.band);
   PcSweepBandAggregate pc{addr(aggregated), addr(spare), addr(costs), addr(first), addr(mask), w, h,
                           p.band,           p.p1,        p.p2};
   const int lines = std::max(w, h);
-  dispatchGroups(kSweepBandAggregate, pc, uint32_t((lines + kSweepBandAggregateLines - 1) / kSweepBandAggregateLines),
-                 4);
+  Shader walk = kSweepBandAggregate;
+  if (subgroupArithmetic_) {
+    switch (subgroupSize_) {
+      case 32:
+        walk = kSweepBandAggregateJ1;
+        break;
+      case 16:
+        walk = kSweepBandAggregateJ2;
+        break;
+      case 8:
+        walk = kSweepBandAggregateJ4;
+        break;
+      case 4:
+        walk = kSweepBandAggregateJ8;
+        break;
+      default:
+        break;
+    }
+  }
+  if (walk != kSweepBandAggregate)
+    dispatchGroups(walk, pc, uint32_t(lines), 4);
+  else
+    dispatchGroups(walk, pc, uint32_t((lines + kSweepBandAggregateLines - 1) / kSweepBandAggregateLines), 4);
   const int64_t count = int64_t(w) * h * p.band;
   PcSweepCombine sum{addr(aggregated), addr(spare), int32_t(count)};
   dispatchGroups(kSweepCombine, sum, uint32_t((count + 255) / 256), 1);
@@ -637,8 +669,8 @@ void VulkanBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const 
 }
 
 void VulkanBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                                     const Buffer& radial, const Buffer& confidence, const Buffer& mask,
-                                     const TemporalParams& p) {
+                                     const Buffer& radial, const Buffer& points, const Buffer& confidence,
+                                     const Buffer& mask, const TemporalParams& p) {
   auto store = [&](auto prm) {
     using S = std::remove_reference_t<decltype(prm.tPrime[0])>;
     prm.cam = toVkCam<S>(p.cam);
@@ -647,10 +679,23 @@ void VulkanBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const
   };
   const Addr block = float64_ ? store(VkTemporalParams<double>{}) : store(VkTemporalParams<float>{});
   const bool weighted = confidence.id >= 0;
-  PcTemporalFilter pc{
-      addr(state), addr(u),   addr(w),     addr(prior),    addr(radial),     addr(weighted ? confidence : mask),
-      addr(mask),  block,     state.width, state.height,   weighted ? 1 : 0, p.strength,
-      p.gate,      p.sigmaPx, p.processPx, p.minConfidence};
+  PcTemporalFilter pc{addr(state),
+                      addr(u),
+                      addr(w),
+                      addr(prior),
+                      addr(radial),
+                      addr(points),
+                      addr(weighted ? confidence : mask),
+                      addr(mask),
+                      block,
+                      state.width,
+                      state.height,
+                      weighted ? 1 : 0,
+                      p.strength,
+                      p.gate,
+                      p.sigmaPx,
+                      p.processPx,
+                      p.minConfidence};
   dispatch(float64_ ? kTemporalFilterF64 : kTemporalFilterF32, pc, state.width, state.height);
 }
 

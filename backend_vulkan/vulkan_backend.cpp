@@ -57,14 +57,17 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
   auto p2 = vkStruct<VkPhysicalDeviceProperties2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2);
   p2.pNext = &driver;
   inst_.fn.vkGetPhysicalDeviceProperties2(phys_, &p2);
-  // Subgroup arithmetic in compute shaders (Vulkan 1.1 core; CURVESTEREO_VULKAN_SUBGROUPS=0
-  // turns it off, as on a device without it, for tests of the fallback).
+  // Subgroup arithmetic and shuffles in compute shaders (Vulkan 1.1 core;
+  // CURVESTEREO_VULKAN_SUBGROUPS=0 turns them off, as on a device without them, for tests of
+  // the fallback).
   const char* useSubgroups = std::getenv("CURVESTEREO_VULKAN_SUBGROUPS");
-  const VkSubgroupFeatureFlags needed = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+  const VkSubgroupFeatureFlags needed =
+      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_SHUFFLE_BIT;
   subgroupArithmetic_ = props_.apiVersion >= VK_API_VERSION_1_1 &&
                         (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
                         (subgroup.supportedOperations & needed) == needed && subgroup.subgroupSize >= 1 &&
                         !(useSubgroups && std::string(useSubgroups) == "0");
+  subgroupSize_ = subgroup.subgroupSize;
   description_ = std::string(props_.deviceName) + " (" + typeName(props_.deviceType) + ", Vulkan " +
                  std::to_string(VK_API_VERSION_MAJOR(props_.apiVersion)) + "." +
                  std::to_string(VK_API_VERSION_MINOR(props_.apiVersion)) + "." +

@@ -102,7 +102,7 @@ class VulkanBackend final : public Backend {
   void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
                        const Buffer& mask, const CarryParams& p) override;
   void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                        const Buffer& radial, const Buffer& confidence, const Buffer& mask,
+                        const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
                         const TemporalParams& p) override;
 
  private:
@@ -165,7 +165,8 @@ class VulkanBackend final : public Backend {
   VkPhysicalDeviceMemoryProperties memProps_{};
   bool float64_ = false;
   PdTile pdTile_ = PdTile::Narrow;   // the largest tile of primal_dual.comp the device holds
-  bool subgroupArithmetic_ = false;  // subgroup arithmetic in compute shaders
+  bool subgroupArithmetic_ = false;  // subgroup arithmetic and shuffles in compute shaders
+  uint32_t subgroupSize_ = 1;        // the device's subgroup size (VkPhysicalDeviceSubgroupProperties)
   VkDevice dev_ = VK_NULL_HANDLE;
   VkQueue queue_ = VK_NULL_HANDLE;
   uint32_t queueFamily_ = 0;

@@ -1,10 +1,13 @@
 #version 460
+#ifdef CS_J
+#define CS_SUBGROUP  // the subgroup walk of CS_J planes a lane
+#endif
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 #ifdef CS_SUBGROUP
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
-#extension GL_KHR_memory_scope_semantics : require
+#extension GL_KHR_shader_subgroup_shuffle : require
 #endif
 // One scanline direction of the semi-global aggregation of the plane-sweep costs
 // (backend_cpu/plane_sweep.cpp aggregateDirection / sweepAggregate). All four directions
@@ -18,16 +21,17 @@
 // walked step by step; within a step the planes are independent except for m, the
 // minimum of the previous step's path costs. Work groups: (max(width, height), 4).
 //
-// With -DCS_SUBGROUP (devices with subgroup arithmetic in compute shaders) a line is one
-// subgroup's (walkSubgroup): each invocation holds J consecutive planes in registers, m is
-// a subgroupMin, the neighbours across invocations pass through shared memory with a
-// subgroup barrier: no work-group barrier in the step loop, and each step's costs load
-// kSlots - 1 steps ahead. Work group x takes lines x * subgroups ..; the
-// groups past the last line return at once. Planes beyond kMaxJ per invocation (a
-// small subgroup) and the build without subgroups walk a line with the whole work group
-// (walkGroup): plane k on invocation k % kGroupSize, the previous step's path costs in
-// shared memory, m from a reduction (subgroupMin of each subgroup, then the few minima;
-// a shared-memory tree without subgroups), barriers at every step.
+// With -DCS_SUBGROUP -DCS_J=J (devices with subgroup arithmetic and shuffles in compute
+// shaders; the host picks J = ceil(planes / subgroup size), 1 .. 8) a line is one
+// subgroup's (walkSubgroup): lane l holds planes l + S j (as backend_cuda's lanes) in
+// registers, m is a subgroupMin, the neighbours pass by subgroup shuffles: no shared
+// memory and no barrier in the step loop, the loads and stores of a step coalesce, and
+// each step's costs load kSlots - 1 steps ahead. Work group x takes lines x * subgroups ..;
+// the groups past the last line return at once. More planes (a small subgroup) and the
+// build without subgroups walk a line with the whole work group (walkGroup): plane k on
+// invocation k % kGroupSize, the previous step's path costs in shared memory, m from a
+// reduction (subgroupMin of each subgroup, then the few minima; a shared-memory tree
+// without subgroups), barriers at every step.
 #define CS_OWN_WORK_GROUP
 #include "common.glsl"
 
@@ -41,7 +45,6 @@ const int kGroupSize = 256;
 #endif
 layout(local_size_x = kGroupSize, local_size_y = 1, local_size_z = 1) in;
 const int kMaxPlanes = 512;  // kMaxSweepPlanes (backend_vulkan/kernels.cpp checks)
-const int kMaxJ = 8;         // planes per invocation in walkSubgroup (256 at subgroup size 32)
 
 layout(push_constant) uniform PC {
   FBuf aggregated, spare, costs, mask;  // aggregated, costs: `planes` channels; spare: 3 volumes
@@ -148,73 +151,80 @@ void walkGroup(Line ln) {
 #ifdef CS_SUBGROUP
 // ---- a line per subgroup ----
 
-// Each invocation's first and last path cost of the last two masked steps (ping-pong as
-// path[]), for the neighbouring invocations' planes k -+ 1 across the seam.
-shared float edges[2][2][kGroupSize];  // [step parity][0: first, 1: last][invocation]
-
-// One masked or unmasked step of a line with its costs c and mask value in hand.
-void subgroupStep(Line ln, int J, int k0, int e, int step, float c[kMaxJ], float inMask, inout float held[kMaxJ],
-                  inout bool havePrevious, inout float previousMin, inout int parity) {
-  const int base = (ln.start + step * ln.stride) * pc.planes;
+// One masked or unmasked step of a line with its costs c and mask value in hand. Lane l
+// holds planes l + S j (j < CS_J, S the subgroup size): the loads and stores of a step
+// coalesce, and the neighbours k -+ 1 come by a rotating shuffle (lane 0's k - 1 is the
+// previous chunk's lane S - 1, lane S - 1's k + 1 the next chunk's lane 0).
+void subgroupStep(Line ln, int lane, int S, int step, float c[CS_J], float inMask, inout float held[CS_J],
+                  inout bool havePrevious, inout float previousMin) {
+  const int base = ln.offset + (ln.start + step * ln.stride) * pc.planes;
   if (inMask == 0.0) {
     // The path restarts after an unmasked pixel; aggregated is 0 there.
     havePrevious = false;
-    [[unroll]] for (int j = 0; j < kMaxJ; ++j)
-      if (j < J && k0 + j < pc.planes) ln.paths.v[ln.offset + base + k0 + j] = 0.0;
+    [[unroll]] for (int j = 0; j < CS_J; ++j)
+      if (lane + S * j < pc.planes) ln.paths.v[base + lane + S * j] = 0.0;
     return;
   }
-  // The neighbours' seam values from the last masked step (read only when they exist).
-  const float below = havePrevious && k0 > 0 ? edges[parity ^ 1][1][e - 1] : 0.0;
-  const float above = havePrevious && k0 + J < pc.planes ? edges[parity ^ 1][0][e + 1] : 0.0;
-  float localMin = posInf(), belowHeld = below;  // belowHeld: held[j - 1] before this step
-  [[unroll]] for (int j = 0; j < kMaxJ; ++j) {
-    const int k = k0 + j;
-    if (j < J && k < pc.planes) {
-      const float cc = min(c[j], kCostCap);
-      float l = cc;
-      if (havePrevious) {
-        const float up = j + 1 < J ? held[min(j + 1, kMaxJ - 1)] : above;
-        l = pathCost(cc, held[j], belowHeld, up, k > 0, k + 1 < pc.planes, previousMin);
-      }
-      belowHeld = held[j];
+  float localMin = posInf();
+  if (havePrevious) {
+    // The previous step's path costs of lanes l - 1 and l + 1 (rotating: lane 0 gets lane
+    // S - 1's, lane S - 1 lane 0's, of the same chunk).
+    const uint down = uint(lane == 0 ? S - 1 : lane - 1), up = uint(lane == S - 1 ? 0 : lane + 1);
+    float fromDown[CS_J], fromUp[CS_J];
+    [[unroll]] for (int j = 0; j < CS_J; ++j) {
+      fromDown[j] = subgroupShuffle(held[j], down);
+      fromUp[j] = subgroupShuffle(held[j], up);
+    }
+    [[unroll]] for (int j = 0; j < CS_J; ++j) {
+      const int k = lane + S * j;
+      const float below = lane == 0 ? (j > 0 ? fromDown[max(j - 1, 0)] : 0.0) : fromDown[j];
+      const float above = lane == S - 1 ? (j + 1 < CS_J ? fromUp[min(j + 1, CS_J - 1)] : 0.0) : fromUp[j];
+      const float l = pathCost(min(c[j], kCostCap), held[j], below, above, k > 0, k + 1 < pc.planes, previousMin);
       held[j] = l;
-      localMin = min(localMin, l);
-      ln.paths.v[ln.offset + base + k] = l;
-      if (j == 0) edges[parity][0][e] = l;
-      if (j == J - 1) edges[parity][1][e] = l;
+      if (k < pc.planes) {
+        localMin = min(localMin, l);
+        ln.paths.v[base + k] = l;
+      }
+    }
+  } else {
+    [[unroll]] for (int j = 0; j < CS_J; ++j) {
+      const int k = lane + S * j;
+      const float l = min(c[j], kCostCap);
+      held[j] = l;
+      if (k < pc.planes) {
+        localMin = min(localMin, l);
+        ln.paths.v[base + k] = l;
+      }
     }
   }
   previousMin = subgroupMin(localMin);  // exact, as the oracle's running minimum
-  controlBarrier(gl_ScopeSubgroup, gl_ScopeSubgroup, gl_StorageSemanticsShared, gl_SemanticsAcquireRelease);
   havePrevious = true;
-  parity ^= 1;
 }
 
 // A step takes a few hundred cycles, a load from memory under this traffic about a
 // microsecond: each step's costs and mask are loaded kSlots - 1 steps ahead into a ring
-// of registers. The step loop is unrolled by kSlots so that every slot index is a
-// constant; the slot refilled at step s is the one step s - 1 consumed, so no register
-// waits on a load before its step (the mask is compared only when its step runs).
-const int kSlots = 6;
+// of registers (as backend_cuda's Ring: about 60 registers of costs). The step loop is
+// unrolled by kSlots so that every slot index is a constant; the slot refilled at step s
+// is the one step s - 1 consumed, so no register waits on a load before its step (the
+// mask is compared only when its step runs).
+const int kSlots = 60 / CS_J < 2 ? 2 : (60 / CS_J > 12 ? 12 : 60 / CS_J);
 
-void walkSubgroup(Line ln, int J) {
+void walkSubgroup(Line ln) {
   const int lane = int(gl_SubgroupInvocationID), S = int(gl_SubgroupSize);
-  const int e = int(gl_SubgroupID) * S + lane;  // this invocation's edges[][][e]
-  const int k0 = lane * J;                      // planes k0 .. k0 + J - 1 (those < planes)
-  const int kLoad = min(k0, pc.planes - 1);     // spare invocations load a valid address
-  float held[kMaxJ];                            // the last masked step's path costs
-  float ringCost[kSlots][kMaxJ], ringMask[kSlots];
+  float held[CS_J];  // the last masked step's path costs of planes lane + S j
+  [[unroll]] for (int j = 0; j < CS_J; ++j) held[j] = 0.0;
+  float ringCost[kSlots][CS_J], ringMask[kSlots];
   [[unroll]] for (int d = 0; d + 1 < kSlots; ++d) {
     if (d < ln.steps) {
       const int pixel = ln.start + d * ln.stride;
       ringMask[d] = pc.mask.v[pixel];
-      [[unroll]] for (int j = 0; j < kMaxJ; ++j)
-        if (j < J) ringCost[d][j] = pc.costs.v[pixel * pc.planes + min(kLoad + j, pc.planes - 1)];
+      // Spare lanes load a plane they never use (a valid address).
+      [[unroll]] for (int j = 0; j < CS_J; ++j)
+        ringCost[d][j] = pc.costs.v[pixel * pc.planes + min(lane + S * j, pc.planes - 1)];
     }
   }
   bool havePrevious = false;
   float previousMin = 0.0;
-  int parity = 0;
   for (int step0 = 0; step0 < ln.steps; step0 += kSlots) {
     [[unroll]] for (int d = 0; d < kSlots; ++d) {
       const int step = step0 + d;
@@ -223,10 +233,10 @@ void walkSubgroup(Line ln, int J) {
       if (ahead < ln.steps) {
         const int pixel = ln.start + ahead * ln.stride;
         ringMask[slot] = pc.mask.v[pixel];
-        [[unroll]] for (int j = 0; j < kMaxJ; ++j)
-          if (j < J) ringCost[slot][j] = pc.costs.v[pixel * pc.planes + min(kLoad + j, pc.planes - 1)];
+        [[unroll]] for (int j = 0; j < CS_J; ++j)
+          ringCost[slot][j] = pc.costs.v[pixel * pc.planes + min(lane + S * j, pc.planes - 1)];
       }
-      subgroupStep(ln, J, k0, e, step, ringCost[d], ringMask[d], held, havePrevious, previousMin, parity);
+      subgroupStep(ln, lane, S, step, ringCost[d], ringMask[d], held, havePrevious, previousMin);
     }
   }
 }
@@ -236,10 +246,12 @@ void main() {
   const int direction = int(gl_WorkGroupID.y);
   Line ln;
 #ifdef CS_SUBGROUP
+  // The host picks the variant of CS_J = ceil(planes / subgroup size); a device whose
+  // subgroups differ from its reported size walks a line with the whole group.
   const int J = (pc.planes + int(gl_SubgroupSize) - 1) / int(gl_SubgroupSize);
-  if (J <= kMaxJ) {
+  if (J == CS_J && kGroupSize % int(gl_SubgroupSize) == 0) {
     const int line = int(gl_WorkGroupID.x * gl_NumSubgroups + gl_SubgroupID);
-    if (lineOf(direction, line, ln)) walkSubgroup(ln, J);
+    if (lineOf(direction, line, ln)) walkSubgroup(ln);
     return;
   }
 #endif

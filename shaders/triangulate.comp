@@ -21,22 +21,33 @@ layout(push_constant) uniform PC {
   int width, height;
 } pc;
 
+// Each output written once: the radial depth r and the point (NaN where none).
+void store(int i, float r, vec3 point) {
+  pc.radial.v[i] = r;
+  pc.points.v[3 * i] = point.x;
+  pc.points.v[3 * i + 1] = point.y;
+  pc.points.v[3 * i + 2] = point.z;
+}
+
 void main() {
   int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
   if (x >= pc.width || y >= pc.height) return;
   const int i = y * pc.width + x;
   const float nan = quietNaN();
-  pc.radial.v[i] = nan;
-  pc.points.v[3 * i] = nan;
-  pc.points.v[3 * i + 1] = nan;
-  pc.points.v[3 * i + 2] = nan;
-  if (!masked(pc.mask, pc.width, pc.height, x, y)) return;
+  const vec3 none = vec3(nan);
+  if (!masked(pc.mask, pc.width, pc.height, x, y)) {
+    store(i, nan, none);
+    return;
+  }
 
   Cam cam0 = pc.prm.cam0;
   vec2r px = vec2r(real(x), real(y));
   vec2r wx = vec2r(real(pc.w.v[2 * i]), real(pc.w.v[2 * i + 1]));
   vec3r d0, d1;
-  if (!camUnproject(cam0, px, d0) || !camUnproject(cam0, px + wx, d1)) return;  // NaN
+  if (!camUnproject(cam0, px, d0) || !camUnproject(cam0, px + wx, d1)) {
+    store(i, nan, none);
+    return;
+  }
   vec3r c1 = -vec3r(pc.prm.tPrime[0], pc.prm.tPrime[1], pc.prm.tPrime[2]);
   vec3r n = cross(d0, d1);
   real n2 = n.x * n.x + n.y * n.y + n.z * n.z;
@@ -49,11 +60,8 @@ void main() {
     infinite = !(a > R(0.0)) || !(b > R(0.0));
   }
   if (infinite) {
-    pc.radial.v[i] = posInf();
+    store(i, posInf(), none);
     return;
   }
-  pc.radial.v[i] = float(a);
-  pc.points.v[3 * i] = float(a * d0.x);
-  pc.points.v[3 * i + 1] = float(a * d0.y);
-  pc.points.v[3 * i + 2] = float(a * d0.z);
+  store(i, float(a), vec3(float(a * d0.x), float(a * d0.y), float(a * d0.z)));
 }
