@@ -172,6 +172,7 @@ class Stereo:
         epipole_deg: float = ...,
         # Sequences (next()): warm start, cold schedule, warm-failure check, temporal filter.
         warm_start: bool = ...,
+        warm_band: int = ...,
         cold_every: int = ...,
         warm_fail_ratio: float = ...,
         temporal_strength: float = ...,
