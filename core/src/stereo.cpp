@@ -154,7 +154,10 @@ void Stereo::next(const ImageF& left, const ImageF& right, DepthResult& result, 
     auto solve = [&] {
       pipeline.run(left, right, profiling_, progress_, result, {frame.warm, frame.filter});
       finish(result);
-      result.consistentShare = pipeline.consistentShare(core_->params().initAccept);
+      // warmFailRatio 0 turns the check off, and with it the read of the sweep's confidence.
+      result.consistentShare = core_->params().warmFailRatio > 0.f
+                                   ? pipeline.consistentShare(core_->params().initAccept)
+                                   : std::numeric_limits<double>::quiet_NaN();
     };
     solve();
     result.redone = false;
