@@ -20,14 +20,6 @@ namespace cs::cli {
 
 namespace {
 
-// A lens mask PNG (non-zero = use the pixel), e.g. the T265's image circle.
-ImageU8 loadMask(const std::string& path) {
-  ImageF m = readPngGray(path);
-  ImageU8 out(m.width, m.height);
-  for (size_t i = 0; i < m.size(); ++i) out.data[i] = m.data[i] > 0.5f;
-  return out;
-}
-
 // The extra depth forms for other tools (README "Outputs for ROS, Open3D and mapping").
 struct ViewOptions {
   bool pinhole = false;

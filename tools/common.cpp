@@ -230,15 +230,29 @@ std::string formatStages(const std::vector<StageTime>& stages) {
   return s.str();
 }
 
-// --calib, or the sequence folder's own camchain.yaml (the ASL layout keeps it there).
+ImageU8 loadMask(const std::string& path) {
+  const ImageF m = readPngGray(path);
+  ImageU8 out(m.width, m.height);
+  for (size_t i = 0; i < m.size(); ++i) out.data[i] = m.data[i] > 0.5f;
+  return out;
+}
+
+// --calib, or the sequence folder's own camchain.yaml: beside mav0/ (the ASL layout keeps
+// it there), inside it, or, when the source is mav0/ itself, beside that.
 std::string sequenceCalibration(const Args& args, const std::string& source) {
   if (args.has("calib")) return args.get("calib", "");
-  const std::filesystem::path own = std::filesystem::path(source) / "camchain.yaml";
+  namespace fs = std::filesystem;
+  fs::path dir = fs::path(source).lexically_normal();
+  if (dir.filename().empty()) dir = dir.parent_path();  // "seq/mav0/"
+  std::vector<fs::path> candidates = {dir / "camchain.yaml", dir / "mav0" / "camchain.yaml"};
+  if (dir.filename() == "mav0") candidates.push_back(dir.parent_path() / "camchain.yaml");
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(own, ec))
-    throw Error("run --sequence needs --calib CALIB (the sequence has no camchain.yaml of its own)");
-  std::fprintf(stderr, "curvestereo: note: calibration %s\n", own.string().c_str());
-  return own.string();
+  for (const fs::path& own : candidates)
+    if (fs::is_regular_file(own, ec)) {
+      std::fprintf(stderr, "curvestereo: note: calibration %s\n", own.string().c_str());
+      return own.string();
+    }
+  throw Error("sequence '" + source + "' has no camchain.yaml (beside mav0/): give one with --calib CALIB");
 }
 
 }  // namespace cs::cli

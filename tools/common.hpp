@@ -69,6 +69,9 @@ class Progress {
 // "upload 0.4 | pyramid 3.1 | ..." for the stage times of one frame.
 std::string formatStages(const std::vector<StageTime>& stages);
 
+// A lens mask PNG (non-zero = use the pixel), e.g. the T265's image circle.
+ImageU8 loadMask(const std::string& path);
+
 // A sequence's calibration: --calib, or the sequence folder's own camchain.yaml (the ASL
 // layout keeps it there; a note says so); else a one-line error.
 std::string sequenceCalibration(const Args& args, const std::string& source);

@@ -96,13 +96,7 @@ SequenceInput openSequence(const std::string& dir, const Args& args, int maxFram
   if (!fs::is_directory(in.mav0 / "cam0", ec))
     throw Error("eval --sequence: '" + dir +
                 "' is not an ASL folder (mav0/cam0/): ground truth is read from mav0/depth0");
-  std::string calib = args.get("calib", "");
-  if (calib.empty())
-    for (const fs::path& p :
-         {fs::path(dir) / "camchain.yaml", in.mav0.parent_path() / "camchain.yaml", in.mav0 / "camchain.yaml"})
-      if (calib.empty() && fs::is_regular_file(p, ec)) calib = p.string();
-  if (calib.empty()) throw Error("sequence '" + dir + "' has no camchain.yaml (next to mav0/); give one with --calib");
-  in.rig = loadCalibration(calib);
+  in.rig = loadCalibration(sequenceCalibration(args, dir));
   in.depth0 = readStream(in.mav0, "depth0");
   if (!in.depth0.present())
     throw Error("sequence '" + dir + "' has no ground truth: no mav0/depth0/ (camera 0's depth maps)");
@@ -204,13 +198,6 @@ Summary summarize(const Run& run) {
   s.ms = meanOf(f, [](const FrameRow& r) { return r.ms; });
   for (const FrameRow& r : f) (r.redone ? s.redone : r.warm ? s.warm : s.cold)++;
   return s;
-}
-
-ImageU8 loadMask(const std::string& path) {
-  const ImageF m = readPngGray(path);
-  ImageU8 out(m.width, m.height);
-  for (size_t i = 0; i < m.size(); ++i) out.data[i] = m.data[i] > 0.5f;
-  return out;
 }
 
 // The progress line on stderr: rewritten in place on a terminal, one line per frame otherwise.

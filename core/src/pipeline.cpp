@@ -186,22 +186,22 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
     // tangent buffer (overwritten by every warp) to receive theirs.
     backend_.fields(L.mask, l == 0 ? calibration_ : L.tangent, L.trajectory, fp);
   }
-  if (initialising()) {
-    const Level& S = levels_[sweep_.level];
-    std::vector<float> mask(S.mask.count());
-    backend_.download(S.mask, mask.data());
-    sweepMaskPixels_ = std::count_if(mask.begin(), mask.end(), [](float m) { return m != 0.f; });
-  }
+  sweepMaskPixels_ = -1;  // the mask changed: counted again by the next consistentShare()
   backend_.synchronize();
 }
 
+// The count of valid pixels is read once per pose, by the first sequence frame that needs
+// it, not by every setPose (a pair never does).
 double Pipeline::consistentShare(float accept) {
   if (!initialising()) return std::numeric_limits<double>::quiet_NaN();
-  const Buffer& confidence = levels_[sweep_.level].confidence;
-  sweepConfidence_.resize(confidence.count());
-  backend_.download(confidence, sweepConfidence_.data());
-  const long long consistent =
-      std::count_if(sweepConfidence_.begin(), sweepConfidence_.end(), [&](float c) { return c >= accept; });
+  const Level& S = levels_[sweep_.level];
+  auto countDownloaded = [&](const Buffer& b, auto counts) {
+    sweepScratch_.resize(b.count());
+    backend_.download(b, sweepScratch_.data());
+    return (long long)std::count_if(sweepScratch_.begin(), sweepScratch_.end(), counts);
+  };
+  if (sweepMaskPixels_ < 0) sweepMaskPixels_ = countDownloaded(S.mask, [](float m) { return m != 0.f; });
+  const long long consistent = countDownloaded(S.confidence, [&](float c) { return c >= accept; });
   return sweepMaskPixels_ ? double(consistent) / double(sweepMaskPixels_) : 0.0;
 }
 
@@ -545,7 +545,6 @@ void Pipeline::resetSequence() {
     motion_ = backend_.create(kMotionFloats, 1, 1);
   }
   backend_.fill(state_, -1.f);
-  setMotion(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
 }
 
 void Pipeline::setMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {

@@ -65,7 +65,7 @@ class Pipeline {
   // estimate enters (Params::warmStart).
   bool canWarmStart() const { return initialising() && sweep_.banded; }
   // Allocates the sequence's buffers on first use and forgets the carried state: the next
-  // frame must be cold.
+  // frame must be cold, and every frame is preceded by its setMotion().
   void resetSequence();
   // The motion of camera 0 since the previous frame (X_new = R X_prev + t); identity when
   // unknown. Uploaded outside the frame, so a replayed frame uses it.
@@ -159,8 +159,8 @@ class Pipeline {
   // frame's, `next` this frame's filtered result, `prior` the state carried into this
   // frame's view; `motion` the kMotionFloats of camera 0's motion. Created by resetSequence.
   Buffer state_, next_, prior_, motion_;
-  long long sweepMaskPixels_ = 0;     // valid pixels at the sweep's level (setPose)
-  std::vector<float> sweepConfidence_;  // consistentShare's download
+  long long sweepMaskPixels_ = -1;   // valid pixels at the sweep's level (-1: not counted since setPose)
+  std::vector<float> sweepScratch_;  // consistentShare's downloads
 };
 
 }  // namespace cs

@@ -105,6 +105,21 @@ void finish(DepthResult& r) {
     finishAll(r);
 }
 
+// One frame of compute() or next(): the inputs checked against the rig, `solve` run, the
+// time taken, and a host allocation failure reported as the frame's.
+template <class Solve>
+void timedSolve(const Rig& rig, const ImageF& left, const ImageF& right, DepthResult& result, Solve&& solve) {
+  checkImage(left, rig.cam0, "left");
+  checkImage(right, rig.cam1, "right");
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    solve();
+  } catch (const std::bad_alloc&) {
+    throw Error("out of memory computing a " + sizeText(left.width, left.height) + " frame (host result images)");
+  }
+  result.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 }  // namespace
 
 Stereo::Stereo(const Rig& rig, const Params& params, const std::string& backend)
@@ -130,26 +145,17 @@ const Rig& Stereo::rig() const { return core_->rig(); }
 const Params& Stereo::params() const { return core_->params(); }
 
 void Stereo::compute(const ImageF& left, const ImageF& right, DepthResult& result) {
-  checkImage(left, core_->rig().cam0, "left");
-  checkImage(right, core_->rig().cam1, "right");
-  const auto t0 = std::chrono::steady_clock::now();
-  try {
+  timedSolve(core_->rig(), left, right, result, [&] {
     core_->pipeline().run(left, right, profiling_, progress_, result);
     finish(result);
     result.warm = result.redone = false;
     result.consistentShare = std::numeric_limits<double>::quiet_NaN();
-  } catch (const std::bad_alloc&) {
-    throw Error("out of memory computing a " + sizeText(left.width, left.height) + " frame (host result images)");
-  }
-  result.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  });
 }
 
 void Stereo::next(const ImageF& left, const ImageF& right, DepthResult& result, const Pose* pose) {
-  checkImage(left, core_->rig().cam0, "left");
-  checkImage(right, core_->rig().cam1, "right");
-  const auto t0 = std::chrono::steady_clock::now();
-  Pipeline& pipeline = core_->pipeline();
-  try {
+  timedSolve(core_->rig(), left, right, result, [&] {
+    Pipeline& pipeline = core_->pipeline();
     detail::StereoCore::SequenceFrame frame = core_->beginSequenceFrame(pose);
     auto solve = [&] {
       pipeline.run(left, right, profiling_, progress_, result, {frame.warm, frame.filter});
@@ -168,10 +174,7 @@ void Stereo::next(const ImageF& left, const ImageF& right, DepthResult& result, 
     }
     result.warm = frame.warm;
     core_->endSequenceFrame(frame, result.consistentShare);
-  } catch (const std::bad_alloc&) {
-    throw Error("out of memory computing a " + sizeText(left.width, left.height) + " frame (host result images)");
-  }
-  result.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  });
 }
 
 DepthResult Stereo::next(const ImageF& left, const ImageF& right, const Pose* pose) {
