@@ -173,6 +173,23 @@ void CpuBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Bu
                       confidence.id >= 0 ? &confidenceView : nullptr, view(mask), p);
 }
 
+void CpuBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
+                             const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
+  cpu::roundTrip(view(error), view(w), view(calibration), view(reverseW), view(reverseCalibration),
+                 view(reverseMask), view(mask));
+}
+
+void CpuBackend::doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
+                                    const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
+                                    const Buffer& trajectory, const Buffer& sweepConfidence,
+                                    const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
+  const View sweepView = sweepConfidence.id >= 0 ? view(sweepConfidence) : View{};
+  const View tripView = roundTripError.id >= 0 ? view(roundTripError) : View{};
+  cpu::resultConfidence(view(confidence), view(radial), view(points), view(image), view(n0), view(n1), view(w),
+                        view(trajectory), sweepConfidence.id >= 0 ? &sweepView : nullptr,
+                        roundTripError.id >= 0 ? &tripView : nullptr, view(mask), p);
+}
+
 void CpuBackend::doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
   cpu::warp(view(dst), view(src), view(flow));
 }

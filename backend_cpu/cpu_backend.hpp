@@ -1,7 +1,8 @@
 // The scalar CPU backend: the readable reference implementation (the oracle) that
 // every other backend is tested against. One file per stage (fields.cpp, warp.cpp, resample.cpp,
 // upsample_estimate.cpp, normalise.cpp, structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp,
-// accumulate.cpp, plane_sweep.cpp, triangulate.cpp, carry_estimate.cpp, temporal_filter.cpp).
+// accumulate.cpp, plane_sweep.cpp, triangulate.cpp, carry_estimate.cpp, temporal_filter.cpp,
+// round_trip.cpp, result_confidence.cpp).
 #pragma once
 #include <vector>
 
@@ -48,6 +49,12 @@ void carryEstimate(const View& dst, const View& src, const View* guess, const fl
                    const View& mask, const CarryParams& p);
 void temporalFilter(const View& state, const View& u, const View& w, const View& prior, const View& radial,
                     const View& points, const View* confidence, const View& mask, const TemporalParams& p);
+void roundTrip(const View& error, const View& w, const View& calibration, const View& reverseW,
+               const View& reverseCalibration, const View& reverseMask, const View& mask);
+void resultConfidence(const View& confidence, const View& radial, const View& points, const View& image,
+                      const View& n0, const View& n1, const View& w, const View& trajectory,
+                      const View* sweepConfidence, const View* roundTripError, const View& mask,
+                      const ConfidenceParams& p);
 
 // Physical memory, or the container's memory limit when lower (0 if unknown): create()
 // refuses buffers beyond it with a cs::Error naming the size instead of being OOM-killed.
@@ -111,6 +118,12 @@ class CpuBackend final : public Backend {
   void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
                         const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
                         const TemporalParams& p) override;
+  void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
+                   const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) override;
+  void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,
+                          const Buffer& n0, const Buffer& n1, const Buffer& w, const Buffer& trajectory,
+                          const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& mask,
+                          const ConfidenceParams& p) override;
 
  private:
   // The view of a buffer (Backend has checked it: created here, used no larger).

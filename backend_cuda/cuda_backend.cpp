@@ -366,8 +366,8 @@ void CudaBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Bu
 }
 
 void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                                   const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
-                                   const TemporalParams& p) {
+                                   const Buffer& radial, const Buffer& points, const Buffer& confidence,
+                                   const Buffer& mask, const TemporalParams& p) {
   flush();
   cudak::TemporalDev d{};
   d.cam = camDev(p.cam);
@@ -380,9 +380,34 @@ void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const B
   const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
   check(cudak::launchTemporalFilter(stream_, img(slot(state).dev, state), img(slot(u).dev, u), img(slot(w).dev, w),
                                     img(slot(prior).dev, prior), img(slot(radial).dev, radial),
-                                    img(slot(points).dev, points), weight,
-                                    img(slot(mask).dev, mask), d),
+                                    img(slot(points).dev, points), weight, img(slot(mask).dev, mask), d),
         "temporalFilter");
+}
+
+void CudaBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
+                              const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
+  flush();
+  check(cudak::launchRoundTrip(stream_, img(slot(error).dev, error), img(slot(w).dev, w),
+                               img(slot(calibration).dev, calibration), img(slot(reverseW).dev, reverseW),
+                               img(slot(reverseCalibration).dev, reverseCalibration),
+                               img(slot(reverseMask).dev, reverseMask), img(slot(mask).dev, mask)),
+        "roundTrip");
+}
+
+void CudaBackend::doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
+                                     const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
+                                     const Buffer& trajectory, const Buffer& sweepConfidence,
+                                     const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
+  flush();
+  const cudak::ConfidenceDev d{p.radius,      p.noise,          p.sigmaPx,    p.residualScale,
+                               p.roundTripPx, p.roundTripMaxPx, p.infinityPx, p.invalidBelow};
+  auto optional = [&](const Buffer& b) { return b.id >= 0 ? img(slot(b).dev, b) : cudak::Img{nullptr, 0, 0, 0}; };
+  check(
+      cudak::launchResultConfidence(stream_, img(slot(confidence).dev, confidence), img(slot(radial).dev, radial),
+                                    img(slot(points).dev, points), img(slot(image).dev, image), img(slot(n0).dev, n0),
+                                    img(slot(n1).dev, n1), img(slot(w).dev, w), img(slot(trajectory).dev, trajectory),
+                                    optional(sweepConfidence), optional(roundTripError), img(slot(mask).dev, mask), d),
+      "resultConfidence");
 }
 
 void CudaBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {

@@ -131,6 +131,12 @@ class CudaBackend final : public Backend {
   void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
                         const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
                         const TemporalParams& p) override;
+  void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
+                   const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) override;
+  void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,
+                          const Buffer& n0, const Buffer& n1, const Buffer& w, const Buffer& trajectory,
+                          const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& mask,
+                          const ConfidenceParams& p) override;
 
  private:
   struct Slot {

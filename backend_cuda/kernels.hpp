@@ -144,6 +144,18 @@ struct TemporalDev {  // cs::TemporalParams
 // confidence.data null: 1 everywhere.
 cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img points, Img confidence,
                                  Img mask, const TemporalDev& p);
+// The result's confidence (round_trip.cu, result_confidence.cu; backend.hpp roundTrip,
+// resultConfidence).
+cudaError_t launchRoundTrip(cudaStream_t s, Img error, Img w, Img calibration, Img reverseW, Img reverseCalibration,
+                            Img reverseMask, Img mask);
+struct ConfidenceDev {  // cs::ConfidenceParams
+  int radius;
+  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow;
+};
+// sweepConfidence.data, roundTripError.data null: absent.
+cudaError_t launchResultConfidence(cudaStream_t s, Img confidence, Img radial, Img points, Img image, Img n0, Img n1,
+                                   Img w, Img trajectory, Img sweepConfidence, Img roundTripError, Img mask,
+                                   const ConfidenceDev& p);
 cudaError_t launchWarp(cudaStream_t s, Img dst, Img src, Img flow);
 cudaError_t launchDownsample(cudaStream_t s, Img dst, Img src, float scale);
 cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float valueScale);

@@ -59,6 +59,12 @@ struct VkTemporalParams {
   S tPrime[3];
 };
 
+// result_confidence.comp's block.
+struct VkConfidenceParams {
+  int32_t radius;
+  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow;
+};
+
 template <class S>
 struct VkSweepParams {
   VkCam<S> cam;
@@ -219,6 +225,15 @@ struct PcTemporalFilter {
   int32_t width, height, hasConfidence;
   float strength, gate, sigmaPx, processPx, minConfidence;
 };
+struct PcRoundTrip {
+  Addr error, w, calibration, reverseW, reverseCalibration, reverseMask, mask;
+  int32_t width, height, reverseWidth, reverseHeight;
+};
+struct PcResultConfidence {
+  Addr confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError, mask, params;
+  int32_t width, height, hasSweep, hasRoundTrip;  // absent buffers: mask
+};
+static_assert(sizeof(PcResultConfidence) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 static_assert(sizeof(PcTemporalFilter) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 static_assert(sizeof(PcPrimalDual) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 static_assert(sizeof(PcSweepBandWarp) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
@@ -697,6 +712,42 @@ void VulkanBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const
                       p.processPx,
                       p.minConfidence};
   dispatch(float64_ ? kTemporalFilterF64 : kTemporalFilterF32, pc, state.width, state.height);
+}
+
+// ---- the result's confidence ----
+
+void VulkanBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
+                                const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
+  PcRoundTrip pc{addr(error),       addr(w),    addr(calibration), addr(reverseW), addr(reverseCalibration),
+                 addr(reverseMask), addr(mask), error.width,       error.height,   reverseMask.width,
+                 reverseMask.height};
+  dispatch(kRoundTrip, pc, error.width, error.height);
+}
+
+void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
+                                       const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
+                                       const Buffer& trajectory, const Buffer& sweepConfidence,
+                                       const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
+  VkConfidenceParams prm{p.radius,      p.noise,          p.sigmaPx,    p.residualScale,
+                         p.roundTripPx, p.roundTripMaxPx, p.infinityPx, p.invalidBelow};
+  const bool hasSweep = sweepConfidence.id >= 0, hasTrip = roundTripError.id >= 0;
+  PcResultConfidence pc{addr(confidence),
+                        addr(radial),
+                        addr(points),
+                        addr(image),
+                        addr(n0),
+                        addr(n1),
+                        addr(w),
+                        addr(trajectory),
+                        addr(hasSweep ? sweepConfidence : mask),
+                        addr(hasTrip ? roundTripError : mask),
+                        addr(mask),
+                        paramBlock(&prm, sizeof prm),
+                        confidence.width,
+                        confidence.height,
+                        hasSweep ? 1 : 0,
+                        hasTrip ? 1 : 0};
+  dispatch(kResultConfidence, pc, confidence.width, confidence.height);
 }
 
 }  // namespace cs::vk

@@ -98,6 +98,15 @@ class ForwardingBackend : public Backend {
                         const Buffer& pt, const Buffer& c, const Buffer& m, const TemporalParams& p) override {
     b_.temporalFilter(st, u, w, pr, r, pt, c, m, p);
   }
+  void doRoundTrip(const Buffer& e, const Buffer& w, const Buffer& c, const Buffer& rw, const Buffer& rc,
+                   const Buffer& rm, const Buffer& m) override {
+    b_.roundTrip(e, w, c, rw, rc, rm, m);
+  }
+  void doResultConfidence(const Buffer& c, const Buffer& r, const Buffer& pt, const Buffer& i, const Buffer& n0,
+                          const Buffer& n1, const Buffer& w, const Buffer& t, const Buffer& sc, const Buffer& e,
+                          const Buffer& m, const ConfidenceParams& p) override {
+    b_.resultConfidence(c, r, pt, i, n0, n1, w, t, sc, e, m, p);
+  }
 
  protected:
   Backend& b_;

@@ -837,42 +837,110 @@ std::vector<Output> sweepBandSelectCase(Backend& b) {
 
 }  // namespace
 
+// --- the result's confidence ---
+
+// A small displacement field and a calibration field that nearly undo each other's
+// directions, so some round trips come home and others miss; NaN in places and a pixel
+// the reverse mask leaves out.
+std::vector<Output> roundTripCase(Backend& b) {
+  Session s{b};
+  Host w = noise(kW, kH, 2, 81, 1.5f), calibration = noise(kW, kH, 2, 82, 0.8f);
+  Host reverseW = noise(kW, kH, 2, 83, 1.5f), reverseCalibration = noise(kW, kH, 2, 84, 0.8f);
+  Host mask = discMask(kW, kH), reverseMask = discMask(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      w.at(x, y, 0) -= 1.3f;
+      reverseW.at(x, y, 0) += 1.3f;
+      if ((x + 5 * y) % 29 == 0) w.at(x, y, 1) = std::numeric_limits<float>::quiet_NaN();
+    }
+  reverseMask.at(10, 12) = 0.f;
+  Buffer error = s.make(kW, kH, 1);
+  b.roundTrip(error, s.put(w), s.put(calibration), s.put(reverseW), s.put(reverseCalibration), s.put(reverseMask),
+              s.put(mask));
+  return {s.get("roundtrip_error", error)};
+}
+
+// A textured left half and a plain right half (structure), a second image that matches the
+// first where w says in the top half and not in the bottom (photometric), a falling sweep
+// confidence, round-trip errors across the threshold, disparities near zero in a corner and
+// depths NaN in places.
+ConfidenceParams confidenceCaseParams() { return {3, 0.01f, 0.5f, 0.6f, 1.f, 1.5f, 0.3f, 0.f}; }
+
+std::vector<Output> resultConfidenceRun(Backend& b, bool optional, const ConfidenceParams& p, const std::string& tag) {
+  Session s{b};
+  Host image = texture(kW, kH, 91, 1), n1(kW, kH, 1), w = noise(kW, kH, 2, 92, 0.4f), mask = discMask(kW, kH);
+  Host radial(kW, kH, 1), sweep(kW, kH, 1), trip(kW, kH, 1), trajectory = tangentField(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      if (x > kW / 2) image.at(x, y) = 0.5f + 0.001f * float(x);
+      radial.at(x, y) = (x + 3 * y) % 37 == 0 ? std::numeric_limits<float>::quiet_NaN() : 2.f;
+      sweep.at(x, y) = 1.2f - float(y) / float(kH - 1);
+      trip.at(x, y) = (x * 7 + y * 3) % 11 == 0 ? std::numeric_limits<float>::quiet_NaN() : 0.25f * float(x % 9);
+      if (x < 8 && y < 8) w.at(x, y, 0) = w.at(x, y, 1) = 0.05f;
+    }
+  Host n0 = image;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) n1.at(x, y) = y < kH / 2 ? image.at(std::min(kW - 1, x + 1), y) : 1.f - image.at(x, y);
+  Buffer confidence = s.make(kW, kH, 1), rb = s.put(radial), points = s.make(kW, kH, 3);
+  b.fill(points, 1.f);
+  b.resultConfidence(confidence, rb, points, s.put(image), s.put(n0), s.put(n1), s.put(w), s.put(trajectory),
+                     optional ? s.put(sweep) : Buffer{}, optional ? s.put(trip) : Buffer{}, s.put(mask), p);
+  return {s.get("confidence_" + tag, confidence), s.get("confidence_radial_" + tag, rb),
+          s.get("confidence_points_" + tag, points)};
+}
+
+std::vector<Output> resultConfidenceCase(Backend& b) {
+  return resultConfidenceRun(b, true, confidenceCaseParams(), "all");
+}
+
+std::vector<Output> resultConfidenceAloneCase(Backend& b) {
+  ConfidenceParams p = confidenceCaseParams();
+  p.radius = 1;
+  p.infinityPx = 0.f;
+  p.invalidBelow = 0.05f;
+  return resultConfidenceRun(b, false, p, "alone");
+}
+
 const std::vector<KernelCase>& kernelCases() {
-  static const std::vector<KernelCase> cases = {{"fields", fieldsCase},
-                                                {"triangulate", triangulateCase},
-                                                {"warp", warpCase},
-                                                {"downsample", downsampleCase},
-                                                {"upsample", upsampleCase},
-                                                {"upsampleEstimate", upsampleEstimateCase},
-                                                {"normalise", normaliseCase},
-                                                {"structureTensor", structureTensorCase},
-                                                {"warpDerivatives", warpDerivativesCase},
-                                                {"warpDerivatives+confidence", warpDerivativesConfidenceCase},
-                                                {"primalDual", primalDualCase},
-                                                {"median", medianCase},
-                                                {"accumulate", accumulateCase},
-                                                {"warpIterations", warpIterationsCase},
-                                                {"warpTail", warpTailCase},
-                                                {"warpTail, last warp", warpTailLastCase},
-                                                {"warpTail, no median", warpTailNoMedianCase},
-                                                {"sweepWarp", sweepWarpCase},
-                                                {"sweepCost", sweepCostCase},
-                                                {"sweepAggregate", sweepAggregateCase},
-                                                {"sweepAggregate, 40 planes", sweepAggregateChunksCase},
-                                                {"sweepSelect", sweepSelectCase},
-                                                {"sweepInitialise", sweepInitialiseCase},
-                                                {"sweepBandWarp", sweepBandWarpCase},
-                                                {"sweepBandCost", sweepBandCostCase},
-                                                {"sweepBandCost, radius 1", sweepBandCostRadius1Case},
-                                                {"sweepBandCost, radius 3", sweepBandCostRadius3Case},
-                                                {"sweepBandCost, radius 4", sweepBandCostRadius4Case},
-                                                {"sweepBandCost, 32-wide bands jumping 50", sweepBandCostJumpCase},
-                                                {"sweepBandAggregate", sweepBandAggregateCase},
-                                                {"sweepBandAggregate, 32-wide band", sweepBandAggregateWideCase},
-                                                {"sweepBandSelect", sweepBandSelectCase},
-                                                {"carryEstimate", carryEstimateCase},
-                                                {"carryEstimate, coarser grid of camera 1'", carryEstimateCoarseCase},
-                                                {"temporalFilter", temporalFilterCase}};
+  static const std::vector<KernelCase> cases = {
+      {"fields", fieldsCase},
+      {"triangulate", triangulateCase},
+      {"warp", warpCase},
+      {"downsample", downsampleCase},
+      {"upsample", upsampleCase},
+      {"upsampleEstimate", upsampleEstimateCase},
+      {"normalise", normaliseCase},
+      {"structureTensor", structureTensorCase},
+      {"warpDerivatives", warpDerivativesCase},
+      {"warpDerivatives+confidence", warpDerivativesConfidenceCase},
+      {"primalDual", primalDualCase},
+      {"median", medianCase},
+      {"accumulate", accumulateCase},
+      {"warpIterations", warpIterationsCase},
+      {"warpTail", warpTailCase},
+      {"warpTail, last warp", warpTailLastCase},
+      {"warpTail, no median", warpTailNoMedianCase},
+      {"sweepWarp", sweepWarpCase},
+      {"sweepCost", sweepCostCase},
+      {"sweepAggregate", sweepAggregateCase},
+      {"sweepAggregate, 40 planes", sweepAggregateChunksCase},
+      {"sweepSelect", sweepSelectCase},
+      {"sweepInitialise", sweepInitialiseCase},
+      {"sweepBandWarp", sweepBandWarpCase},
+      {"sweepBandCost", sweepBandCostCase},
+      {"sweepBandCost, radius 1", sweepBandCostRadius1Case},
+      {"sweepBandCost, radius 3", sweepBandCostRadius3Case},
+      {"sweepBandCost, radius 4", sweepBandCostRadius4Case},
+      {"sweepBandCost, 32-wide bands jumping 50", sweepBandCostJumpCase},
+      {"sweepBandAggregate", sweepBandAggregateCase},
+      {"sweepBandAggregate, 32-wide band", sweepBandAggregateWideCase},
+      {"sweepBandSelect", sweepBandSelectCase},
+      {"carryEstimate", carryEstimateCase},
+      {"carryEstimate, coarser grid of camera 1'", carryEstimateCoarseCase},
+      {"temporalFilter", temporalFilterCase},
+      {"roundTrip", roundTripCase},
+      {"resultConfidence", resultConfidenceCase},
+      {"resultConfidence, no sweep or round trip, radius 1", resultConfidenceAloneCase}};
   return cases;
 }
 

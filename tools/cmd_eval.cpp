@@ -146,10 +146,12 @@ baselines::PlaneSweepOptions sweepOptions(const Args& args) {
   return o;
 }
 
-// Runs every planned method on one pair; returns the rows and (for the sheet) results.
+// Runs every planned method on one pair; returns the rows and (for the sheet) results, and
+// ours's sparsification when `curve` is given.
 std::vector<Row> evaluatePair(const Pair& p, const Plan& plan, const Args& args, const Params& params,
-                              const std::string& backend, const std::string& maps) {
+                              const std::string& backend, const std::string& maps, Sparsification* curve) {
   std::map<std::string, MethodResult> results;
+  ImageF confidence;
   MethodResult psAll, psValid;
   bool psDone = false;
   for (const std::string& m : plan.methods) {
@@ -161,6 +163,7 @@ std::vector<Row> evaluatePair(const Pair& p, const Plan& plan, const Args& args,
       DepthResult r = stereo.compute(p.left, p.right);
       progress.done();
       results[m] = MethodResult{r.warp, r.depth.radial, r.totalMs};
+      confidence = std::move(r.confidence);
     } else if (m.rfind("rectified-tgv-", 0) == 0) {
       const double fov = std::stod(m.substr(14));
       results[m] = baselines::runRectifiedTgv(p.rig, p.left, p.right, params, backend, fov, p.left.width);
@@ -183,6 +186,7 @@ std::vector<Row> evaluatePair(const Pair& p, const Plan& plan, const Args& args,
     rows.push_back({p.name, m, evaluate(p.rig, r.warp, r.depth, p.depthLeft, dr, &error), r.ms});
     rows.back().tau1Est = tauPercent(error, 1.0, Missing::Skipped);
     rows.back().tau3Est = tauPercent(error, 3.0, Missing::Skipped);
+    if (m == "ours" && curve) *curve = sparsification(error, confidence, 1.0);
     errors[m] = std::move(error);
   }
 
@@ -202,7 +206,7 @@ std::vector<Row> evaluatePair(const Pair& p, const Plan& plan, const Args& args,
 int cmdEval(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert({"csv", "md", "maps", "methods", "fov", "sgbm-fov", "ps-scale", "ps-window", "ps-step", "min-depth",
-                "sweep", "warps-list", "step", "plot", "replot"});
+                "sweep", "warps-list", "step", "plot", "replot", "sparsification"});
   known.insert({"sequence", "cold", "compare", "frames", "calib", "blind"});
   args.allowOnly(known);
   if (args.has("sequence")) return runSequences(args, paramsFromArgs(args), backendFromArgs(args));
@@ -215,9 +219,21 @@ int cmdEval(const Args& args) {
   const std::string csv = args.require("csv");
   const Plan plan = makePlan(args);
   std::vector<Row> rows;
+  const std::string curvesPath = args.get("sparsification", "");
+  if (args.has("sparsification") && std::find(plan.methods.begin(), plan.methods.end(), "ours") == plan.methods.end())
+    throw Error("--sparsification ranks ours's pixels by its confidence: add ours to --methods");
+  std::vector<std::pair<std::string, Sparsification>> curves;
   for (const std::string& dir : args.positional()) {
     const Pair pair = loadPair(dir);
-    for (const Row& r : evaluatePair(pair, plan, args, params, backend, args.get("maps", ""))) {
+    Sparsification curve;
+    const std::vector<Row> pairRows =
+        evaluatePair(pair, plan, args, params, backend, args.get("maps", ""), curvesPath.empty() ? nullptr : &curve);
+    if (!curvesPath.empty()) {
+      printSparsification(pair.name, curve);
+      curves.push_back({pair.name, curve});
+      writeSparsification(curvesPath, curves);
+    }
+    for (const Row& r : pairRows) {
       rows.push_back(r);
       std::printf(
           "%-22s %-18s tau>1 %6.2f %%  tau>3 %6.2f %%  EPE %7.3f px  abs-rel %5.2f %%  density %5.1f %%  %6.0f ms\n",

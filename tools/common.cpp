@@ -33,7 +33,7 @@ std::string solverUsage() {
       "solver options (run, demo, eval, bench):\n"
       "  --backend auto|cpu|...  --device INDEX|NAME  --mask PNG (run)\n";
   s += "  --preset " + presets + " (default: realtime)\n";
-  s += "  --min-confidence C (run, demo: points.ply; needs the plane-sweep initialiser)\n";
+  s += "  --min-confidence C (run, demo: points.ply keeps points of at least this confidence)\n";
   const char* group = "";
   for (const ParamInfo& info : paramTable()) {
     if (std::string(info.group) != group) s += std::string(info.group) + ":\n";
@@ -166,11 +166,8 @@ StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftP
 void writeDepthPng(const std::string& path, const ImageF& radialDepth) { writePngRgb(path, depthPicture(radialDepth)); }
 
 float minConfidenceFromArgs(const Args& args, const Params& params) {
+  (void)params;  // every preset has a confidence
   if (!args.has("min-confidence")) return 0.f;
-  if (params.init != Params::Init::PlaneSweep)
-    throw Error(
-        "--min-confidence needs the plane-sweep initialiser's confidence (--init planesweep; on in --preset realtime "
-        "and quality)");
   const double c = args.getDouble("min-confidence", 0.0);
   if (!(c >= 0 && c <= 1)) throw Error("--min-confidence must be in [0, 1]");
   return float(c);

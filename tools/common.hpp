@@ -41,12 +41,12 @@ struct StereoInputs {
 StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftPath, const std::string& rightPath,
                               bool scaleIntrinsics);
 
-// Writes depth.exr, depth.png, disparity.exr, flow.flo, points.ply and, with the
-// initialiser, confidence.exr / confidence.png into dir; the left image colours the point
-// cloud, which keeps only points of confidence >= minConfidence (when there is one).
+// Writes depth.exr, depth.png, disparity.exr, flow.flo, points.ply and confidence.exr /
+// confidence.png (when selected) into dir; the left image colours the point cloud, which
+// keeps only points of confidence >= minConfidence.
 void writeOutputs(const std::string& dir, const DepthResult& result, const ImageF& left, float minConfidence = 0.f);
 
-// --min-confidence (0 when absent); an error without the initialiser or outside [0, 1].
+// --min-confidence (0 when absent); an error outside [0, 1].
 float minConfidenceFromArgs(const Args& args, const Params& params);
 
 // A colour picture of radial depth: inverse depth on a perceptual map, invalid black.

@@ -56,6 +56,11 @@ struct SheetEntry {
 // error) and each method's error and depth pictures.
 void writeSheet(const std::string& dir, const Pair& p, const std::vector<SheetEntry>& entries);
 
+// --sparsification FILE (eval_sparsification.cpp): one line per pair, and every pair's curve
+// in the CSV FILE with the mean curves beside the oracle's in FILE's .png.
+void printSparsification(const std::string& pair, const Sparsification& s);
+void writeSparsification(const std::string& path, const std::vector<std::pair<std::string, Sparsification>>& curves);
+
 // --sweep warps=A..B | dumax=A..B: the paper's two parameter studies as CSV and a plot.
 int runStudy(const Args& args, const Params& base, const std::string& backend);
 

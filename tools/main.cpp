@@ -30,8 +30,10 @@ commands:
                                 --poses: T_world_cam0 as CSV (t_ns,px,py,pz,qx,qy,qz,qw)
                                 or TUM text; --cold: every frame solved alone (no warm
                                 start, no temporal filter)
-  eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR]
-                                accuracy against ground truth (tau>1, tau>3, EPE, abs-rel)
+  eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR] [--sparsification FILE]
+                                accuracy against ground truth (tau>1, tau>3, EPE, abs-rel);
+                                --sparsification: tau>1 of the most confident 100..50 %
+                                beside the oracle's, as CSV and FILE's .png
   eval --sequence DIR... [--cold | --compare] [--blind] [--frames N] [--csv FILE] [--md FILE]
                                 a sequence with ground truth (synth --sequence's layout):
                                 tau per frame, on the moving object, and flicker; --compare

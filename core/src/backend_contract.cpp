@@ -429,11 +429,47 @@ void Backend::temporalFilter(const Buffer& state, const Buffer& u, const Buffer&
   c.camera(p.cam, "cam", &mask, "mask");
   c.require(state.id != prior.id, "state and prior are the same buffer");
   c.require(p.strength >= 0.f && p.strength < 1.f, "strength must be in [0, 1), got " + std::to_string(p.strength));
-  c.require(p.gate > 0.f && p.sigmaPx > 0.f && p.processPx >= 0.f,
-            "gate and sigmaPx must be > 0 and processPx >= 0");
+  c.require(p.gate > 0.f && p.sigmaPx > 0.f && p.processPx >= 0.f, "gate and sigmaPx must be > 0 and processPx >= 0");
   c.require(p.minConfidence > 0.f && p.minConfidence <= 1.f,
             "minConfidence must be in (0, 1], got " + std::to_string(p.minConfidence));
   doTemporalFilter(state, u, w, prior, radial, points, confidence, mask, p);
+}
+
+}  // namespace cs
+
+namespace cs {
+
+void Backend::roundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
+                        const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
+  const BackendContract c(*this, "roundTrip");
+  c.buffer(mask, "mask", 1).sameGrid(error, "error", 1, mask, "mask").sameGrid(w, "w", 2, mask, "mask");
+  c.sameGrid(calibration, "calibration", 2, mask, "mask");
+  c.buffer(reverseMask, "reverseMask", 1).sameGrid(reverseW, "reverseW", 2, reverseMask, "reverseMask");
+  c.sameGrid(reverseCalibration, "reverseCalibration", 2, reverseMask, "reverseMask");
+  doRoundTrip(error, w, calibration, reverseW, reverseCalibration, reverseMask, mask);
+}
+
+void Backend::resultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
+                               const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
+                               const Buffer& trajectory, const Buffer& sweepConfidence, const Buffer& roundTripError,
+                               const Buffer& mask, const ConfidenceParams& p) {
+  const BackendContract c(*this, "resultConfidence");
+  c.buffer(mask, "mask", 1).sameGrid(confidence, "confidence", 1, mask, "mask");
+  c.sameGrid(radial, "radial", 1, mask, "mask").sameGrid(points, "points", 3, mask, "mask");
+  c.sameGrid(image, "image", 1, mask, "mask").sameGrid(n0, "n0", 1, mask, "mask").sameGrid(n1, "n1", 1, mask, "mask");
+  c.sameGrid(w, "w", 2, mask, "mask").sameGrid(trajectory, "trajectory", 2, mask, "mask");
+  if (sweepConfidence.id >= 0) c.sameGrid(sweepConfidence, "sweepConfidence", 1, mask, "mask");
+  if (roundTripError.id >= 0) c.sameGrid(roundTripError, "roundTripError", 1, mask, "mask");
+  c.require(confidence.id != radial.id, "confidence and radial are the same buffer");
+  c.require(p.radius >= 0 && p.radius <= kMaxConfidenceRadius,
+            "radius must be in [0, " + std::to_string(kMaxConfidenceRadius) + "], got " + std::to_string(p.radius));
+  c.require(p.noise > 0.f && p.sigmaPx > 0.f && p.residualScale > 0.f && p.roundTripPx > 0.f,
+            "noise, sigmaPx, residualScale and roundTripPx must be > 0");
+  c.require(p.infinityPx >= 0.f, "infinityPx must be >= 0");
+  c.require(p.invalidBelow >= 0.f && p.invalidBelow <= 1.f,
+            "invalidBelow must be in [0, 1], got " + std::to_string(p.invalidBelow));
+  doResultConfidence(confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError, mask,
+                     p);
 }
 
 }  // namespace cs

@@ -121,6 +121,57 @@ Metrics evaluate(const Rig& rig, const FlowImage& est, const ImageF& estDepth, c
   return m;
 }
 
+namespace {
+
+// tau>k (percent) of the first share of `errors`, already in rank order.
+std::vector<double> tauOfRanked(const std::vector<float>& errors, const std::vector<double>& keptPercent, double k) {
+  std::vector<double> tau;
+  for (double kept : keptPercent) {
+    const size_t n = size_t(std::ceil(double(errors.size()) * kept / 100.0 - 1e-9));
+    long long bad = 0;
+    for (size_t i = 0; i < n; ++i) bad += !(errors[i] <= k);
+    tau.push_back(n ? 100.0 * double(bad) / double(n) : std::numeric_limits<double>::quiet_NaN());
+  }
+  return tau;
+}
+
+double meanOfCurve(const std::vector<double>& x, const std::vector<double>& y) {
+  double area = 0;
+  for (size_t i = 1; i < x.size(); ++i) area += 0.5 * (y[i] + y[i - 1]) * std::fabs(x[i] - x[i - 1]);
+  return area / std::fabs(x.back() - x.front());
+}
+
+}  // namespace
+
+Sparsification sparsification(const ImageF& errorMap, const ImageF& confidence, double k) {
+  if (errorMap.width != confidence.width || errorMap.height != confidence.height)
+    throw Error("sparsification: the error map and the confidence differ in size");
+  struct Ranked {
+    float confidence, error;
+  };
+  std::vector<Ranked> pixels;
+  for (size_t i = 0; i < errorMap.data.size(); ++i) {
+    const float e = errorMap.data[i];
+    if (std::isnan(e)) continue;
+    const float c = confidence.data[i];
+    const bool estimated = std::isfinite(e) && !std::isnan(c);
+    pixels.push_back({estimated ? c : -std::numeric_limits<float>::infinity(), e});
+  }
+  Sparsification s;
+  for (int kept = 100; kept >= 50; kept -= 5) s.keptPercent.push_back(kept);
+  s.evaluated = (long long)pixels.size();
+  std::stable_sort(pixels.begin(), pixels.end(),
+                   [](const Ranked& a, const Ranked& b) { return a.confidence > b.confidence; });
+  std::vector<float> errors;
+  for (const Ranked& p : pixels) errors.push_back(p.error);
+  s.tau = tauOfRanked(errors, s.keptPercent, k);
+  std::sort(errors.begin(), errors.end());
+  s.oracleTau = tauOfRanked(errors, s.keptPercent, k);
+  s.area = meanOfCurve(s.keptPercent, s.tau);
+  s.oracleArea = meanOfCurve(s.keptPercent, s.oracleTau);
+  return s;
+}
+
 double maskedTau(const ImageF& errorMap, const ImageU8& mask, double k, long long* pixels) {
   if (mask.width != errorMap.width || mask.height != errorMap.height)
     throw Error("evaluation: mask and error map differ in size");

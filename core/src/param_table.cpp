@@ -162,8 +162,7 @@ std::vector<ParamInfo> buildTable() {
                             "epipole"),
               });
   ParamInfo warm = base("warm_start", Type::Bool, {},
-                        "sequences: start each frame from the previous one's estimate (needs init_band)",
-                        Shown::Never);
+                        "sequences: start each frame from the previous one's estimate (needs init_band)", Shown::Never);
   warm.boolField = &Params::warmStart;
   std::vector<ParamInfo> sequence =
       grouped("sequences (run --sequence, Stereo::next)",
@@ -181,6 +180,22 @@ std::vector<ParamInfo> buildTable() {
                   floatParam("temporal_gate", &Params::temporalGate, above(0),
                              "temporal filter: reset a pixel beyond this many standard deviations", Shown::Never),
               });
+  ParamInfo lrCheck =
+      base("lr_check", Type::Bool, {},
+           "solve the other direction too and leave invalid the pixels whose round trip fails", Shown::Always);
+  lrCheck.boolField = &Params::lrCheck;
+  std::vector<ParamInfo> trust =
+      grouped("confidence and validity (every preset)",
+              {
+                  lrCheck,
+                  floatParam("lr_check_px", &Params::lrCheckPx, above(0),
+                             "lr_check: a round trip beyond this (px) leaves the pixel invalid", Shown::Always),
+                  floatParam("infinity_px", &Params::infinityPx, closed(0, 10),
+                             "a disparity below this (px) is a point at infinity", Shown::Never),
+                  floatParam("reject_below", &Params::rejectBelow, closed(0, 1),
+                             "leave invalid the pixels whose confidence is below this", Shown::Always),
+              });
+  table.insert(table.end(), trust.begin(), trust.end());
   table.insert(table.end(), sweep.begin(), sweep.end());
   table.insert(table.end(), sequence.begin(), sequence.end());
   table.insert(table.end(), view.begin(), view.end());

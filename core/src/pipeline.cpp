@@ -32,10 +32,27 @@ std::vector<float> levelMask(const ImageU8& userMask, const LevelSize& size) {
 
 }  // namespace
 
+// The other direction's solve (Params::lrCheck): camera 1 as the reference.
+static Rig reversedRig(const Rig& rig) {
+  Rig r;
+  r.cam0 = rig.cam1;
+  r.cam1 = rig.cam0;
+  r.R = rig.R.transpose();
+  r.t = -(rig.R.transpose() * rig.t);
+  return r;
+}
+
+static Params reverseParams(Params p) {
+  p.lrCheck = false;
+  p.rejectBelow = 0.f;
+  return p;
+}
+
 // Keep in step with the constructor below: 34 floats per pixel per level (userMask, i0, i1,
 // mask, scratch 1; trajectory, w, tangent 2; tensor, steps 4; pd 12; data 3), 5 more with
-// the normalised data term (n0, n1 1; moments 3), plus 7 at
-// level 0 (rawRight 1, calibration 2, radial 1, points 3); with the initialiser, a
+// the normalised data term (n0, n1 1; moments 3), plus 8 at
+// level 0 (rawRight 1, calibration 2, radial 1, points 3, confidence 1; with lrCheck the
+// round trip's error 1 and the other direction's pipeline); with the initialiser, a
 // confidence (1) at the sweep level and every finer one (and the coarser one with a band), and the volume and the costs
 // (planes each) and two sweep results (2 + 2) at the sweep level; with a band, those at the coarser level and, at the
 // sweep's, a volume and costs of band channels each, two results and `first` (1), and a warm frame's volume and
@@ -43,7 +60,7 @@ std::vector<float> levelMask(const ImageU8& userMask, const LevelSize& size) {
 unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
   const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
   auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
-  unsigned long long floats = 7ull * pixels(plan[0]);
+  unsigned long long floats = (params.lrCheck ? 9ull : 8ull) * pixels(plan[0]);
   const unsigned long long perPixel = params.dataTerm == Params::DataTerm::Normalised ? 39 : 34;
   for (const LevelSize& size : plan) floats += perPixel * pixels(size);
   if (params.init == Params::Init::PlaneSweep) {
@@ -62,7 +79,9 @@ unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
       floats += (unsigned long long)(2 * planes + 4) * pixels(plan[level]);
     }
   }
-  return floats * sizeof(float);
+  unsigned long long bytes = floats * sizeof(float);
+  if (params.lrCheck) bytes += bufferBytes(reversedRig(rig), reverseParams(params));
+  return bytes;
 }
 
 // The nearest sphere: a point seen with initMaxParallaxDeg of parallax across the baseline.
@@ -160,6 +179,12 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
   calibration_ = backend_.create(w, h, 2);
   radial_ = backend_.create(w, h, 1);
   points_ = backend_.create(w, h, 3);
+  confidence_ = backend_.create(w, h, 1);
+  if (params_.lrCheck) {
+    roundTripError_ = backend_.create(w, h, 1);
+    reverse_ = std::make_unique<Pipeline>(backend_, reversedRig(rig), reverseParams(params_), ImageU8());
+    reverse_->slotBase_ = kFrameSlots / 2;
+  }
 }
 
 void Pipeline::setUserMask(const ImageU8& userMask) {
@@ -187,6 +212,7 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
     backend_.fields(L.mask, l == 0 ? calibration_ : L.tangent, L.trajectory, fp);
   }
   sweepMaskPixels_ = -1;  // the mask changed: counted again by the next consistentShare()
+  if (reverse_) reverse_->setPose(R.transpose(), -(R.transpose() * t));
   backend_.synchronize();
 }
 
@@ -453,6 +479,40 @@ void Pipeline::filterResult() {
   backend_.temporalFilter(next_, L0.pd.u, L0.w, prior_, radial_, points_, L0.confidence, L0.mask, tp);
 }
 
+// The result's confidence (backend.hpp resultConfidence). The structure term's window is
+// 7x7 full-resolution pixels: wide enough that the Cramer-Rao deviation averages a few
+// texture cycles, narrow enough that a plain surface a few pixels from an edge is still
+// recognised as plain. It is 1/2 where that deviation is half a pixel (the tau>1 threshold
+// is one). The photometric term compares the normalised images (units of the local
+// contrast, where noise on texture is a few tenths and a wrong match about one) or, with
+// the brightness data term, grey levels (a few times the noise).
+constexpr int kConfidenceRadius = 3;
+constexpr float kConfidenceSigmaPx = 0.5f;
+constexpr float kNormalisedResidualScale = 0.6f;
+constexpr float kBrightnessResidualNoises = 4.f;
+
+void Pipeline::finishResult() {
+  Level& L0 = levels_[0];
+  if (reverse_) {
+    stage("round trip");
+    const Pipeline& r = *reverse_;
+    backend_.roundTrip(roundTripError_, L0.w, calibration_, r.levels_[0].w, r.calibration_, r.levels_[0].mask, L0.mask);
+  }
+  stage("confidence");
+  ConfidenceParams p{};
+  p.radius = kConfidenceRadius;
+  p.noise = params_.noiseLevel;
+  p.sigmaPx = kConfidenceSigmaPx;
+  p.residualScale = normalising() ? kNormalisedResidualScale : kBrightnessResidualNoises * params_.noiseLevel;
+  p.roundTripPx = params_.lrCheckPx;
+  p.roundTripMaxPx = params_.lrCheckPx;
+  p.infinityPx = params_.infinityPx;
+  p.invalidBelow = params_.rejectBelow;
+  backend_.resultConfidence(confidence_, radial_, points_, L0.i0, L0.n0, L0.n1, L0.w, L0.trajectory,
+                            initialising() ? L0.confidence : Buffer{}, reverse_ ? roundTripError_ : Buffer{}, L0.mask,
+                            p);
+}
+
 void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind kind) {
   // Progress in pixel-warps: a warp costs about the same per pixel at every level, and the
   // plane sweep about kSweepWarpsPerPlane warps per pixel and hypothesis (measured at full
@@ -491,6 +551,7 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
   }
   triangulate();
   if (kind.filter) filterResult();
+  finishResult();
 }
 
 // Straight into the result's images: a warp pixel is two floats and a point three, laid
@@ -504,8 +565,8 @@ void Pipeline::download(DepthResult& out) {
   const int w = L0.size.width, h = L0.size.height;
   // No mask: the caller derives the valid mask from radial, NaN wherever the mask is 0.
   backend_.download(radial_, fitImage(out.depth.radial, w, h));
-  if (initialising() && selection_.confidence)
-    backend_.download(L0.confidence, fitImage(out.confidence, w, h));
+  if (selection_.confidence)
+    backend_.download(confidence_, fitImage(out.confidence, w, h));
   else
     out.confidence = ImageF();
   if (selection_.disparity)
@@ -524,13 +585,14 @@ void Pipeline::download(DepthResult& out) {
 
 void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
   if (kind.filter && state_.id < 0) throw Error("pipeline: a filtered frame before resetSequence()");
-  if (!profiling_ && backend_.canReplayFrame(kind.slot())) {
+  const int slot = slotBase_ + kind.slot();
+  if (!profiling_ && backend_.canReplayFrame(slot)) {
     // A replayed frame issues nothing the warps could report: its start and, once its
     // results are here, its end.
     if (progress) progress(0.0);
-    backend_.replayFrame(kind.slot());
+    backend_.replayFrame(slot);
   } else {
-    backend_.beginFrame(kind.slot());
+    backend_.beginFrame(slot);
     issueFrame(progress, kind);
     backend_.endFrame();
   }
@@ -560,8 +622,14 @@ void Pipeline::commitSequenceFrame() { backend_.copy(state_, next_); }
 void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
                    DepthResult& out, FrameKind kind) {
   profiling_ = profile;
+  if (reverse_) {
+    // The other direction first: the round trip at the end of this frame reads its result.
+    reverse_->profiling_ = profile;
+    reverse_->upload(right, left);
+    reverse_->issueOrReplay(nullptr, {});
+  }
   upload(left, right);
-  const bool replay = !profiling_ && backend_.canReplayFrame(kind.slot());
+  const bool replay = !profiling_ && backend_.canReplayFrame(slotBase_ + kind.slot());
   issueOrReplay(progress, kind);
   download(out);
   if (replay && progress) progress(1.0);
@@ -573,11 +641,17 @@ void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const 
 
 Pipeline::DeviceIO Pipeline::deviceIO() const {
   const Level& L0 = levels_[0];
-  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_, L0.confidence};
+  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_, confidence_};
 }
 
 void Pipeline::runOnDevice(FrameKind kind) {
   profiling_ = false;
+  if (reverse_) {
+    reverse_->profiling_ = false;
+    backend_.copy(reverse_->levels_[0].i0, rawRight_);
+    backend_.copy(reverse_->rawRight_, levels_[0].i0);
+    reverse_->issueOrReplay(nullptr, {});
+  }
   issueOrReplay(nullptr, kind);
 }
 

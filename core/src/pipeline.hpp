@@ -1,6 +1,7 @@
 // The per-frame algorithm (DESIGN.md "Per frame"), written once against Backend.
 #pragma once
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "curvestereo/backend.hpp"
@@ -140,6 +141,7 @@ class Pipeline {
   void carryIntoCoarseSweep();
   void filterResult();
   void triangulate();
+  void finishResult();
   void stage(const char* name);
   void initialiseLevel(size_t l);
   void solveLevel(Level& level, int warps, const std::function<void(int)>& warpDone);
@@ -152,6 +154,12 @@ class Pipeline {
   std::vector<Level> levels_;
   Sweep sweep_;
   Buffer rawRight_, calibration_, radial_, points_;
+  Buffer confidence_;  // the result's (resultConfidence), level 0
+  // Params::lrCheck: the other direction's solve (camera 1 as the reference) on the same
+  // backend, its frames recorded in slots of their own, and the round trip's error.
+  std::unique_ptr<Pipeline> reverse_;
+  int slotBase_ = 0;
+  Buffer roundTripError_;
   bool profiling_ = false;
   bool warmFrame_ = false;  // the frame being issued is warm (issueFrame)
   Selection selection_;

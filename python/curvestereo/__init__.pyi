@@ -104,7 +104,7 @@ class Result:
         """Pixels that were solved."""
     @property
     def confidence(self) -> _F32 | DeviceArray | None:
-        """Plane-sweep left-right confidence in [0, 1]; None without the initialiser."""
+        """How far each pixel can be trusted, [0, 1] (NaN where not valid); None only if left out."""
     @property
     def stages(self) -> dict[str, float]:
         """Milliseconds per stage ({} when profiling is off)."""

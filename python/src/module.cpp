@@ -543,8 +543,9 @@ PYBIND11_MODULE(_curvestereo, m) {
           "valid", [](const Result& r) { return r.valid; }, "bool H x W: pixels that were solved.")
       .def_property_readonly(
           "confidence", [](const Result& r) { return r.confidence; },
-          "The plane-sweep initialiser's left-right confidence in [0, 1] (float32 H x W), or None "
-          "without the initialiser.")
+          "How far each pixel's depth can be trusted, in [0, 1] (float32 H x W; NaN where not valid): "
+          "the structure along the epipolar curve, the photometric agreement, the sweep's and (with "
+          "lr_check) the round trip's consistency. None only when left out by outputs.")
       .def_property_readonly(
           "stages", [](const Result& r) { return r.stages; },
           "Milliseconds per stage of this frame ({} when profiling is off).")

@@ -34,8 +34,8 @@ struct DeviceDepth {
   const float* warp = nullptr;       // 2 ch: w into the calibrated image 1 (meaningful where valid)
   const float* radial = nullptr;     // 1 ch: radial depth, m; NaN where not valid, +inf at infinity
   const float* points = nullptr;     // 3 ch: camera-0 points, m; NaN where not valid or infinite
-  // 1 ch: the plane-sweep initialiser's left-right confidence in [0, 1] (meaningful where
-  // valid); nullptr when the parameters do not run the initialiser.
+  // 1 ch: the result's confidence in [0, 1] (cs::DepthResult::confidence; NaN where not
+  // valid).
   const float* confidence = nullptr;
   // next(): whether the frame started from the previous frame's estimate (warm) or was
   // solved cold; false from compute().

@@ -1,5 +1,7 @@
 // The evaluation of DESIGN.md "Evaluation definitions".
 #pragma once
+#include <vector>
+
 #include "curvestereo/image.hpp"
 #include "curvestereo/pose.hpp"
 #include "curvestereo/rig.hpp"
@@ -27,6 +29,20 @@ ImageU8 nonOccludedMask(const Rig& rig, const ImageF& depthLeft, const ImageF* d
 // +inf where evaluated without an estimate).
 Metrics evaluate(const Rig& rig, const FlowImage& est, const ImageF& estDepth, const ImageF& depthLeft,
                  const ImageF* depthRight, ImageF* errorMap = nullptr);
+
+// Sparsification (docs/confidence.md): how well a confidence ranks the pixels. For each share
+// kept (100, 95, ..., 50 % of the evaluated pixels: errorMap not NaN), tau>k of the most
+// confident ones, the pixels without an estimate (error +inf, or a NaN confidence) ranked
+// last, ties in the order of the pixels; beside it the oracle's curve, the pixels ranked by
+// their true error. area: the curve's mean over the shares kept (trapezoids; in percent, like
+// tau), lower is better; the oracle's is the best any ranking can do. Throws cs::Error when
+// the images' sizes differ.
+struct Sparsification {
+  std::vector<double> keptPercent, tau, oracleTau;
+  double area = 0, oracleArea = 0;
+  long long evaluated = 0;
+};
+Sparsification sparsification(const ImageF& errorMap, const ImageF& confidence, double k);
 
 // --- sequences (DESIGN.md "Evaluation definitions", *sequences*) ---
 

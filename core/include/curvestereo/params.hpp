@@ -162,6 +162,21 @@ struct Params {
   float temporalStrength = 0.8f;
   float temporalGate = 4.f;
 
+  // The result's confidence (DepthResult::confidence; docs/confidence.md), for every preset:
+  // the product of the structure along the epipolar curve (how well the image fixes a shift
+  // along it), the photometric agreement the final estimate leaves, the sweep's left-right
+  // consistency (with the initialiser) and, with lrCheck, the round trip through the other
+  // direction's solve. lrCheck solves that other direction too (about twice the time) and
+  // leaves invalid (NaN in every output) the pixels whose round trip misses by more than
+  // lrCheckPx. A pixel whose disparity is below infinityPx is at infinity (+inf depth): a
+  // subpixel estimate resolves about a tenth of a pixel, so a smaller disparity does not
+  // tell a far point from one at infinity. A pixel whose confidence is below rejectBelow
+  // is left invalid (0: every solved pixel is kept).
+  bool lrCheck = false;
+  float lrCheckPx = 1.f;
+  float infinityPx = 0.1f;
+  float rejectBelow = 0.f;
+
   // This data term with its default lambda.
   Params withDataTerm(DataTerm term) const;
 

@@ -36,11 +36,12 @@ struct DepthResult {
   ImageF disparity;  // u: px along the epipolar curve (NaN where invalid)
   FlowImage warp;    // w: 2-D displacement into the calibrated image 1 (NaN where invalid)
   DepthMaps depth;   // radial / z depth and 3-D points
-  // With the plane-sweep initialiser (Params::init): how well each pixel passed the
-  // sweep's left-right check, in [0, 1] (exp(-(e/tol)^2) for a round-trip error e, carried
-  // from the sweep level); low in occlusions, at the image rim and where the two views'
-  // sweeps found different matches.
-  // Empty without the initialiser.
+  // How far each pixel's depth can be trusted, in [0, 1] (NaN where valid is 0), for every
+  // preset: the product of the structure along the epipolar curve (low on plain walls and
+  // the sky), the photometric agreement the estimate leaves (low where it matched the wrong
+  // thing), the plane sweep's left-right consistency (with the initialiser: low in
+  // occlusions and at the rim) and, with Params::lrCheck, the final round trip's. See
+  // docs/confidence.md.
   ImageF confidence;
   std::vector<StageTime> stages;  // time of each stage of this frame (when profiling)
   double totalMs = 0;
@@ -80,7 +81,7 @@ class Stereo {
   // (depth.z comes with the points).
   struct Outputs {
     bool disparity = true, warp = true, points = true;
-    bool confidence = true;  // the initialiser's (empty without one)
+    bool confidence = true;
   };
   void setOutputs(const Outputs& outputs);
   // Called during compute(), on the calling thread, with the fraction of the solve done
@@ -95,9 +96,8 @@ class Stereo {
   DepthResult compute(const ImageF& left, const ImageF& right);
   // The same result, written into `result`: its images keep their storage where their size
   // already matches, so a loop that passes the same DepthResult every frame allocates
-  // nothing after the first. Every field is overwritten (outputs not selected and, without
-  // the initialiser, the confidence become empty images). If it throws, `result` is left
-  // in an unspecified but valid state.
+  // nothing after the first. Every field is overwritten (outputs not selected become empty
+  // images). If it throws, `result` is left in an unspecified but valid state.
   void compute(const ImageF& left, const ImageF& right, DepthResult& result);
 
   // --- sequences: frame after frame of one rig (a live camera or a recording) ---

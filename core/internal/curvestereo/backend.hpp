@@ -136,7 +136,7 @@ struct EstimateUpsampleParams {
 // Carrying a frame's estimate into the next frame's view (Backend::carryEstimate): a
 // sequence's warm start and the temporal filter's prior.
 constexpr int kMotionFloats = 12;  // the motion buffer: R row-major, then t
-constexpr int kFrameSlots = 4;     // recorded frames a backend keeps (beginFrame)
+constexpr int kFrameSlots = 8;     // recorded frames a backend keeps (beginFrame): 4 kinds x 2 directions (lrCheck)
 constexpr double kCarryTie = 1e-3;  // px: positions this close to halfway go to the lower pixel
 struct CarryParams {
   CameraParams srcCam;  // the grid of src (the previous view's camera 0)
@@ -155,6 +155,21 @@ struct TemporalParams {
   float sigmaPx;         // the measurement's standard deviation (px) at confidence 1, > 0
   float processPx;       // how far (px) a static surface's disparity may drift between frames, >= 0
   float minConfidence;   // floor of the confidence in the measurement's deviation, (0, 1]
+};
+
+// The final result's confidence and the left-right round trip (Backend::resultConfidence,
+// Backend::roundTrip): the evidence a pixel's estimate rests on, and where it is too weak to
+// give a depth at all.
+constexpr int kMaxConfidenceRadius = 4;
+struct ConfidenceParams {
+  int radius;           // window (2 radius + 1)^2 of the structure and the residual, 0..kMaxConfidenceRadius
+  float noise;          // the image's noise deviation (grey levels of [0, 1]; Params::noiseLevel)
+  float sigmaPx;        // disparity deviation (px) at which the structure term is 1/2, > 0
+  float residualScale;  // mean |n1(y + w) - n0(y)| at which the photometric term is 1/e, > 0
+  float roundTripPx;    // round-trip error (px) at which that term is 1/e, > 0
+  float roundTripMaxPx; // a round trip beyond this (or none) leaves the pixel invalid; <= 0: never
+  float infinityPx;     // |w| below this: the point is at infinity (radial +inf, points NaN), >= 0
+  float invalidBelow;   // a confidence below this leaves the pixel invalid, [0, 1]
 };
 
 // The normalised Gaussian taps of standard deviation sigma > 0 over radius ceil(3 sigma)
@@ -372,6 +387,35 @@ class Backend {
   void temporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior, const Buffer& radial,
                       const Buffer& points, const Buffer& confidence, const Buffer& mask, const TemporalParams& p);
 
+  // --- the result's confidence (one file / shader per kernel: result_confidence, round_trip) ---
+  // error (1 ch): the left-right round trip of x through the other direction's solve. a = x
+  // + w(x) (calibrated image 1), y = a + calibration(a) (image 1's pixel), b = y + reverseW(y)
+  // (the other solve's calibrated image 0), z = b + reverseCalibration(b); error = |z - x|.
+  // Samples are sampleBilinear's (clamped to the edge); NaN where x is not masked, where a,
+  // y or b falls outside its image or y's nearest pixel floor(y + 0.5) is not in
+  // reverseMask, or where a sample is not finite. w, calibration 2 ch on mask's grid;
+  // reverseW, reverseCalibration 2 ch and reverseMask 1 ch on image 1's grid.
+  void roundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
+                 const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask);
+  // confidence (1 ch, [0, 1]) of the final estimate, the product of four terms at a masked
+  // pixel x whose radial is not NaN (0 elsewhere):
+  // - structure: with g = trajectory(x) (unit) and S = sum over the window's pixels y that
+  //   are masked with their four neighbours of (g . grad image(y))^2 (central differences),
+  //   S sigmaPx^2 / (S sigmaPx^2 + 2 noise^2): 1/2 where the Cramer-Rao deviation of a shift
+  //   along the curve, noise sqrt(2 / S), is sigmaPx;
+  // - photometric: exp(-(r / residualScale)^2), r the mean over the window's masked pixels y
+  //   with a finite w(y) of |n1(y + w(y)) - n0(y)| (bilinear; 0 terms: r = +inf);
+  // - sweep: sweepConfidence(x) clamped to [0, 1] (id -1: 1);
+  // - round trip: exp(-(e / roundTripPx)^2) for roundTrip's error e (id -1: 1).
+  // Then, in order: a pixel whose e is NaN or above roundTripMaxPx (> 0), or whose
+  // confidence is below invalidBelow, is invalid: radial and points NaN, confidence 0; else
+  // where |w(x)| < infinityPx radial is +inf and points NaN. image, n0, n1, radial, mask 1 ch;
+  // w, trajectory 2 ch; points 3 ch; one grid.
+  void resultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,
+                        const Buffer& n0, const Buffer& n1, const Buffer& w, const Buffer& trajectory,
+                        const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& mask,
+                        const ConfidenceParams& p);
+
   // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w (2 ch) where
   // mask is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.
   // radial is NaN outside the mask: Stereo derives the valid mask from radial instead of
@@ -455,6 +499,12 @@ class Backend {
                                     const Buffer& mask, const SweepParams& p) = 0;
   virtual void doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& first,
                                  const Buffer& mask, const SweepParams& p) = 0;
+  virtual void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
+                           const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) = 0;
+  virtual void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
+                                  const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
+                                  const Buffer& trajectory, const Buffer& sweepConfidence,
+                                  const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) = 0;
   virtual void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                              const CameraParams& cam0, const double tPrime[3]) = 0;
   virtual void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,

@@ -1,0 +1,86 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The final result's confidence (backend_cpu/result_confidence.cpp, backend.hpp
+// resultConfidence): structure along the epipolar curve x photometric agreement x the
+// sweep's consistency x the round trip; then the invalid pixels and the points at infinity.
+#include "common.glsl"
+#include "sampling.glsl"
+
+// Mirrors VkConfidenceParams in backend_vulkan/kernels.cpp.
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer ConfidenceParamsRef {
+  int radius;
+  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow;
+};
+
+layout(push_constant) uniform PC {
+  FBuf confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError, mask;
+  ConfidenceParamsRef prm;
+  int width, height, hasSweep, hasRoundTrip;
+} pc;
+
+bool m(int x, int y) { return masked(pc.mask, pc.width, pc.height, x, y); }
+
+float structureTerm(int x, int y, int r) {
+  const int i = y * pc.width + x;
+  const float gx = pc.trajectory.v[2 * i], gy = pc.trajectory.v[2 * i + 1];
+  float s = 0.0;
+  for (int dy = -r; dy <= r; ++dy)
+    for (int dx = -r; dx <= r; ++dx) {
+      const int cx = x + dx, cy = y + dy;
+      if (!m(cx, cy) || !m(cx - 1, cy) || !m(cx + 1, cy) || !m(cx, cy - 1) || !m(cx, cy + 1)) continue;
+      const int c = cy * pc.width + cx;
+      const float ix = 0.5 * (pc.image.v[c + 1] - pc.image.v[c - 1]);
+      const float iy = 0.5 * (pc.image.v[c + pc.width] - pc.image.v[c - pc.width]);
+      const float along = gx * ix + gy * iy;
+      s += along * along;
+    }
+  const float signal = s * pc.prm.sigmaPx * pc.prm.sigmaPx;
+  return signal / (signal + 2.0 * pc.prm.noise * pc.prm.noise);
+}
+
+float photometricTerm(int x, int y, int r) {
+  float sum = 0.0;
+  int count = 0;
+  for (int dy = -r; dy <= r; ++dy)
+    for (int dx = -r; dx <= r; ++dx) {
+      const int cx = x + dx, cy = y + dy;
+      if (!m(cx, cy)) continue;
+      const int c = cy * pc.width + cx;
+      const float wx = pc.w.v[2 * c], wy = pc.w.v[2 * c + 1];
+      if (isnan(wx) || isinf(wx) || isnan(wy) || isinf(wy)) continue;
+      sum += abs(sampleBilinear(pc.n1, pc.width, pc.height, 1, 0, float(cx) + wx, float(cy) + wy) - pc.n0.v[c]);
+      ++count;
+    }
+  if (count == 0) return 0.0;
+  const float q = sum / float(count) / pc.prm.residualScale;
+  return exp(-q * q);
+}
+
+void main() {
+  const int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
+  if (x >= pc.width || y >= pc.height) return;
+  const int i = y * pc.width + x;
+  pc.confidence.v[i] = 0.0;
+  if (!m(x, y) || isnan(pc.radial.v[i])) return;
+  const int r = pc.prm.radius;
+  float c = structureTerm(x, y, r) * photometricTerm(x, y, r);
+  if (pc.hasSweep != 0) c *= min(1.0, max(0.0, pc.sweepConfidence.v[i]));
+  bool invalid = false;
+  if (pc.hasRoundTrip != 0) {
+    const float e = pc.roundTripError.v[i];
+    invalid = isnan(e) || (pc.prm.roundTripMaxPx > 0.0 && e > pc.prm.roundTripMaxPx);
+    const float q = e / pc.prm.roundTripPx;
+    c *= invalid ? 0.0 : exp(-q * q);
+  }
+  if (invalid || c < pc.prm.invalidBelow) {
+    pc.radial.v[i] = quietNaN();
+    for (int k = 0; k < 3; ++k) pc.points.v[3 * i + k] = quietNaN();
+    return;
+  }
+  pc.confidence.v[i] = c;
+  const float wx = pc.w.v[2 * i], wy = pc.w.v[2 * i + 1];
+  if (wx * wx + wy * wy < pc.prm.infinityPx * pc.prm.infinityPx) {
+    pc.radial.v[i] = posInf();
+    for (int k = 0; k < 3; ++k) pc.points.v[3 * i + k] = quietNaN();
+  }
+}
