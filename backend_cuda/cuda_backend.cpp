@@ -32,12 +32,14 @@ int parseDeviceIndex(const std::string& device) {
 
 std::string versionText(int v) { return std::to_string(v / 1000) + "." + std::to_string((v % 1000) / 10); }
 
+static_assert(cudak::kCamParams == kMaxCameraParams, "CamDev must hold every camera parameter");
+
 cudak::CamDev camDev(const CameraParams& c) {
   cudak::CamDev d{};
   d.model = c.model;
   d.width = c.width;
   d.height = c.height;
-  std::copy(c.params, c.params + 8, d.p);
+  std::copy(c.params, c.params + kMaxCameraParams, d.p);
   const CameraConstants k = cameraConstants(c);
   d.a = k.a;
   d.b = k.b;
@@ -366,8 +368,8 @@ void CudaBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Bu
 }
 
 void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                                   const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
-                                   const TemporalParams& p) {
+                                   const Buffer& radial, const Buffer& points, const Buffer& confidence,
+                                   const Buffer& mask, const TemporalParams& p) {
   flush();
   cudak::TemporalDev d{};
   d.cam = camDev(p.cam);
@@ -380,8 +382,7 @@ void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const B
   const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
   check(cudak::launchTemporalFilter(stream_, img(slot(state).dev, state), img(slot(u).dev, u), img(slot(w).dev, w),
                                     img(slot(prior).dev, prior), img(slot(radial).dev, radial),
-                                    img(slot(points).dev, points), weight,
-                                    img(slot(mask).dev, mask), d),
+                                    img(slot(points).dev, points), weight, img(slot(mask).dev, mask), d),
         "temporalFilter");
 }
 

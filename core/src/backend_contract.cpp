@@ -24,6 +24,7 @@ bool knownModel(int model) {
     case CameraModel::ExtendedUnified:
     case CameraModel::DoubleSphere:
     case CameraModel::PinholeRadtan:
+    case CameraModel::Mei:
       return true;
   }
   return false;
@@ -429,8 +430,7 @@ void Backend::temporalFilter(const Buffer& state, const Buffer& u, const Buffer&
   c.camera(p.cam, "cam", &mask, "mask");
   c.require(state.id != prior.id, "state and prior are the same buffer");
   c.require(p.strength >= 0.f && p.strength < 1.f, "strength must be in [0, 1), got " + std::to_string(p.strength));
-  c.require(p.gate > 0.f && p.sigmaPx > 0.f && p.processPx >= 0.f,
-            "gate and sigmaPx must be > 0 and processPx >= 0");
+  c.require(p.gate > 0.f && p.sigmaPx > 0.f && p.processPx >= 0.f, "gate and sigmaPx must be > 0 and processPx >= 0");
   c.require(p.minConfidence > 0.f && p.minConfidence <= 1.f,
             "minConfidence must be in (0, 1], got " + std::to_string(p.minConfidence));
   doTemporalFilter(state, u, w, prior, radial, points, confidence, mask, p);
