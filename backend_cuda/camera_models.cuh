@@ -15,7 +15,7 @@ struct V3 {
 };
 
 // CameraModel's order.
-enum : int { kKannalaBrandt4 = 0, kUnified = 1, kExtendedUnified = 2, kDoubleSphere = 3, kPinholeRadtan = 4 };
+enum : int { kKannalaBrandt4 = 0, kUnified = 1, kExtendedUnified = 2, kDoubleSphere = 3, kPinholeRadtan = 4, kMei = 5 };
 constexpr double kEpsD = 2.220446049250313080847e-16;
 
 __device__ __forceinline__ double norm3(const V3& p) { return sqrt(p.x * p.x + p.y * p.y + p.z * p.z); }
@@ -187,9 +187,9 @@ __device__ inline bool dsUnproject(const CamDev& c, double px, double py, V3& ra
   return ray.z > -w2 * norm3(ray);
 }
 
-// --- Pinhole + radial-tangential ---
-__device__ __forceinline__ V2 rtDistort(const CamDev& c, double x, double y, double Jd[2][2]) {
-  const double k1 = c.p[4], k2 = c.p[5], p1 = c.p[6], p2 = c.p[7];
+// --- Radial-tangential distortion (pinhole: coefficients at p[4], MEI: at p[5]) ---
+__device__ __forceinline__ V2 rtDistort(const double* k, double x, double y, double Jd[2][2]) {
+  const double k1 = k[0], k2 = k[1], p1 = k[2], p2 = k[3];
   const double r2 = x * x + y * y;
   const double radial = 1.0 + r2 * (k1 + r2 * k2);
   const V2 out{x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
@@ -203,27 +203,13 @@ __device__ __forceinline__ V2 rtDistort(const CamDev& c, double x, double y, dou
   }
   return out;
 }
-__device__ inline bool rtProject(const CamDev& c, const V3& p, V2& px, J23* J) {
-  if (!(p.z > 1e-6 * norm3(p))) return false;
-  const double iz = 1.0 / p.z;
-  const double nx = p.x * iz, ny = p.y * iz;
-  double Jd[2][2];
-  const V2 md = rtDistort(c, nx, ny, J ? Jd : nullptr);
-  px = toPixel(c, md.x, md.y);
-  if (!J) return true;
-  const double Jn[2][3] = {{iz, 0, -nx * iz}, {0, iz, -ny * iz}};
-  const double f[2] = {c.p[0], c.p[1]};
-  for (int r = 0; r < 2; ++r)
-    for (int col = 0; col < 3; ++col) J->m[r][col] = f[r] * (Jd[r][0] * Jn[0][col] + Jd[r][1] * Jn[1][col]);
-  return true;
-}
-__device__ inline bool rtUnproject(const CamDev& c, double px, double py, V3& ray) {
-  const V2 m = toNormalized(c, px, py);
-  if (!isfinite(m.x) || !isfinite(m.y)) return false;
-  double nx = m.x, ny = m.y;
+// Radtan::undistort: Newton from n = start, accepted when it reaches m.
+__device__ inline bool rtUndistort(const double* k, const V2& m, const V2& start, V2& n) {
+  if (!isfinite(m.x) || !isfinite(m.y) || !isfinite(start.x) || !isfinite(start.y)) return false;
+  double nx = start.x, ny = start.y;
   double Jd[2][2];
   for (int it = 0; it < 20; ++it) {
-    const V2 d = rtDistort(c, nx, ny, Jd);
+    const V2 d = rtDistort(k, nx, ny, Jd);
     const double rx = d.x - m.x, ry = d.y - m.y;
     const double det = Jd[0][0] * Jd[1][1] - Jd[0][1] * Jd[1][0];
     if (!(fabs(det) > kEpsD)) return false;
@@ -233,11 +219,97 @@ __device__ inline bool rtUnproject(const CamDev& c, double px, double py, V3& ra
     if (sqrt(sx * sx + sy * sy) <= 16.0 * kEpsD * (1.0 + sqrt(nx * nx + ny * ny))) break;
   }
   const double accepted = sqrt(kEpsD) * (1.0 + sqrt(m.x * m.x + m.y * m.y));
-  const V2 d = rtDistort(c, nx, ny, nullptr);
+  const V2 d = rtDistort(k, nx, ny, nullptr);
   const double ex = d.x - m.x, ey = d.y - m.y;
-  if (!(sqrt(ex * ex + ey * ey) <= accepted)) return false;
-  ray = normalized(V3{nx, ny, 1.0});
+  n = {nx, ny};
+  return sqrt(ex * ex + ey * ey) <= accepted;
+}
+// Radtan::solveRadius: r in [0, rMax] with r (1 + k1 r^2 + k2 r^4) = rd.
+__device__ inline double rtSolveRadius(const double* k, double rd, double rMax) {
+  const double k1 = k[0], k2 = k[1];
+  double lo = 0, hi = rMax;
+  double r = rd < hi ? rd : 0.5 * hi;
+  for (int it = 0; it < 60; ++it) {
+    const double r2 = r * r;
+    const double f = r * (1.0 + r2 * (k1 + r2 * k2)) - rd;
+    if (f == 0) break;
+    (f < 0 ? lo : hi) = r;
+    double next = r - f / (1.0 + r2 * (3.0 * k1 + 5.0 * k2 * r2));
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    const double stp = fabs(next - r);
+    r = next;
+    if (stp <= 4.0 * kEpsD * r) break;
+  }
+  return r;
+}
+// d(px)/d(p) = diag(f) Jd Jn for the 2x3 Jacobian Jn of the undistorted point.
+__device__ __forceinline__ void rtChain(const CamDev& c, const double Jd[2][2], const double Jn[2][3], J23* J) {
+  const double f[2] = {c.p[0], c.p[1]};
+  for (int r = 0; r < 2; ++r)
+    for (int col = 0; col < 3; ++col) J->m[r][col] = f[r] * (Jd[r][0] * Jn[0][col] + Jd[r][1] * Jn[1][col]);
+}
+
+// --- Pinhole + radial-tangential ---
+__device__ inline bool rtProject(const CamDev& c, const V3& p, V2& px, J23* J) {
+  if (!(p.z > 1e-6 * norm3(p))) return false;
+  const double iz = 1.0 / p.z;
+  const double nx = p.x * iz, ny = p.y * iz;
+  double Jd[2][2];
+  const V2 md = rtDistort(c.p + 4, nx, ny, J ? Jd : nullptr);
+  px = toPixel(c, md.x, md.y);
+  if (!J) return true;
+  const double Jn[2][3] = {{iz, 0, -nx * iz}, {0, iz, -ny * iz}};
+  rtChain(c, Jd, Jn, J);
   return true;
+}
+__device__ inline bool rtUnproject(const CamDev& c, double px, double py, V3& ray) {
+  const V2 m = toNormalized(c, px, py);
+  V2 n;
+  if (!rtUndistort(c.p + 4, m, m, n)) return false;
+  ray = normalized(V3{n.x, n.y, 1.0});
+  return true;
+}
+
+// --- MEI: unified projection, then radial-tangential distortion ---
+__device__ inline bool meiProject(const CamDev& c, const V3& p, V2& px, J23* J) {
+  const double xi = c.p[4], w = c.a, rMax = c.b;
+  const double d = norm3(p);
+  if (!(p.z > -w * d)) return false;
+  const double den = p.z + xi * d;
+  if (!(den > 0)) return false;
+  const double inv = 1.0 / den;
+  const double mx = p.x * inv, my = p.y * inv;
+  if (!(sqrt(mx * mx + my * my) < rMax)) return false;
+  double Jd[2][2];
+  const V2 md = rtDistort(c.p + 5, mx, my, J ? Jd : nullptr);
+  px = toPixel(c, md.x, md.y);
+  if (!J) return true;
+  const double k = xi / d;
+  const double g[3] = {k * p.x, k * p.y, k * p.z + 1.0};
+  const double a0 = -mx * inv, a1 = -my * inv;
+  const double Jm[2][3] = {{a0 * g[0] + inv, a0 * g[1], a0 * g[2]}, {a1 * g[0], a1 * g[1] + inv, a1 * g[2]}};
+  rtChain(c, Jd, Jm, J);
+  return true;
+}
+__device__ inline bool meiUnproject(const CamDev& c, double px, double py, V3& ray) {
+  const double xi = c.p[4], w = c.a, rMax = c.b;
+  const V2 md = toNormalized(c, px, py);
+  if (!isfinite(md.x) || !isfinite(md.y)) return false;
+  const double rd = sqrt(md.x * md.x + md.y * md.y);
+  V2 start = md;
+  if (rd > 0) {
+    const double s = rtSolveRadius(c.p + 5, rd, rMax) / rd;
+    start = {md.x * s, md.y * s};
+  }
+  V2 m;
+  if (!rtUndistort(c.p + 5, md, start, m)) return false;
+  const double r2 = m.x * m.x + m.y * m.y;
+  if (!(sqrt(r2) < rMax)) return false;
+  const double disc = 1.0 + (1.0 - xi * xi) * r2;
+  if (!(disc >= 0)) return false;
+  const double factor = (xi + sqrt(disc)) / (1.0 + r2);
+  ray = normalized(V3{factor * m.x, factor * m.y, factor - xi});
+  return ray.z > -w * norm3(ray);
 }
 
 __device__ inline bool cameraProject(const CamDev& c, const V3& p, V2& px, J23* J = nullptr) {
@@ -250,6 +322,8 @@ __device__ inline bool cameraProject(const CamDev& c, const V3& p, V2& px, J23* 
       return dsProject(c, p, px, J);
     case kPinholeRadtan:
       return rtProject(c, p, px, J);
+    case kMei:
+      return meiProject(c, p, px, J);
     default:
       return kbProject(c, p, px, J);
   }
@@ -264,6 +338,8 @@ __device__ inline bool cameraUnproject(const CamDev& c, double px, double py, V3
       return dsUnproject(c, px, py, ray);
     case kPinholeRadtan:
       return rtUnproject(c, px, py, ray);
+    case kMei:
+      return meiUnproject(c, px, py, ray);
     default:
       return kbUnproject(c, px, py, ray);
   }

@@ -32,12 +32,14 @@ int parseDeviceIndex(const std::string& device) {
 
 std::string versionText(int v) { return std::to_string(v / 1000) + "." + std::to_string((v % 1000) / 10); }
 
+static_assert(cudak::kCamParams == kMaxCameraParams, "CamDev must hold every camera parameter");
+
 cudak::CamDev camDev(const CameraParams& c) {
   cudak::CamDev d{};
   d.model = c.model;
   d.width = c.width;
   d.height = c.height;
-  std::copy(c.params, c.params + 8, d.p);
+  std::copy(c.params, c.params + kMaxCameraParams, d.p);
   const CameraConstants k = cameraConstants(c);
   d.a = k.a;
   d.b = k.b;

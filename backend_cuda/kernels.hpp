@@ -15,11 +15,13 @@ struct Img {
 
 // A camera in the form the device camera models take (double precision, as the oracle).
 // a, b: what each model's constructor precomputes on the host, from cs::cameraConstants
-// (core): Kannala-Brandt 4: thetaMax, radiusMax;  unified, extended unified: w;  double sphere: w2.
+// (core): Kannala-Brandt 4: thetaMax, radiusMax;  unified, extended unified: w;  double sphere: w2;
+// MEI: w, rMax. kCamParams is cs::kMaxCameraParams (cuda_backend.cpp checks it).
+constexpr int kCamParams = 12;
 struct CamDev {
   int model;  // CameraModel
   int width, height;
-  double p[8];
+  double p[kCamParams];
   double a, b;
 };
 
@@ -128,7 +130,7 @@ cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img
 // by the kernel, so that a recorded frame uses each frame's upload.
 constexpr int kMotionFloats = 12;   // = cs::kMotionFloats
 constexpr double kCarryTie = 1e-3;  // = cs::kCarryTie
-struct CarryDev {                  // cs::CarryParams
+struct CarryDev {                   // cs::CarryParams
   CamDev srcCam, dstCam;
   double extraT[3];
   int iterations;
@@ -142,8 +144,8 @@ struct TemporalDev {  // cs::TemporalParams
   float strength, gate, sigmaPx, processPx, minConfidence;
 };
 // confidence.data null: 1 everywhere.
-cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img points, Img confidence,
-                                 Img mask, const TemporalDev& p);
+cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img points,
+                                 Img confidence, Img mask, const TemporalDev& p);
 // The result's confidence (round_trip.cu, result_confidence.cu; backend.hpp roundTrip,
 // resultConfidence).
 cudaError_t launchRoundTrip(cudaStream_t s, Img error, Img w, Img calibration, Img reverseW, Img reverseCalibration,

@@ -22,10 +22,11 @@ namespace {
 template <class S>
 struct VkCam {
   int32_t model, width, height, pad;
-  S p[8];
+  S p[kMaxCameraParams];
   S d[4];
 };
-static_assert(sizeof(VkCam<double>) == 112 && sizeof(VkCam<float>) == 64, "VkCam must match the GLSL Cam");
+static_assert(kMaxCameraParams == 12 && sizeof(VkCam<double>) == 144 && sizeof(VkCam<float>) == 80,
+              "VkCam must match the GLSL Cam");
 
 template <class S>
 struct VkFieldsParams {
@@ -78,7 +79,7 @@ VkCam<S> toVkCam(const CameraParams& c) {
   out.model = c.model;
   out.width = c.width;
   out.height = c.height;
-  for (int i = 0; i < 8; ++i) out.p[i] = S(c.params[i]);
+  for (int i = 0; i < kMaxCameraParams; ++i) out.p[i] = S(c.params[i]);
   const CameraConstants k = cameraConstants(c);
   out.d[0] = S(k.a);
   out.d[1] = S(k.b);

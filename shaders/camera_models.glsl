@@ -1,7 +1,8 @@
 // The camera models of core/include/curvestereo/camera_models.hpp, operation by operation:
 // project (with the 2x3 Jacobian as two rows) and unproject for Kannala-Brandt 4, Unified,
-// Extended Unified, Double Sphere and pinhole + radtan. Per-lens constants the C++
-// constructors derive (KB turning angle and radius, the unified-family w) come from the host.
+// Extended Unified, Double Sphere, pinhole + radtan and MEI (unified + radtan). Per-lens
+// constants the C++ constructors derive (KB turning angle and radius, the unified-family w,
+// MEI's undistorted radius bound) come from the host.
 #ifndef CS_CAMERA_MODELS_GLSL
 #define CS_CAMERA_MODELS_GLSL
 #include "real.glsl"
@@ -9,11 +10,11 @@
 // Mirrors VkCam<S> in backend_vulkan/vulkan_backend.cpp (std430).
 struct Cam {
   int model, width, height, pad;
-  real p[8];  // fx fy cx cy extra...
-  real d[4];  // KB: thetaMax, radiusMax; unified family: w; radtan: unused
+  real p[12];  // fx fy cx cy extra... (cs::kMaxCameraParams)
+  real d[4];   // KB: thetaMax, radiusMax; unified family: w; radtan: unused; MEI: w, rMax
 };
 
-const int kKannalaBrandt4 = 0, kUnified = 1, kExtendedUnified = 2, kDoubleSphere = 3, kPinholeRadtan = 4;
+const int kKannalaBrandt4 = 0, kUnified = 1, kExtendedUnified = 2, kDoubleSphere = 3, kPinholeRadtan = 4, kMei = 5;
 
 vec2r toNormalized(Cam c, vec2r px) { return vec2r((px.x - c.p[2]) / c.p[0], (px.y - c.p[3]) / c.p[1]); }
 real norm3(vec3r v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
@@ -171,28 +172,67 @@ bool dsUnproject(Cam c, vec2r px, out vec3r ray) {
   return ray.z > -w2 * norm3(ray);
 }
 
-// ---- pinhole + radial-tangential ----
+// ---- radial-tangential distortion: coefficients at p[o..o+3] (pinhole o = 4, MEI o = 5) ----
 // Distorted normalised point; Jd rows (d00 d01) (d10 d11).
-vec2r radtanDistort(Cam c, vec2r n, out vec2r Jd0, out vec2r Jd1) {
-  real k1 = c.p[4], k2 = c.p[5], p1 = c.p[6], p2 = c.p[7];
+vec2r radtanDistort(Cam c, int o, vec2r n, out vec2r Jd0, out vec2r Jd1) {
+  real k1 = c.p[o], k2 = c.p[o + 1], p1 = c.p[o + 2], p2 = c.p[o + 3];
   real x = n.x, y = n.y;
   real r2 = x * x + y * y;
   real radial = R(1.0) + r2 * (k1 + r2 * k2);
-  vec2r o = vec2r(x * radial + R(2.0) * p1 * x * y + p2 * (r2 + R(2.0) * x * x),
+  vec2r v = vec2r(x * radial + R(2.0) * p1 * x * y + p2 * (r2 + R(2.0) * x * x),
                   y * radial + p1 * (r2 + R(2.0) * y * y) + R(2.0) * p2 * x * y);
   real dRadial = R(2.0) * (k1 + R(2.0) * k2 * r2);
   real off = x * y * dRadial + R(2.0) * p1 * x + R(2.0) * p2 * y;
   Jd0 = vec2r(radial + x * x * dRadial + R(2.0) * p1 * y + R(6.0) * p2 * x, off);
   Jd1 = vec2r(off, radial + y * y * dRadial + R(6.0) * p1 * y + R(2.0) * p2 * x);
-  return o;
+  return v;
 }
+bool finite2(vec2r v) { return !(isnan(v.x) || isnan(v.y) || isinf(v.x) || isinf(v.y)); }
+// Newton from n = start; false when it does not reach m (Radtan::undistort).
+bool radtanUndistort(Cam c, int o, vec2r m, vec2r start, out vec2r n) {
+  n = start;
+  if (!finite2(m) || !finite2(start)) return false;
+  vec2r Jd0, Jd1;
+  for (int it = 0; it < 20; ++it) {
+    vec2r res = radtanDistort(c, o, n, Jd0, Jd1) - m;
+    real det = Jd0.x * Jd1.y - Jd0.y * Jd1.x;
+    if (!(abs(det) > EPS)) return false;
+    vec2r step = vec2r((Jd1.y * res.x - Jd0.y * res.y) / det, (Jd0.x * res.y - Jd1.x * res.x) / det);
+    n -= step;
+    if (sqrt(step.x * step.x + step.y * step.y) <= R(16.0) * EPS * (R(1.0) + sqrt(n.x * n.x + n.y * n.y))) break;
+  }
+  real accepted = sqrt(EPS) * (R(1.0) + sqrt(m.x * m.x + m.y * m.y));
+  vec2r e = radtanDistort(c, o, n, Jd0, Jd1) - m;
+  return sqrt(e.x * e.x + e.y * e.y) <= accepted;
+}
+
+// r in [0, rMax] with r (1 + k1 r^2 + k2 r^4) = rd (Radtan::solveRadius).
+real radtanSolveRadius(Cam c, int o, real rd, real rMax) {
+  real k1 = c.p[o], k2 = c.p[o + 1];
+  real lo = R(0.0), hi = rMax;
+  real r = rd < hi ? rd : R(0.5) * hi;
+  for (int it = 0; it < 60; ++it) {
+    real r2 = r * r;
+    real f = r * (R(1.0) + r2 * (k1 + r2 * k2)) - rd;
+    if (f == R(0.0)) break;
+    if (f < R(0.0)) lo = r; else hi = r;
+    real next = r - f / (R(1.0) + r2 * (R(3.0) * k1 + R(5.0) * k2 * r2));
+    if (!(next > lo && next < hi)) next = R(0.5) * (lo + hi);
+    real step = abs(next - r);
+    r = next;
+    if (step <= R(4.0) * EPS * r) break;
+  }
+  return r;
+}
+
+// ---- pinhole + radial-tangential ----
 bool radtanProject(Cam c, vec3r p, out vec2r px, out vec3r J0, out vec3r J1) {
   px = vec2r(0); J0 = vec3r(0); J1 = vec3r(0);
   if (!(p.z > D(1e-6LF, 1e-6) * norm3(p))) return false;
   real iz = R(1.0) / p.z;
   vec2r n = vec2r(p.x * iz, p.y * iz);
   vec2r Jd0, Jd1;
-  vec2r md = radtanDistort(c, n, Jd0, Jd1);
+  vec2r md = radtanDistort(c, 4, n, Jd0, Jd1);
   px = vec2r(c.p[0] * md.x + c.p[2], c.p[1] * md.y + c.p[3]);
   // J = diag(fx, fy) Jd Jn with Jn = (iz 0 -nx iz; 0 iz -ny iz).
   vec2r a0 = c.p[0] * Jd0, a1 = c.p[1] * Jd1;
@@ -203,22 +243,52 @@ bool radtanProject(Cam c, vec3r p, out vec2r px, out vec3r J0, out vec3r J1) {
 bool radtanUnproject(Cam c, vec2r px, out vec3r ray) {
   ray = vec3r(0);
   vec2r m = toNormalized(c, px);
-  if (isnan(m.x) || isnan(m.y) || isinf(m.x) || isinf(m.y)) return false;
-  vec2r n = m;
-  vec2r Jd0, Jd1;
-  for (int it = 0; it < 20; ++it) {
-    vec2r res = radtanDistort(c, n, Jd0, Jd1) - m;
-    real det = Jd0.x * Jd1.y - Jd0.y * Jd1.x;
-    if (!(abs(det) > EPS)) return false;
-    vec2r step = vec2r((Jd1.y * res.x - Jd0.y * res.y) / det, (Jd0.x * res.y - Jd1.x * res.x) / det);
-    n -= step;
-    if (sqrt(step.x * step.x + step.y * step.y) <= R(16.0) * EPS * (R(1.0) + sqrt(n.x * n.x + n.y * n.y))) break;
-  }
-  real accepted = sqrt(EPS) * (R(1.0) + sqrt(m.x * m.x + m.y * m.y));
-  vec2r e = radtanDistort(c, n, Jd0, Jd1) - m;
-  if (!(sqrt(e.x * e.x + e.y * e.y) <= accepted)) return false;
+  vec2r n;
+  if (!radtanUndistort(c, 4, m, m, n)) return false;
   ray = normalized3(vec3r(n.x, n.y, R(1.0)));
   return true;
+}
+
+// ---- MEI: unified projection m = (x, y) / (z + xi |p|), then radtan of m ----
+bool meiProject(Cam c, vec3r p, out vec2r px, out vec3r J0, out vec3r J1) {
+  px = vec2r(0); J0 = vec3r(0); J1 = vec3r(0);
+  real xi = c.p[4], w = c.d[0], rMax = c.d[1];
+  real d = norm3(p);
+  if (!(p.z > -w * d)) return false;
+  real den = p.z + xi * d;
+  if (!(den > R(0.0))) return false;
+  real inv = R(1.0) / den;
+  vec2r m = vec2r(p.x * inv, p.y * inv);
+  if (!(sqrt(m.x * m.x + m.y * m.y) < rMax)) return false;
+  vec2r Jd0, Jd1;
+  vec2r md = radtanDistort(c, 5, m, Jd0, Jd1);
+  px = vec2r(c.p[0] * md.x + c.p[2], c.p[1] * md.y + c.p[3]);
+  // J = diag(fx, fy) Jd Jm, Jm rows (e_x - m.x g) / den, (e_y - m.y g) / den, g = grad(den).
+  vec3r g = (xi / d) * p + vec3r(R(0.0), R(0.0), R(1.0));
+  vec3r m0 = (-m.x * inv) * g, m1 = (-m.y * inv) * g;
+  m0.x += inv;
+  m1.y += inv;
+  vec2r a0 = c.p[0] * Jd0, a1 = c.p[1] * Jd1;
+  J0 = a0.x * m0 + a0.y * m1;
+  J1 = a1.x * m0 + a1.y * m1;
+  return true;
+}
+bool meiUnproject(Cam c, vec2r px, out vec3r ray) {
+  ray = vec3r(0);
+  real xi = c.p[4], w = c.d[0], rMax = c.d[1];
+  vec2r md = toNormalized(c, px);
+  if (!finite2(md)) return false;
+  real rd = sqrt(md.x * md.x + md.y * md.y);
+  vec2r start = rd > R(0.0) ? md * (radtanSolveRadius(c, 5, rd, rMax) / rd) : md;
+  vec2r m;
+  if (!radtanUndistort(c, 5, md, start, m)) return false;
+  real r2 = m.x * m.x + m.y * m.y;
+  if (!(sqrt(r2) < rMax)) return false;
+  real disc = R(1.0) + (R(1.0) - xi * xi) * r2;
+  if (!(disc >= R(0.0))) return false;
+  real factor = (xi + sqrt(disc)) / (R(1.0) + r2);
+  ray = normalized3(vec3r(factor * m.x, factor * m.y, factor - xi));
+  return ray.z > -w * norm3(ray);
 }
 
 // ---- dispatch on the model ----
@@ -227,6 +297,7 @@ bool camProject(Cam c, vec3r p, out vec2r px, out vec3r J0, out vec3r J1) {
   if (c.model == kExtendedUnified) return eucmProject(c, p, px, J0, J1);
   if (c.model == kDoubleSphere) return dsProject(c, p, px, J0, J1);
   if (c.model == kPinholeRadtan) return radtanProject(c, p, px, J0, J1);
+  if (c.model == kMei) return meiProject(c, p, px, J0, J1);
   return kbProject(c, p, px, J0, J1);
 }
 bool camUnproject(Cam c, vec2r px, out vec3r ray) {
@@ -234,6 +305,7 @@ bool camUnproject(Cam c, vec2r px, out vec3r ray) {
   if (c.model == kExtendedUnified) return eucmUnproject(c, px, ray);
   if (c.model == kDoubleSphere) return dsUnproject(c, px, ray);
   if (c.model == kPinholeRadtan) return radtanUnproject(c, px, ray);
+  if (c.model == kMei) return meiUnproject(c, px, ray);
   return kbUnproject(c, px, ray);
 }
 bool camInImage(Cam c, vec2r px) {

@@ -345,6 +345,10 @@ TEST_CASE("OpenCV errors are one line naming the file and the problem") {
     std::string s = replaceFirst(openCvYaml("fisheye", kFisheyeD), "R: !!opencv-matrix\n   rows: 3\n   cols: 3",
                                  "R: !!opencv-matrix\n   rows: 3\n   cols: 1");
     s = replaceFirst(s, "data: [ 1., 0., 0., 0., 1., 0., 0., 0., 1. ]", "data: [ 0.01, 0., 0. ]");
+    // OpenCV's 3-value rotation (issue 29): 0.01 rad about x, as cv::Rodrigues reads it.
+    CHECK(cs::parseCalibration(s).R(2, 1) == doctest::Approx(std::sin(0.01)));
+    s = replaceFirst(s, "rows: 3\n   cols: 1\n   dt: d\n   data: [ 0.01, 0., 0. ]",
+                     "rows: 2\n   cols: 2\n   dt: d\n   data: [ 1, 0, 0, 1 ]");
     checkError(s, {"R must be a 3x3", "Rodrigues"});
   }
 }
@@ -380,10 +384,10 @@ TEST_CASE("the format comes from the content; unrecognised files are one line") 
   CHECK(cs::detectCalibFormat("cam0:\n  camera_model: pinhole\n") == CalibFormat::Kalibr);
   CHECK(cs::detectCalibFormat("{\"value0\": {}}") == CalibFormat::Basalt);
   CHECK(cs::detectCalibFormat("\xEF\xBB\xBF<?xml version=\"1.0\"?><opencv_storage/>") == CalibFormat::OpenCv);
-  CHECK(cs::detectCalibFormat("%YAML:1.0\n---\n") == CalibFormat::OpenCv);
+  CHECK(cs::detectCalibFormat("%YAML:1.0\n---\nK1: !!opencv-matrix\n") == CalibFormat::OpenCv);
   checkError("", {"empty"});
   checkError("  \n\t\n", {"empty"});
-  checkError("camera: 1\n", {"not a Kalibr camchain, Basalt calibration.json or OpenCV", "cam0"});
+  checkError("camera: 1\n", {"not a Kalibr camchain, Basalt calibration.json, OpenCV stereo file", "cam0"});
   checkError("[1, 2, 3]\n", {"not a Kalibr camchain"});
   checkError("{\"value0\": [1, 2", {"JSON syntax error"});
   const std::string missing = (cs::test::tempDir("calib_missing") / "none.json").string();

@@ -73,6 +73,12 @@ std::vector<NamedCamera> testCameras() {
       {"pinhole radtan euroc", Camera::pinholeRadtan(752, 480, 458.654, 457.296, 367.215, 248.375, -0.28340811,
                                                      0.07395907, 0.00019359, 1.76187114e-05)},
       {"pinhole plain", Camera::pinholeRadtan(640, 480, 500.0, 500.0, 319.5, 239.5)},
+      // MEI: a T265-like lens (xi < 1, no turning radius), a catadioptric-like xi > 1, and
+      // one whose radial distortion turns (k2 = 0, k1 < 0: rMax = 1 / sqrt(-3 k1)).
+      {"mei t265",
+       Camera::mei(848, 800, 519.4431, 521.3283, 420.135, 403.394, 0.81, -0.3215268, 0.0570208, 0.00012, -8.0e-05)},
+      {"mei xi>1", Camera::mei(752, 480, 1100.0, 1098.0, 375.2, 240.1, 2.1, -0.12, 0.09, -0.0003, 0.0002)},
+      {"mei turning", Camera::mei(640, 640, 700.0, 700.0, 319.5, 319.5, 0.9, -0.3, 0.0, 0.0, 0.0)},
   };
 }
 
@@ -109,7 +115,8 @@ Mat23<double> numericJacobian(const TestCamera& cam, const Vec3<double>& p, doub
 // On the optical axis every model is a pinhole of focal f * gain: UCM and DS divide by
 // (1 + xi) z there, the others by z.
 double axisGain(const Camera& cam) {
-  if (cam.model == cs::CameraModel::Unified || cam.model == cs::CameraModel::DoubleSphere)
+  if (cam.model == cs::CameraModel::Unified || cam.model == cs::CameraModel::DoubleSphere ||
+      cam.model == cs::CameraModel::Mei)
     return 1.0 / (1.0 + cam.params[4]);
   return 1.0;
 }
@@ -316,6 +323,31 @@ TEST_CASE("unified family and pinhole: invalid regions") {
   Camera broken = pin;
   broken.params.pop_back();  // wrong parameter count: refused when built, not read out of bounds
   CHECK_THROWS_AS(BuiltCamera{broken}, cs::Error);
+}
+
+TEST_CASE("MEI: unified without distortion; the turning radius bounds the valid region") {
+  // With k1 = k2 = p1 = p2 = 0 MEI is the unified model, ray for ray.
+  const TestCamera mei = Camera::mei(512, 512, 465, 464, 254.9, 256.8, 1.9);
+  const TestCamera ucm = Camera::unified(512, 512, 465, 464, 254.9, 256.8, 1.9);
+  CHECK(mei.maxAngle() == doctest::Approx(ucm.maxAngle()));
+  for (double theta : {0.0, 0.3, 1.0, 1.9}) {
+    Vec2<double> a, b;
+    REQUIRE(mei.project(rayAt(theta, 0.7), a));
+    REQUIRE(ucm.project(rayAt(theta, 0.7), b));
+    CHECK((a - b).norm() < 1e-12);
+  }
+  // k1 = -0.3, k2 = 0: r (1 + k1 r^2) turns at r^2 = 1 / 0.9; the ray there is maxAngle.
+  const TestCamera turning = Camera::mei(640, 640, 350, 350, 319.5, 319.5, 0.9, -0.3);
+  const double r = std::sqrt(1 / 0.9), xi = 0.9;
+  const double f = (xi + std::sqrt(1 + (1 - xi * xi) * r * r)) / (1 + r * r);
+  CHECK(turning.maxAngle() == doctest::Approx(std::atan2(f * r, f - xi)));
+  Vec2<double> px;
+  Vec3<double> ray;
+  CHECK_FALSE(turning.project(rayAt(turning.maxAngle() + 1e-3, 0.2), px));
+  // Beyond the distorted image of rMax (r (1 + k1 r^2) = 2 r / 3) no pixel unprojects.
+  CHECK_FALSE(turning.unproject(Vec2<double>(319.5 + 350 * (2 * r / 3) * 1.01, 319.5), ray));
+  CHECK(turning.unproject(Vec2<double>(319.5 + 350 * (2 * r / 3) * 0.99, 319.5), ray));
+  CHECK(Camera::mei(512, 512, 465, 464, 254.9, 256.8, 1.9).modelName() == "mei");
 }
 
 TEST_CASE("scaled() keeps the image of every ray at the scaled pixel") {

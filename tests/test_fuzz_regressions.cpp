@@ -10,6 +10,7 @@
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/rig.hpp"
 #include "curvestereo/sequence.hpp"
+#include "fuzz/fuzz_vins.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -40,6 +41,11 @@ std::string load(const std::string& target, const fs::path& file) {
     } else if (target == "opencv") {
       cs::parseOpenCv(readAll(file), file.filename().string());
       cs::loadOpenCv(file.string());
+    } else if (target == "orbslam3") {
+      cs::parseOrbSlam3(readAll(file), file.filename().string());
+      cs::loadOrbSlam3(file.string());
+    } else if (target == "vins") {  // fuzz_vins.hpp's input: config, "###", camera file
+      cs::fuzz::parseVinsInput(readAll(file));
     } else if (target == "png") {
       cs::readPngGray(file.string());
     } else if (target == "exr") {
@@ -95,13 +101,15 @@ TEST_CASE("fuzz seed corpus: every seed loads or is a cs::Error") {
 }
 
 TEST_CASE("every calibration seed is read the same by parseCalibration (format detected) and its own reader") {
-  for (const char* target : {"camchain", "basalt", "opencv"})
+  for (const char* target : {"camchain", "basalt", "opencv", "orbslam3"})
     for (const auto& entry : fs::directory_iterator(fuzzDir() / "corpus" / target)) {
       CAPTURE(entry.path().string());
       const std::string text = readAll(entry.path());
-      const cs::Rig own = std::string(target) == "camchain" ? cs::parseKalibr(text)
-                          : std::string(target) == "basalt" ? cs::parseBasalt(text)
-                                                            : cs::parseOpenCv(text);
+      const std::string t = target;
+      const cs::Rig own = t == "camchain" ? cs::parseKalibr(text)
+                          : t == "basalt" ? cs::parseBasalt(text)
+                          : t == "opencv" ? cs::parseOpenCv(text)
+                                          : cs::parseOrbSlam3(text);
       const cs::Rig detected = cs::parseCalibration(text);
       CHECK(detected.cam0.params == own.cam0.params);
       CHECK(detected.cam1.params == own.cam1.params);

@@ -87,6 +87,7 @@ TEST_CASE("saveKalibr -> loadKalibr is exact for every model") {
       Camera::unified(512, 512, 465.0 / 3, 464.1, 254.9, 256.8, 1.9),
       Camera::extendedUnified(512, 512, 191.4, 191.3, 254.9, 256.9, 0.629, 1.0 / 3),
       Camera::doubleSphere(512, 512, 158.3, 158.2, 254.9, 256.9, -0.18, 0.59),
+      Camera::mei(848, 800, 519.4431, 521.3283, 420.135, 403.394, 0.81, -0.3215268, 0.0570208, 0.00012, -8.0e-05),
   };
   const auto dir = cs::test::tempDir("rig_roundtrip");
   for (const auto& cam : cams) {
@@ -150,9 +151,9 @@ TEST_CASE("loadKalibr errors are one line naming the file and the problem") {
   SUBCASE("unsupported model combination") {
     CamchainText text;
     text.cam0Model = "omni";
-    text.cam0Distortion = "radtan";
+    text.cam0Distortion = "equidistant";
     text.cam0Intrinsics = "[0.9, 285.722, 286.759, 420.135, 403.394]";
-    checkError(writeText("rig_combo", text.str()), {"cam0", "omni+radtan", "unsupported"});
+    checkError(writeText("rig_combo", text.str()), {"cam0", "omni+equidistant", "unsupported"});
   }
   SUBCASE("missing T_cn_cnm1") {
     CamchainText text;

@@ -1,7 +1,7 @@
-// curvestereo calib convert IN OUT [--format kalibr|basalt|opencv]
-// curvestereo calib show IN
-// Calibration files between Kalibr, Basalt and OpenCV; the input's format is read from its
-// content, the output's from --format or from OUT's name.
+// curvestereo calib convert IN OUT [--format kalibr|basalt|opencv|orbslam3|vins] [--image-size WxH]
+// curvestereo calib show IN [--image-size WxH]
+// Calibration files between Kalibr, Basalt, OpenCV, ORB-SLAM3 and VINS-Fusion; the input's
+// format is read from its keys, the output's from --format or from OUT's name.
 #include <Eigen/Geometry>
 #include <cctype>
 #include <cmath>
@@ -10,6 +10,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "common.hpp"
 #include "curvestereo/rig.hpp"
 
 namespace cs::cli {
@@ -26,20 +27,26 @@ CalibFormat parseFormat(const std::string& name) {
   if (n == "kalibr") return CalibFormat::Kalibr;
   if (n == "basalt") return CalibFormat::Basalt;
   if (n == "opencv") return CalibFormat::OpenCv;
-  throw Error("--format must be kalibr, basalt or opencv, got '" + name + "'");
+  if (n == "orbslam3") return CalibFormat::OrbSlam3;
+  if (n == "vins") return CalibFormat::VinsFusion;
+  throw Error("--format must be kalibr, basalt, opencv, orbslam3 or vins, got '" + name + "'");
 }
 
-// .json is Basalt's, camchain*.yaml Kalibr's, .xml OpenCV's; any other .yaml / .yml could be
-// Kalibr or OpenCV, so the user must say.
+// .json is Basalt's; Kalibr's names camchain.yaml, <bag>-camchain.yaml and
+// <bag>-camchain-imucam.yaml are Kalibr's; .xml is OpenCV's. Any other .yaml / .yml could
+// be any of the YAML formats, so the user must say.
 CalibFormat formatFromName(const std::string& path) {
   const std::filesystem::path p(path);
   const std::string ext = lower(p.extension().string());
   const std::string stem = lower(p.stem().string());
   if (ext == ".json") return CalibFormat::Basalt;
   if (ext == ".xml") return CalibFormat::OpenCv;
-  if ((ext == ".yaml" || ext == ".yml") && stem.rfind("camchain", 0) == 0) return CalibFormat::Kalibr;
+  const bool kalibrName = stem.rfind("camchain", 0) == 0 || stem.find("-camchain") != std::string::npos ||
+                          stem.find("_camchain") != std::string::npos;
+  if ((ext == ".yaml" || ext == ".yml") && kalibrName) return CalibFormat::Kalibr;
   throw Error("cannot tell the output format from the name '" + path +
-              "' (.json = basalt, camchain*.yaml = kalibr, .xml = opencv): pass --format kalibr|basalt|opencv");
+              "' (.json = basalt, camchain*.yaml or *-camchain[-imucam].yaml = kalibr, .xml = opencv): pass --format "
+              "kalibr|basalt|opencv|orbslam3|vins");
 }
 
 std::string describe(const Camera& cam) {
@@ -57,7 +64,7 @@ int convert(const Args& args) {
   const std::string in = args.positional()[1], out = args.positional()[2];
   const CalibFormat to = args.has("format") ? parseFormat(args.get("format", "")) : formatFromName(out);
   CalibFormat from{};
-  const Rig rig = loadCalibration(in, &from);
+  const Rig rig = loadCalibration(in, &from, calibHintsFromArgs(args));
   if (std::filesystem::exists(out) && std::filesystem::equivalent(in, out))
     throw Error("calib convert: IN and OUT are the same file ('" + out + "')");
   saveCalibration(rig, out, to);
@@ -68,26 +75,30 @@ int convert(const Args& args) {
 int show(const Args& args) {
   if (args.positional().size() != 2) throw Error("calib show needs one file: calib show IN");
   CalibFormat format{};
-  const Rig rig = loadCalibration(args.positional()[1], &format);
+  const Rig rig = loadCalibration(args.positional()[1], &format, calibHintsFromArgs(args));
   const Eigen::AngleAxisd turn(rig.R);
   std::printf("format: %s\ncam0: %s\ncam1: %s\n", calibFormatName(format), describe(rig.cam0).c_str(),
               describe(rig.cam1).c_str());
   std::printf("X1 = R X0 + t: t = [%.9g, %.9g, %.9g] m (baseline %.6g m), R turns %.6g deg\n", rig.t.x(), rig.t.y(),
               rig.t.z(), rig.t.norm(), turn.angle() * 180.0 / M_PI);
+  for (int r = 0; r < 3; ++r)
+    std::printf("  [%12.9f %12.9f %12.9f | %12.9f]\n", rig.R(r, 0), rig.R(r, 1), rig.R(r, 2), rig.t(r));
   return 0;
 }
 
 }  // namespace
 
 int cmdCalib(const Args& args) {
-  args.allowOnly({"format"});
+  args.allowOnly({"format", "image-size"});
   const std::string sub = args.positional().empty() ? "" : args.positional()[0];
   if (sub == "convert") return convert(args);
   if (sub == "show") {
     if (args.has("format")) throw Error("calib show takes no --format (the file's content says it)");
     return show(args);
   }
-  throw Error("calib needs a sub-command: calib convert IN OUT [--format kalibr|basalt|opencv] | calib show IN");
+  throw Error(
+      "calib needs a sub-command: calib convert IN OUT [--format kalibr|basalt|opencv|orbslam3|vins] "
+      "[--image-size WxH] | calib show IN [--image-size WxH]");
 }
 
 }  // namespace cs::cli

@@ -28,9 +28,9 @@ float maxMagnitude(const FlowImage& f, const ImageU8& mask) {
 }  // namespace
 
 int cmdFields(const Args& args) {
-  args.allowOnly({"calib", "o", "output", "max-fov", "epipole"});
+  args.allowOnly({"calib", "o", "output", "max-fov", "epipole", "image-size"});
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
-  const Rig rig = loadCalibration(args.require("calib"));
+  const Rig rig = loadCalibration(args.require("calib"), nullptr, calibHintsFromArgs(args));
   FieldOptions opt;
   // The solver's defaults, so that the mask shown is the one it solves on.
   opt.maxFovDeg = args.getDouble("max-fov", Params{}.maxFovDeg);

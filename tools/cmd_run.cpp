@@ -132,7 +132,7 @@ int runSequence(const Args& args, const std::string& outDir) {
   const bool cold = args.has("cold");
   if (cold) params.warmStart = false, params.temporalStrength = 0.f;  // every frame alone: the baseline
   const float minConfidence = minConfidenceFromArgs(args, params);
-  const Rig rig = loadCalibration(sequenceCalibration(args, source));
+  const Rig rig = loadCalibration(sequenceCalibration(args, source), nullptr, calibHintsFromArgs(args));
   const ViewOptions views = viewOptions(args, rig.cam0);
   Stereo stereo(rig, params, backendFromArgs(args));
   if (args.has("mask")) stereo.setMask(loadMask(args.get("mask", "")));
@@ -186,7 +186,8 @@ int runSequence(const Args& args, const std::string& outDir) {
 
 int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling"});
+  known.insert(
+      {"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling", "image-size"});
   known.insert({"sequence", "poses", "cold", "pair-tolerance-ms"});
   args.allowOnly(known);
   if (args.has("sequence")) {

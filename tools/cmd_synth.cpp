@@ -53,9 +53,12 @@ synth::SynthConfig configFromArgs(const Args& args, RenderDefaults defaults = {}
   if (args.has("calib")) {
     for (const char* option : kRigOptions)
       if (args.has(option)) throw Error(std::string("option --") + option + " cannot be combined with --calib");
-    Rig rig = loadCalibration(args.get("calib", ""));
+    Rig rig = loadCalibration(args.get("calib", ""), nullptr, calibHintsFromArgs(args));
     cfg.rig = args.has("size") ? scaledRig(rig, size) : rig;
-    cfg.maxFovDeg = args.getDouble("fov", 0.0);  // a calibrated lens: its own valid region
+    // Ground truth where the solver solves by default (Params::maxFovDeg), so that eval does
+    // not count a ring the solver was never asked for as missing; --fov widens both sides
+    // alike (pass the same value to run as max_fov_deg).
+    cfg.maxFovDeg = args.getDouble("fov", Params{}.maxFovDeg);
   } else {
     cfg.camera = synth::defaultFisheye(size);
     cfg.motion = args.get("motion", cfg.motion);
@@ -197,7 +200,7 @@ int synthSequence(const Args& args) {
 int cmdSynth(const Args& given) {
   std::set<std::string> known = kCameraOptions;
   known.insert({"o", "output", "scene", "seed", "size", "calib", "motion", "baseline", "rotation", "nearest", "samples",
-                "fov", "quiet", "sequence"});
+                "fov", "quiet", "sequence", "image-size"});
   for (const char* option : kSequenceOptions) known.insert(option);
   given.allowOnly(known);
   if (!given.get("sequence", "").empty())

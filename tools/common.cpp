@@ -133,7 +133,12 @@ ImageF loadImageFor(const std::string& path, const Camera& cam, const char* whic
 
 StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftPath, const std::string& rightPath,
                               bool scaleIntrinsics) {
-  StereoInputs in{loadCalibration(calib), loadImage(leftPath, "left"), loadImage(rightPath, "right")};
+  ImageF left = loadImage(leftPath, "left"), right = loadImage(rightPath, "right");
+  // A calibration without an image size (OpenCV's stereoCalibrate output) is for these images.
+  CalibHints hints;
+  hints.width = left.width;
+  hints.height = left.height;
+  StereoInputs in{loadCalibration(calib, nullptr, hints), std::move(left), std::move(right)};
   const ImageF &l = in.left, &r = in.right;
   if (l.width != r.width || l.height != r.height)
     throw Error("left image '" + leftPath + "' is " + sizeText(l.width, l.height) + " but right image '" + rightPath +
@@ -161,6 +166,20 @@ StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftP
   std::fprintf(stderr, "curvestereo: note: images are %s, calibration %s: intrinsics scaled by %s\n",
                sizeText(l.width, l.height).c_str(), sizeText(cam.width, cam.height).c_str(), ratio.c_str());
   return in;
+}
+
+CalibHints calibHintsFromArgs(const Args& args) {
+  CalibHints hints;
+  if (!args.has("image-size")) return hints;
+  const std::string text = args.get("image-size", "");
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
+      w > 1000000 || h > 1000000)
+    throw Error("--image-size must be WIDTHxHEIGHT in pixels (e.g. 848x800), got '" + text + "'");
+  hints.width = w;
+  hints.height = h;
+  return hints;
 }
 
 void writeDepthPng(const std::string& path, const ImageF& radialDepth) { writePngRgb(path, depthPicture(radialDepth)); }

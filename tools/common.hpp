@@ -38,6 +38,8 @@ struct StereoInputs {
   Rig rig;
   ImageF left, right;
 };
+// --image-size WxH: the image size for calibration files that store none.
+CalibHints calibHintsFromArgs(const Args& args);
 StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftPath, const std::string& rightPath,
                               bool scaleIntrinsics);
 

@@ -17,8 +17,9 @@ commands:
                                 render a synthetic fisheye pair, solve it, report accuracy
   run --calib CALIB LEFT RIGHT -o OUTDIR [--scale-intrinsics] [--pinhole FOV[,WxH]] [--equirect W]
                                 depth.exr depth.png disparity.exr flow.flo points.ply points.pcd;
-                                CALIB: Kalibr camchain, Basalt calibration.json or OpenCV
-                                FileStorage; --pinhole: depth_pinhole.exr/.png + camera_info.yaml;
+                                CALIB: Kalibr / OpenVINS camchain, Basalt calibration.json,
+                                OpenCV FileStorage, ORB-SLAM3 settings or VINS-Fusion config
+                                (docs/calibration.md); --pinhole: depth_pinhole.exr/.png + camera_info.yaml;
                                 --equirect: range_equirect.exr (--sampling nearest|bilinear);
                                 --scale-intrinsics: images at a uniform rescale of the
                                 calibrated resolution (e.g. half) scale the cameras
@@ -43,8 +44,10 @@ commands:
                                 time per frame and per stage
   fields --calib CAMCHAIN -o OUTDIR
                                 valid mask, calibration and trajectory fields
-  calib convert IN OUT [--format kalibr|basalt|opencv] | calib show IN
-                                calibration files between Kalibr, Basalt and OpenCV
+  calib convert IN OUT [--format kalibr|basalt|opencv|orbslam3|vins] [--image-size WxH]
+  calib show IN [--image-size WxH]
+                                calibration files between Kalibr, Basalt, OpenCV, ORB-SLAM3
+                                and VINS-Fusion; --image-size for files without one
   synth -o OUTDIR [--scene urban|indoor] [--motion binocular|forward|sideways] [--camera none|t265]
                                 render a synthetic pair with exact ground truth
   synth --sequence -o OUTDIR [--frames 12] [--fps 30] [--speed 1] [--turn 20] [--mover on|off]

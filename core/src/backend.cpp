@@ -31,12 +31,14 @@ std::vector<float> gaussianTaps(float sigma) {
   return taps;
 }
 
+static_assert(models::Mei<double>::kNumParams <= kMaxCameraParams, "the kernels' camera blocks are too small");
+
 CameraParams toCameraParams(const Camera& camera) {
   CameraParams p;
   p.model = int(camera.model);
   p.width = camera.width;
   p.height = camera.height;
-  if (camera.params.size() > 8) throw Error("camera has more parameters than kernels take");
+  if (camera.params.size() > size_t(kMaxCameraParams)) throw Error("camera has more parameters than kernels take");
   std::copy(camera.params.begin(), camera.params.end(), p.params);
   return p;
 }
@@ -71,6 +73,12 @@ CameraConstants cameraConstants(const CameraParams& c) {
       return k;
     case CameraModel::PinholeRadtan:
       return k;
+    case CameraModel::Mei: {
+      const models::Mei<double> mei(p);
+      k.a = mei.w;
+      k.b = mei.rMax;
+      return k;
+    }
   }
   throw Error("unknown camera model " + std::to_string(c.model));
 }

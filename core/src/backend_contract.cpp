@@ -24,6 +24,7 @@ bool knownModel(int model) {
     case CameraModel::ExtendedUnified:
     case CameraModel::DoubleSphere:
     case CameraModel::PinholeRadtan:
+    case CameraModel::Mei:
       return true;
   }
   return false;

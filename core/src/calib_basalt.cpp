@@ -212,6 +212,10 @@ std::pair<const char*, std::vector<double>> toBasalt(const Camera& cam, const st
       const double rpmax = 1.05 * std::tan(std::min(BuiltCamera(cam).maxAngle(), 89.0 * M_PI / 180.0));
       return {"pinhole-radtan8", {p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], 0, 0, 0, 0, rpmax}};
     }
+    case CameraModel::Mei:
+      throw Error(path +
+                  ": Basalt calibrations cannot represent the mei (unified + radtan) camera model: write "
+                  "Kalibr or VINS-Fusion instead");
   }
   throw Error(path + ": saveBasalt: unknown camera model");
 }

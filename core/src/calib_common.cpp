@@ -2,6 +2,8 @@
 #include "calib_common.hpp"
 
 #include <Eigen/LU>  // determinant()
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -110,11 +112,39 @@ void YamlDoc::fail(const std::string& problem) const { throw Error(oneLine(name_
 
 namespace {
 
+bool isKeyChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-'; }
+
+// OpenCV's parser takes "key:value" without a space (ORB-SLAM3 files have
+// "Viewer.PointSize:2"); YAML does not. A key at the start of a line directly followed by
+// ':' and a value gets the space, which changes nothing else on the line.
+std::string withSpaceAfterKeys(const std::string& text) {
+  std::string out;
+  out.reserve(text.size() + 16);
+  size_t i = 0;
+  while (i < text.size()) {
+    const size_t end = std::min(text.find('\n', i), text.size());
+    size_t k = i;
+    while (k < end && text[k] == ' ') ++k;
+    const size_t keyStart = k;
+    while (k < end && isKeyChar(text[k])) ++k;
+    const bool glued = k > keyStart && std::isalpha(static_cast<unsigned char>(text[keyStart])) && k + 1 < end &&
+                       text[k] == ':' && text[k + 1] != ' ' && text[k + 1] != '\t' && text[k + 1] != '\r' &&
+                       text[k + 1] != ':';
+    out.append(text, i, glued ? k + 1 - i : end - i);
+    if (glued) out.append(" ").append(text, k + 1, end - k - 1);
+    if (end < text.size()) out += '\n';
+    i = end + 1;
+  }
+  return out;
+}
+
 // OpenCV writes "%YAML:1.0", which is not a YAML directive; as a comment it keeps the
-// line numbers of everything after it.
+// line numbers of everything after it. Such a file is OpenCV's, so it is read as leniently
+// as OpenCV reads it.
 std::string withoutOpenCvDirective(std::string text) {
-  if (text.compare(0, 6, "%YAML:") == 0) text[0] = '#';
-  return text;
+  if (text.compare(0, 6, "%YAML:") != 0) return text;
+  text[0] = '#';
+  return withSpaceAfterKeys(text);
 }
 
 }  // namespace
@@ -178,6 +208,30 @@ int YamlDoc::integer(const YAML::Node& node, const std::string& key, int lo, int
     fail(key + " must be a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
          formatNumber(v) + lineOf(node));
   return int(v);
+}
+
+Eigen::Matrix4d YamlDoc::transform(const YAML::Node& node, const std::string& key) const {
+  const bool matrix = node.IsMap();
+  const std::vector<double> data = numbers(matrix ? require(node, "data", key) : node, matrix ? key + ".data" : key);
+  if (matrix) {
+    const int rows = integer(require(node, "rows", key), key + ".rows", 1, 4);
+    const int cols = integer(require(node, "cols", key), key + ".cols", 1, 4);
+    if (cols != 4 || (rows != 3 && rows != 4) || data.size() != size_t(rows * cols))
+      fail(key + " must be a 4x4 or 3x4 matrix with rows * cols values" + lineOf(node));
+  }
+  if (data.size() != 16 && data.size() != 12) fail(key + " must be a 4x4 or 3x4 matrix" + lineOf(node));
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  for (size_t i = 0; i < data.size(); ++i) T(int(i / 4), int(i % 4)) = data[i];
+  if ((T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9)
+    fail(key + " last row must be [0, 0, 0, 1]" + lineOf(node));
+  return T;
+}
+
+Eigen::Matrix4d rigidInverse(const Eigen::Matrix4d& T) {
+  Eigen::Matrix4d out = Eigen::Matrix4d::Identity();
+  out.topLeftCorner<3, 3>() = T.topLeftCorner<3, 3>().transpose();
+  out.topRightCorner<3, 1>() = -T.topLeftCorner<3, 3>().transpose() * T.topRightCorner<3, 1>();
+  return out;
 }
 
 }  // namespace cs::calib

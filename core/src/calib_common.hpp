@@ -65,10 +65,16 @@ class YamlDoc {
   std::string text(const YAML::Node& node, const std::string& key) const;
   // A whole number in [lo, hi].
   int integer(const YAML::Node& node, const std::string& key, int lo, int hi) const;
+  // A rigid transform written by OpenCV: an !!opencv-matrix (rows, cols, data) or a plain
+  // list, 4x4 or 3x4 (the last row [0 0 0 1] implied). The rotation is checked later.
+  Eigen::Matrix4d transform(const YAML::Node& node, const std::string& key) const;
 
  private:
   std::string name_;
 };
+
+// The inverse [R^T, -R^T t] of a rigid transform.
+Eigen::Matrix4d rigidInverse(const Eigen::Matrix4d& T);
 
 // v is a whole number in [lo, hi] (checked before any cast to int, which would be
 // undefined for values out of range).

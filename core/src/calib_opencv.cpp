@@ -3,6 +3,7 @@
 // module (cv::fisheye: Kannala-Brandt with D = k1..k4).
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
 #include <sstream>
@@ -78,7 +79,8 @@ enum class Distortion { Unknown, Fisheye, Radtan };
 
 class OpenCvRigReader {
  public:
-  OpenCvRigReader(std::string name, const CvStorage& storage) : name_(std::move(name)), s_(storage) {}
+  OpenCvRigReader(std::string name, const CvStorage& storage, const CalibHints& hints)
+      : name_(std::move(name)), s_(storage), hints_(hints) {}
 
   Rig read() const {
     if (!find("K1") && !find("M1") && !find("R") && !find("D1"))
@@ -97,6 +99,7 @@ class OpenCvRigReader {
  private:
   std::string name_;
   const CvStorage& s_;
+  CalibHints hints_;
 
   [[noreturn]] void fail(const std::string& problem) const { throw Error(calib::oneLine(name_ + ": " + problem)); }
 
@@ -105,13 +108,24 @@ class OpenCvRigReader {
     return it == s_.end() ? nullptr : &it->second;
   }
 
-  const CvValue& matrix(const std::string& key, const std::string& alias, const std::string& hint) const {
+  // An !!opencv-matrix, or a plain list as cv::FileStorage writes a cv::Vec (YAML [a, b, c],
+  // XML text "a b c"): n values are an n x 1 column, 9 values a 3x3 matrix.
+  CvValue matrix(const std::string& key, const std::string& alias, const std::string& hint) const {
     const CvValue* v = find(key);
     if (!v && !alias.empty()) v = find(alias);
     const std::string names = alias.empty() ? "\"" + key + "\"" : "\"" + key + "\" (or \"" + alias + "\")";
     if (!v) fail("missing key " + names + hint);
-    if (v->kind != CvValue::Kind::Matrix) fail(key + " must be an !!opencv-matrix with rows, cols and data" + v->where);
-    return *v;
+    if (v->kind == CvValue::Kind::Matrix) return *v;
+    CvValue out = *v;
+    const bool list = v->kind == CvValue::Kind::List ||
+                      (v->kind == CvValue::Kind::Scalar && calib::parseNumberList(v->text, out.data));
+    if (!list || out.data.empty())
+      fail(key + " must be an !!opencv-matrix with rows, cols and data, or a list of numbers" + v->where);
+    out.kind = CvValue::Kind::Matrix;
+    const bool square = out.data.size() == 9;
+    out.rows = square ? 3 : int(out.data.size());
+    out.cols = square ? 3 : 1;
+    return out;
   }
 
   // A whole number from a scalar entry (YAML plain scalar or XML text).
@@ -127,17 +141,22 @@ class OpenCvRigReader {
     const CvValue* w = find("image_width");
     const CvValue* h = find("image_height");
     if (w && h) return {integer(*w, "image_width"), integer(*h, "image_height")};
-    for (const char* key : {"image_size", "imageSize"}) {
-      const CvValue* v = find(key);
-      if (!v) continue;
-      std::vector<double> wh = v->data;
-      if (v->kind == CvValue::Kind::Scalar) calib::parseNumberList(v->text, wh);
-      if (wh.size() != 2 || !calib::wholeInRange(wh[0], 1, 1e6) || !calib::wholeInRange(wh[1], 1, 1e6))
-        fail(std::string(key) + " must be [width, height] in pixels" + v->where);
-      return {int(wh[0]), int(wh[1])};
+    if (!w && !h) {
+      for (const char* key : {"image_size", "imageSize"})
+        if (find(key)) return listedImageSize(*find(key), key);
+      if (hints_.width > 0 && hints_.height > 0) return {hints_.width, hints_.height};
     }
     fail(std::string("missing key \"") + (w ? "image_height" : "image_width") +
-         "\" (the image size in pixels; stereoCalibrate does not store it: add image_width and image_height)");
+         "\" (the image size in pixels, which stereoCalibrate does not store: add image_width and image_height, or "
+         "pass --image-size WxH)");
+  }
+
+  std::pair<int, int> listedImageSize(const CvValue& v, const std::string& key) const {
+    std::vector<double> wh = v.data;
+    if (v.kind == CvValue::Kind::Scalar) calib::parseNumberList(v.text, wh);
+    if (wh.size() != 2 || !calib::wholeInRange(wh[0], 1, 1e6) || !calib::wholeInRange(wh[1], 1, 1e6))
+      fail(key + " must be [width, height] in pixels" + v.where);
+    return {int(wh[0]), int(wh[1])};
   }
 
   Distortion distortionModel() const {
@@ -179,8 +198,8 @@ class OpenCvRigReader {
 
   Camera camera(int i, Distortion model, int width, int height) const {
     const std::string n = std::to_string(i + 1);
-    const CvValue& K = matrix("K" + n, "M" + n, "");
-    const CvValue& D = matrix("D" + n, "", "");
+    const CvValue K = matrix("K" + n, "M" + n, "");
+    const CvValue D = matrix("D" + n, "", "");
     const std::string kKey = find("K" + n) ? "K" + n : "M" + n;
     const std::string dKey = "D" + n;
     if (D.rows != 1 && D.cols != 1) fail(dKey + " must be a row or a column" + D.where);
@@ -210,20 +229,28 @@ class OpenCvRigReader {
   }
 
   Eigen::Matrix3d rotation() const {
-    const CvValue& R = matrix("R", "",
-                              " (the rotation from camera 1 to camera 2, X2 = R X1 + T; OpenCV's stereo_calib "
-                              "sample writes R and T to extrinsics.yml: merge it into this file)");
+    const CvValue R = matrix("R", "",
+                             " (the rotation from camera 1 to camera 2, X2 = R X1 + T; OpenCV's stereo_calib "
+                             "sample writes R and T to extrinsics.yml: merge it into this file)");
+    if (R.data.size() == 3) return rodrigues(R.data);
     if (R.rows != 3 || R.cols != 3)
-      fail("R must be a 3x3 rotation matrix (a 3-vector is a Rodrigues vector: convert it with cv::Rodrigues)" +
-           R.where);
+      fail("R must be a 3x3 rotation matrix or a 3-vector (Rodrigues, as cv::Rodrigues)" + R.where);
     Eigen::Matrix3d out;
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) out(r, c) = R.data[size_t(3 * r + c)];
     return out;
   }
 
+  // OpenCV's 3-value form of a rotation: axis * angle.
+  static Eigen::Matrix3d rodrigues(const std::vector<double>& r) {
+    const Eigen::Vector3d v(r[0], r[1], r[2]);
+    const double angle = v.norm();
+    if (!(angle > 0)) return Eigen::Matrix3d::Identity();
+    return Eigen::AngleAxisd(angle, v / angle).toRotationMatrix();
+  }
+
   Eigen::Vector3d translation() const {
-    const CvValue& T = matrix("T", "", " (the translation, X2 = R X1 + T)");
+    const CvValue T = matrix("T", "", " (the translation, X2 = R X1 + T)");
     if (T.data.size() != 3) fail("T must hold 3 values" + T.where);
     return {T.data[0], T.data[1], T.data[2]};
   }
@@ -304,17 +331,21 @@ std::string xmlText(const Rig& rig, const char* model) {
 
 bool endsWithXml(const std::string& path) { return path.size() >= 4 && lower(path.substr(path.size() - 4)) == ".xml"; }
 
-Rig readOpenCv(const std::string& text, const std::string& name) {
+Rig readOpenCv(const std::string& text, const std::string& name, const CalibHints& hints) {
   const CvStorage storage = calib::firstSignificantChar(text) == '<' ? calib::parseOpenCvXml(text, name)
                                                                      : storageFromYaml(YamlDoc(name), text);
-  return OpenCvRigReader(name, storage).read();
+  return OpenCvRigReader(name, storage, hints).read();
 }
 
 }  // namespace
 
-Rig parseOpenCv(const std::string& text, const std::string& name) { return readOpenCv(text, name); }
+Rig parseOpenCv(const std::string& text, const std::string& name, const CalibHints& hints) {
+  return readOpenCv(text, name, hints);
+}
 
-Rig loadOpenCv(const std::string& path) { return readOpenCv(calib::readTextFile(path), path); }
+Rig loadOpenCv(const std::string& path, const CalibHints& hints) {
+  return readOpenCv(calib::readTextFile(path), path, hints);
+}
 
 void saveOpenCv(const Rig& rig, const std::string& path) {
   calib::checkRigBeforeSaving(rig, path);

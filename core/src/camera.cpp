@@ -45,6 +45,11 @@ Camera Camera::pinholeRadtan(int w, int h, double fx, double fy, double cx, doub
   return makeCamera(CameraModel::PinholeRadtan, w, h, {fx, fy, cx, cy, k1, k2, p1, p2});
 }
 
+Camera Camera::mei(int w, int h, double fx, double fy, double cx, double cy, double xi, double k1, double k2, double p1,
+                   double p2) {
+  return makeCamera(CameraModel::Mei, w, h, {fx, fy, cx, cy, xi, k1, k2, p1, p2});
+}
+
 bool Camera::inImage(const Vec2<double>& px, double margin) const {
   return px.x() >= -0.5 + margin && px.y() >= -0.5 + margin && px.x() <= width - 0.5 - margin &&
          px.y() <= height - 0.5 - margin;
@@ -77,6 +82,8 @@ std::string Camera::modelName() const {
       return "double-sphere";
     case CameraModel::PinholeRadtan:
       return "pinhole-radtan";
+    case CameraModel::Mei:
+      return "mei";
   }
   return "unknown";
 }
@@ -114,6 +121,8 @@ const char* paramName(CameraModel model, size_t i) {
       return i == 4 ? "xi" : "alpha";
     case CameraModel::PinholeRadtan:
       return radtan[i - 4];
+    case CameraModel::Mei:
+      return i == 4 ? "xi" : radtan[i - 5];
   }
   return "?";
 }
@@ -122,6 +131,7 @@ void checkModelParameters(const Camera& cam) {
   const auto& p = cam.params;
   switch (cam.model) {
     case CameraModel::Unified:
+    case CameraModel::Mei:
       if (p[4] < 0) fail(cam, "xi = " + str(p[4]) + " is negative");
       break;
     case CameraModel::ExtendedUnified:

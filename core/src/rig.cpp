@@ -41,8 +41,8 @@ class KalibrReader {
     Rig rig;
     rig.cam0 = readCamera(root, "cam0");
     rig.cam1 = readCamera(root, "cam1");
-    readPose(YamlDoc::find(require(root, "cam1", ""), "T_cn_cnm1"), rig);
-    calib::checkRig(rig, doc_.name(), "T_cn_cnm1");
+    const std::string poseName = stereoPose(root, rig);
+    calib::checkRig(rig, doc_.name(), poseName);
     return rig;
   }
 
@@ -83,11 +83,12 @@ class KalibrReader {
 
   CameraModel modelFor(const std::string& name, const std::string& cameraModel, const std::string& distortion) const {
     static const char* supported =
-        "supported: pinhole+equidistant, pinhole+radtan, pinhole+none, omni+none, eucm+none, ds+none";
+        "supported: pinhole+equidistant, pinhole+radtan, pinhole+none, omni+none, omni+radtan, eucm+none, ds+none";
     const bool none = distortion == "none";
     if (cameraModel == "pinhole" && distortion == "equidistant") return CameraModel::KannalaBrandt4;
     if (cameraModel == "pinhole" && (distortion == "radtan" || none)) return CameraModel::PinholeRadtan;
     if (cameraModel == "omni" && none) return CameraModel::Unified;
+    if (cameraModel == "omni" && distortion == "radtan") return CameraModel::Mei;
     if (cameraModel == "eucm" && none) return CameraModel::ExtendedUnified;
     if (cameraModel == "ds" && none) return CameraModel::DoubleSphere;
     const bool knownCamera =
@@ -126,9 +127,34 @@ class KalibrReader {
     params.insert(params.end(), coeffs.begin(), coeffs.end());
   }
 
-  void readPose(const YAML::Node& node, Rig& rig) const {
-    const std::string key = "cam1.T_cn_cnm1";
-    if (!node) fail("missing key \"" + key + "\"");
+  // cam1.T_cn_cnm1 when present; else, as in camchain-imucam files (Kalibr: T_cam_imu maps
+  // IMU to camera coordinates; OpenVINS: T_imu_cam the other way), the cameras' IMU poses:
+  // T_c1_c0 = T_c1_imu T_c0_imu^-1. Returns the name the pose goes by in messages.
+  std::string stereoPose(const YAML::Node& root, Rig& rig) const {
+    const YAML::Node cam0 = YamlDoc::find(root, "cam0"), cam1 = YamlDoc::find(root, "cam1");
+    Eigen::Matrix4d T;
+    std::string poseName = "T_cn_cnm1";
+    if (YamlDoc::find(cam1, "T_cn_cnm1").IsDefined()) {
+      T = readPose(YamlDoc::find(cam1, "T_cn_cnm1"), "cam1.T_cn_cnm1");
+    } else if (YamlDoc::find(cam0, "T_cam_imu").IsDefined() && YamlDoc::find(cam1, "T_cam_imu").IsDefined()) {
+      T = readPose(YamlDoc::find(cam1, "T_cam_imu"), "cam1.T_cam_imu") *
+          calib::rigidInverse(readPose(YamlDoc::find(cam0, "T_cam_imu"), "cam0.T_cam_imu"));
+      poseName = "T_cam_imu";
+    } else if (YamlDoc::find(cam0, "T_imu_cam").IsDefined() && YamlDoc::find(cam1, "T_imu_cam").IsDefined()) {
+      T = calib::rigidInverse(readPose(YamlDoc::find(cam1, "T_imu_cam"), "cam1.T_imu_cam")) *
+          readPose(YamlDoc::find(cam0, "T_imu_cam"), "cam0.T_imu_cam");
+      poseName = "T_imu_cam";
+    } else {
+      fail(
+          "missing key \"cam1.T_cn_cnm1\" (the stereo pose; nor do both cameras have T_cam_imu or T_imu_cam to "
+          "derive it from)");
+    }
+    rig.R = T.topLeftCorner<3, 3>();
+    rig.t = T.topRightCorner<3, 1>();
+    return poseName;
+  }
+
+  Eigen::Matrix4d readPose(const YAML::Node& node, const std::string& key) const {
     if (!node.IsSequence() || node.size() != 4) fail(key + " must be a 4x4 matrix (4 rows of 4 numbers)");
     Eigen::Matrix4d T;
     for (int r = 0; r < 4; ++r) {
@@ -139,8 +165,7 @@ class KalibrReader {
     if ((T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9)
       fail(key + " last row must be [0, 0, 0, 1], got [" + formatNumber(T(3, 0)) + ", " + formatNumber(T(3, 1)) + ", " +
            formatNumber(T(3, 2)) + ", " + formatNumber(T(3, 3)) + "]");
-    rig.R = T.topLeftCorner<3, 3>();
-    rig.t = T.topRightCorner<3, 1>();
+    return T;
   }
 };
 
@@ -170,6 +195,8 @@ KalibrCamera toKalibr(const Camera& cam) {
       return {"pinhole", "radtan", pinhole, extra};
     case CameraModel::Unified:
       return {"omni", "none", modelFirst(), {}};
+    case CameraModel::Mei:
+      return {"omni", "radtan", {p[4], p[0], p[1], p[2], p[3]}, {p[5], p[6], p[7], p[8]}};
     case CameraModel::ExtendedUnified:
       return {"eucm", "none", modelFirst(), {}};
     case CameraModel::DoubleSphere:

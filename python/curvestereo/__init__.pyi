@@ -55,7 +55,9 @@ class Rig:
     def cam1(self) -> dict[str, Any]: ...
     def scaled(self, factor: float) -> Rig:
         """The rig for images rescaled by `factor` (0.5: a half-resolution stream)."""
-    def save(self, path: _Path, format: Literal["kalibr", "basalt", "opencv"] = "kalibr") -> None:
+    def save(
+        self, path: _Path, format: Literal["kalibr", "basalt", "opencv", "orbslam3", "vins"] = "kalibr"
+    ) -> None:
         """Write the rig in a calibration format (OpenCV: XML when path ends in .xml)."""
 
 class DeviceArray:
@@ -275,8 +277,9 @@ class Sequence:
     def source(self) -> str: ...
 
 def load_calibration(path: _Path) -> Rig:
-    """Read a stereo calibration: Kalibr camchain.yaml, Basalt calibration.json or OpenCV
-    FileStorage YAML / XML (the format told from the content)."""
+    """Read a stereo calibration: Kalibr / OpenVINS camchain, Basalt calibration.json, OpenCV
+    FileStorage YAML / XML, ORB-SLAM3 settings or VINS-Fusion config (the format told from
+    the keys; docs/calibration.md)."""
 
 def read_image(path: _Path) -> _F32:
     """PNG (8/16-bit; colour -> Rec. 601 luma) scaled to [0, 1], EXR, or .flo (H x W x 2)."""

@@ -29,13 +29,14 @@ namespace {
 // Paths arrive as std::filesystem::path: str and os.PathLike (pathlib) both convert.
 using Path = std::filesystem::path;
 
-// Every format the library reads (Kalibr, Basalt, OpenCV), chosen from the content.
+// Every format the library reads (docs/calibration.md), chosen from the keys.
 Rig loadRig(const Path& path) { return loadCalibration(path.string()); }
 
 void saveRig(const Rig& rig, const Path& path, const std::string& format) {
-  for (CalibFormat f : {CalibFormat::Kalibr, CalibFormat::Basalt, CalibFormat::OpenCv})
+  for (CalibFormat f : {CalibFormat::Kalibr, CalibFormat::Basalt, CalibFormat::OpenCv, CalibFormat::OrbSlam3,
+                        CalibFormat::VinsFusion})
     if (format == calibFormatName(f)) return saveCalibration(rig, path.string(), f);
-  throw Error("unknown calibration format '" + format + "' (known: kalibr, basalt, opencv)");
+  throw Error("unknown calibration format '" + format + "' (known: kalibr, basalt, opencv, orbslam3, vins)");
 }
 
 pb::dict cameraDict(const Camera& c) {

@@ -1,4 +1,4 @@
-// Shared by the calibration fuzz targets (calib, basalt, opencv): any input must give a
+// Shared by the calibration fuzz targets (calib, basalt, opencv, orbslam3, vins): any input must give a
 // Rig that passes validate() or a one-line cs::Error; anything else (another exception,
 // a crash, a sanitizer report) is a finding. A rig that loads must also be usable by the
 // camera models, and every format must write it and read it back the same.
@@ -58,15 +58,34 @@ inline std::string scratchFile(const std::string& name) {
   return (dir / ("curvestereo_fuzz_" + std::to_string(getpid()) + "_" + name)).string();
 }
 
+// Whether `format` can hold both cameras' models (else its writer must refuse). OpenCV and
+// ORB-SLAM3 hold Kannala-Brandt 4 and pinhole radtan (one model, one size for both cameras);
+// Basalt all but MEI; VINS-Fusion (camodocal) KB4, radtan, MEI and unified; Kalibr all.
+inline bool mayRefuse(const Rig& rig, CalibFormat format) {
+  auto any = [&](CameraModel m) { return rig.cam0.model == m || rig.cam1.model == m; };
+  switch (format) {
+    case CalibFormat::Kalibr:
+      return false;
+    case CalibFormat::Basalt:
+      return any(CameraModel::Mei);
+    case CalibFormat::VinsFusion:
+      return any(CameraModel::ExtendedUnified) || any(CameraModel::DoubleSphere);
+    case CalibFormat::OpenCv:
+    case CalibFormat::OrbSlam3:
+      return true;
+  }
+  return true;
+}
+
 // Writes rig as `format` to `name` and reads it back; traps when a valid rig cannot be
-// written (except a model OpenCV cannot hold) or reads back different.
+// written (except a model the format cannot hold) or reads back different.
 inline void roundTrip(const Rig& rig, CalibFormat format, const std::string& name, double tolerance) {
   const std::string path = scratchFile(name);
   try {
     saveCalibration(rig, path, format);
   } catch (const cs::Error& e) {
     requireOneLine(e);
-    if (format != CalibFormat::OpenCv) __builtin_trap();  // Kalibr and Basalt hold every model
+    if (!mayRefuse(rig, format)) __builtin_trap();
     return;
   }
   Rig back;
@@ -104,6 +123,9 @@ int fuzzCalibration(const uint8_t* data, size_t size, Parse parse) {
   roundTrip(rig, CalibFormat::Kalibr, "camchain.yaml", 0.0);
   roundTrip(rig, CalibFormat::Basalt, "calibration.json", basaltTolerance(rig));
   roundTrip(rig, CalibFormat::OpenCv, own == CalibFormat::OpenCv ? "stereo.yml" : "stereo.xml", 0.0);
+  // A transform's inverse on the way out and back in: rounding of the pose.
+  roundTrip(rig, CalibFormat::OrbSlam3, "orbslam3.yaml", basaltTolerance(rig));
+  roundTrip(rig, CalibFormat::VinsFusion, "vins.yaml", basaltTolerance(rig));
   return 0;
 }
 

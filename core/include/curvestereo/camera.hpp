@@ -17,6 +17,7 @@ class Camera {
   // params layout: [fx, fy, cx, cy, model-specific...]
   //   KannalaBrandt4: k1 k2 k3 k4     Unified: xi     ExtendedUnified: alpha beta
   //   DoubleSphere:   xi alpha        PinholeRadtan: k1 k2 p1 p2
+  //   Mei:            xi k1 k2 p1 p2 (unified projection, then radtan)
   CameraModel model = CameraModel::KannalaBrandt4;
   int width = 0;
   int height = 0;
@@ -29,6 +30,8 @@ class Camera {
   static Camera doubleSphere(int w, int h, double fx, double fy, double cx, double cy, double xi, double alpha);
   static Camera pinholeRadtan(int w, int h, double fx, double fy, double cx, double cy, double k1 = 0, double k2 = 0,
                               double p1 = 0, double p2 = 0);
+  static Camera mei(int w, int h, double fx, double fy, double cx, double cy, double xi, double k1 = 0, double k2 = 0,
+                    double p1 = 0, double p2 = 0);
 
   // px inside the image rectangle [-0.5, w-0.5] x [-0.5, h-0.5], shrunk by margin.
   bool inImage(const Vec2<double>& px, double margin = 0.0) const;

@@ -12,7 +12,8 @@
 //
 // Written from the published model equations: Kannala & Brandt (2006), Geyer &
 // Daniilidis / Mei & Rives (unified), Khomenko et al. (2016, extended unified),
-// Usenko, Demmel & Cremers (2018, double sphere, incl. the valid regions used here).
+// Usenko, Demmel & Cremers (2018, double sphere, incl. the valid regions used here), Mei &
+// Rives (2007, unified projection followed by radial-tangential distortion).
 #pragma once
 #include <Eigen/Core>
 #include <algorithm>
@@ -29,7 +30,7 @@ using Vec3 = Eigen::Matrix<S, 3, 1>;
 template <class S>
 using Mat23 = Eigen::Matrix<S, 2, 3>;
 
-enum class CameraModel { KannalaBrandt4, Unified, ExtendedUnified, DoubleSphere, PinholeRadtan };
+enum class CameraModel { KannalaBrandt4, Unified, ExtendedUnified, DoubleSphere, PinholeRadtan, Mei };
 
 }  // namespace cs
 
@@ -327,22 +328,16 @@ struct DoubleSphere {
 };
 
 // ---------------------------------------------------------------------------------------
-// Pinhole with radial-tangential distortion (Kalibr radtan, OpenCV k1 k2 p1 p2) on the
-// normalised point n = (x, y) / z. Valid for z > 1e-6 |p| (in front of the camera).
+// Radial-tangential distortion of a normalised point (Kalibr radtan, OpenCV k1 k2 p1 p2),
+// shared by the pinhole and the MEI model.
 template <class S>
-struct PinholeRadtan {
-  static constexpr int kNumParams = 8;
+struct Radtan {
   static constexpr int kNewtonIterations = 20;
-  Intrinsics<S> in;
   S k1, k2, p1, p2;
-  int width, height;  // maxAngle() is the angle of the widest image corner
 
-  PinholeRadtan(const double* p, int w, int h)
-      : in(p), k1(S(p[4])), k2(S(p[5])), p1(S(p[6])), p2(S(p[7])), width(w), height(h) {}
+  explicit Radtan(const double* k) : k1(S(k[0])), k2(S(k[1])), p1(S(k[2])), p2(S(k[3])) {}
 
-  bool validPoint(const Vec3<S>& p) const { return p.z() > S(1e-6) * p.norm(); }
-
-  // Distorted normalised point and, optionally, its 2x2 Jacobian d(distorted)/d(n).
+  // Distorted point and, optionally, its 2x2 Jacobian d(distorted)/d(n).
   Vec2<S> distort(const Vec2<S>& n, Eigen::Matrix<S, 2, 2>* Jd = nullptr) const {
     const S x = n.x(), y = n.y();
     const S r2 = x * x + y * y;
@@ -359,27 +354,12 @@ struct PinholeRadtan {
     return out;
   }
 
-  bool project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J = nullptr) const {
-    if (!validPoint(p)) return false;
-    const S iz = S(1) / p.z();
-    const Vec2<S> n(p.x() * iz, p.y() * iz);
-    Eigen::Matrix<S, 2, 2> Jd;
-    const Vec2<S> md = distort(n, J ? &Jd : nullptr);
-    px = in.toPixel(md.x(), md.y());
-    if (!J) return true;
-    Mat23<S> Jn;  // d(n)/d(p)
-    Jn << iz, 0, -n.x() * iz, 0, iz, -n.y() * iz;
-    *J = Eigen::DiagonalMatrix<S, 2>(in.fx, in.fy) * Jd * Jn;
-    return true;
-  }
-
-  // Newton on distort(n) = m from n = m; converges in a few steps for real lenses.
-  // The pixel is rejected when the iteration ends without reaching the target
-  // (outside the region where the distortion is invertible).
-  bool unproject(const Vec2<S>& px, Vec3<S>& ray) const {
-    const Vec2<S> m = in.toNormalized(px);
-    if (!m.allFinite()) return false;
-    Vec2<S> n = m;
+  // Newton on distort(n) = m from n = start (the pinhole model starts at m, which converges
+  // in a few steps for real lenses). False when the iteration ends without reaching the
+  // target (outside the region where the distortion is invertible).
+  bool undistort(const Vec2<S>& m, const Vec2<S>& start, Vec2<S>& n) const {
+    if (!m.allFinite() || !start.allFinite()) return false;
+    n = start;
     Eigen::Matrix<S, 2, 2> Jd;
     for (int it = 0; it < kNewtonIterations; ++it) {
       const Vec2<S> residual = distort(n, &Jd) - m;
@@ -392,7 +372,83 @@ struct PinholeRadtan {
       if (step.norm() <= S(16) * kEps<S> * (S(1) + n.norm())) break;
     }
     const S accepted = std::sqrt(kEps<S>) * (S(1) + m.norm());
-    if (!((distort(n) - m).norm() <= accepted)) return false;
+    return (distort(n) - m).norm() <= accepted;
+  }
+
+  // The undistorted radius r in [0, rMax] whose radial image r (1 + k1 r^2 + k2 r^4) is rd:
+  // Newton kept inside the bracket the monotone radial part gives, bisecting a step that
+  // leaves it (as KannalaBrandt4::solveTheta). A start for undistort() far from the axis,
+  // where Newton from m would need many steps.
+  S solveRadius(S rd, S rMax) const {
+    S lo = 0, hi = rMax;
+    S r = rd < hi ? rd : S(0.5) * hi;
+    for (int it = 0; it < 60; ++it) {
+      const S r2 = r * r;
+      const S f = r * (S(1) + r2 * (k1 + r2 * k2)) - rd;
+      if (f == 0) break;
+      (f < 0 ? lo : hi) = r;
+      S next = r - f / (S(1) + r2 * (S(3) * k1 + S(5) * k2 * r2));
+      if (!(next > lo && next < hi)) next = S(0.5) * (lo + hi);
+      const S step = std::abs(next - r);
+      r = next;
+      if (step <= S(4) * kEps<S> * r) break;
+    }
+    return r;
+  }
+
+  // The first undistorted radius where the radial part r (1 + k1 r^2 + k2 r^4) stops
+  // increasing: the smallest positive root s = r^2 of 1 + 3 k1 s + 5 k2 s^2, else
+  // kUnbounded (finite, so that float shaders compare with it safely).
+  static constexpr double kUnbounded = 1e6;
+  static double turningRadius(double c1, double c2) {
+    double s = -1;
+    if (c2 == 0) {
+      if (c1 < 0) s = -1.0 / (3 * c1);
+    } else {
+      const double disc = 9 * c1 * c1 - 20 * c2;
+      if (disc >= 0) {
+        const double q = std::sqrt(disc);
+        const double a = (-3 * c1 - q) / (10 * c2), b = (-3 * c1 + q) / (10 * c2);
+        const double lo = std::min(a, b), hi = std::max(a, b);
+        s = lo > 0 ? lo : hi;
+      }
+    }
+    return s > 0 ? std::min(std::sqrt(s), kUnbounded) : kUnbounded;
+  }
+};
+
+// ---------------------------------------------------------------------------------------
+// Pinhole with radial-tangential distortion (Kalibr radtan, OpenCV k1 k2 p1 p2) on the
+// normalised point n = (x, y) / z. Valid for z > 1e-6 |p| (in front of the camera).
+template <class S>
+struct PinholeRadtan {
+  static constexpr int kNumParams = 8;
+  Intrinsics<S> in;
+  Radtan<S> rt;
+  int width, height;  // maxAngle() is the angle of the widest image corner
+
+  PinholeRadtan(const double* p, int w, int h) : in(p), rt(p + 4), width(w), height(h) {}
+
+  bool validPoint(const Vec3<S>& p) const { return p.z() > S(1e-6) * p.norm(); }
+
+  bool project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J = nullptr) const {
+    if (!validPoint(p)) return false;
+    const S iz = S(1) / p.z();
+    const Vec2<S> n(p.x() * iz, p.y() * iz);
+    Eigen::Matrix<S, 2, 2> Jd;
+    const Vec2<S> md = rt.distort(n, J ? &Jd : nullptr);
+    px = in.toPixel(md.x(), md.y());
+    if (!J) return true;
+    Mat23<S> Jn;  // d(n)/d(p)
+    Jn << iz, 0, -n.x() * iz, 0, iz, -n.y() * iz;
+    *J = Eigen::DiagonalMatrix<S, 2>(in.fx, in.fy) * Jd * Jn;
+    return true;
+  }
+
+  bool unproject(const Vec2<S>& px, Vec3<S>& ray) const {
+    const Vec2<S> m = in.toNormalized(px);
+    Vec2<S> n;
+    if (!rt.undistort(m, m, n)) return false;
     ray = Vec3<S>(n.x(), n.y(), S(1)).normalized();
     return true;
   }
@@ -412,6 +468,92 @@ struct PinholeRadtan {
   }
 };
 
+// ---------------------------------------------------------------------------------------
+// MEI model (Mei & Rives 2007; Kalibr omni + radtan, camodocal MEI): the unified
+// projection m = (x, y) / (z + xi |p|), then radial-tangential distortion of m, then
+// px = f * distort(m) + c. Params [fx fy cx cy xi k1 k2 p1 p2].
+// Valid region: the unified one (z > -w |p|) where also |m| < rMax, the radius where the
+// radial distortion stops increasing, so that every valid pixel has one ray.
+template <class S>
+struct Mei {
+  static constexpr int kNumParams = 9;
+  Intrinsics<S> in;
+  S xi;
+  Radtan<S> rt;
+  S w;     // the unified valid region z > -w |p|
+  S rMax;  // undistorted radius bound (Radtan::turningRadius)
+
+  explicit Mei(const double* p)
+      : in(p),
+        xi(S(p[4])),
+        rt(p + 5),
+        w(S(p[4] <= 1 ? p[4] : 1.0 / p[4])),
+        rMax(S(Radtan<double>::turningRadius(p[5], p[6]))) {}
+
+  // The unified ray of undistorted radius r makes the angle atan2(f r, f - xi) with the
+  // axis, f = (xi + sqrt(1 + (1 - xi^2) r^2)) / (1 + r^2); it grows with r up to the
+  // unified boundary.
+  double maxAngle() const {
+    const double x = double(xi), r = double(rMax);
+    const double boundary = unifiedBoundaryAngle(double(w), 1.0);
+    const double disc = 1 + (1 - x * x) * r * r;
+    if (!(disc >= 0)) return boundary;
+    const double f = (x + std::sqrt(disc)) / (1 + r * r);
+    return std::min(boundary, std::atan2(f * r, f - x));
+  }
+
+  bool validPoint(const Vec3<S>& p) const {
+    const S d = p.norm();
+    if (!(p.z() > -w * d)) return false;
+    const S den = p.z() + xi * d;
+    if (!(den > 0)) return false;
+    const S inv = S(1) / den;
+    return Vec2<S>(p.x() * inv, p.y() * inv).norm() < rMax;
+  }
+
+  bool project(const Vec3<S>& p, Vec2<S>& px, Mat23<S>* J = nullptr) const {
+    const S d = p.norm();
+    if (!(p.z() > -w * d)) return false;
+    const S den = p.z() + xi * d;
+    if (!(den > 0)) return false;
+    const S inv = S(1) / den;
+    const Vec2<S> m(p.x() * inv, p.y() * inv);
+    if (!(m.norm() < rMax)) return false;
+    Eigen::Matrix<S, 2, 2> Jd;
+    const Vec2<S> md = rt.distort(m, J ? &Jd : nullptr);
+    px = in.toPixel(md.x(), md.y());
+    if (!J) return true;
+    // d(m)/d(p) = (e_xy - m grad(den)^T) / den, grad(den) = xi p / d + e_z.
+    const Vec3<S> gradDen = (xi / d) * p + Vec3<S>(0, 0, 1);
+    Mat23<S> Jm;
+    Jm.row(0) = (-m.x() * inv) * gradDen.transpose();
+    Jm.row(1) = (-m.y() * inv) * gradDen.transpose();
+    Jm(0, 0) += inv;
+    Jm(1, 1) += inv;
+    *J = Eigen::DiagonalMatrix<S, 2>(in.fx, in.fy) * Jd * Jm;
+    return true;
+  }
+
+  // Undistort by Newton (Radtan::undistort) from the radial-only solution, then the unified
+  // closed form ray = factor * (mx, my, 1) - (0, 0, xi), factor = (xi + sqrt(1 + (1 - xi^2)
+  // r^2)) / (1 + r^2).
+  bool unproject(const Vec2<S>& px, Vec3<S>& ray) const {
+    const Vec2<S> md = in.toNormalized(px);
+    if (!md.allFinite()) return false;
+    const S rd = md.norm();
+    const Vec2<S> start = rd > 0 ? Vec2<S>(md * (rt.solveRadius(rd, rMax) / rd)) : md;
+    Vec2<S> m;
+    if (!rt.undistort(md, start, m)) return false;
+    if (!(m.norm() < rMax)) return false;
+    const S r2 = m.squaredNorm();
+    const S disc = S(1) + (S(1) - xi * xi) * r2;
+    if (!(disc >= 0)) return false;
+    const S factor = (xi + std::sqrt(disc)) / (S(1) + r2);
+    ray = Vec3<S>(factor * m.x(), factor * m.y(), factor - xi).normalized();
+    return ray.z() > -w * ray.norm();
+  }
+};
+
 // Number of entries of Camera::params for a model.
 inline int paramCount(CameraModel model) {
   switch (model) {
@@ -425,13 +567,16 @@ inline int paramCount(CameraModel model) {
       return DoubleSphere<double>::kNumParams;
     case CameraModel::PinholeRadtan:
       return PinholeRadtan<double>::kNumParams;
+    case CameraModel::Mei:
+      return Mei<double>::kNumParams;
   }
   return -1;
 }
 
 // One of the models, in CameraModel's order (AnyModel<S>::index() == int(model)).
 template <class S>
-using AnyModel = std::variant<KannalaBrandt4<S>, Unified<S>, ExtendedUnified<S>, DoubleSphere<S>, PinholeRadtan<S>>;
+using AnyModel =
+    std::variant<KannalaBrandt4<S>, Unified<S>, ExtendedUnified<S>, DoubleSphere<S>, PinholeRadtan<S>, Mei<S>>;
 
 // The model `model` in scalar S from params [fx fy cx cy extra...], which must have
 // paramCount(model) entries (BuiltCamera checks it); width and height are the image's.
@@ -446,6 +591,8 @@ AnyModel<S> makeModel(CameraModel model, const double* params, int width, int he
       return DoubleSphere<S>(params);
     case CameraModel::PinholeRadtan:
       return PinholeRadtan<S>(params, width, height);
+    case CameraModel::Mei:
+      return Mei<S>(params);
     case CameraModel::KannalaBrandt4:
       break;
   }

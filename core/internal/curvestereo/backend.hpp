@@ -24,12 +24,16 @@ struct Buffer {
   size_t count() const { return size_t(width) * size_t(height) * size_t(channels); }
 };
 
+// The most parameters a camera model has, with room to spare: the fixed size of the
+// parameter blocks of every backend (CUDA CamDev, the GLSL Cam).
+constexpr int kMaxCameraParams = 12;
+
 // A camera in the flat form kernels take: model as in CameraModel, params as in
 // Camera::params ([fx fy cx cy extra...], unused entries zero).
 struct CameraParams {
   int model = 0;
   int width = 0, height = 0;
-  double params[8] = {};
+  double params[kMaxCameraParams] = {};
 };
 
 // The relative pose and options of the per-rig fields (DESIGN.md "Per rig").
@@ -135,8 +139,8 @@ struct EstimateUpsampleParams {
 
 // Carrying a frame's estimate into the next frame's view (Backend::carryEstimate): a
 // sequence's warm start and the temporal filter's prior.
-constexpr int kMotionFloats = 12;  // the motion buffer: R row-major, then t
-constexpr int kFrameSlots = 8;     // recorded frames a backend keeps (beginFrame): 4 kinds x 2 directions (lrCheck)
+constexpr int kMotionFloats = 12;   // the motion buffer: R row-major, then t
+constexpr int kFrameSlots = 8;      // recorded frames a backend keeps (beginFrame): 4 kinds x 2 directions (lrCheck)
 constexpr double kCarryTie = 1e-3;  // px: positions this close to halfway go to the lower pixel
 struct CarryParams {
   CameraParams srcCam;  // the grid of src (the previous view's camera 0)
@@ -148,13 +152,13 @@ struct CarryParams {
 // The per-pixel temporal filter of a sequence (Backend::temporalFilter): a one-state Kalman
 // filter on inverse depth, its variances in px^2 of disparity.
 struct TemporalParams {
-  CameraParams cam;      // level 0's camera 0
-  double tPrime[3];      // t' (triangulate's)
-  float strength;        // the prior weighs at most this (gain >= 1 - strength), [0, 1)
-  float gate;            // an innovation beyond gate standard deviations resets the pixel, > 0
-  float sigmaPx;         // the measurement's standard deviation (px) at confidence 1, > 0
-  float processPx;       // how far (px) a static surface's disparity may drift between frames, >= 0
-  float minConfidence;   // floor of the confidence in the measurement's deviation, (0, 1]
+  CameraParams cam;     // level 0's camera 0
+  double tPrime[3];     // t' (triangulate's)
+  float strength;       // the prior weighs at most this (gain >= 1 - strength), [0, 1)
+  float gate;           // an innovation beyond gate standard deviations resets the pixel, > 0
+  float sigmaPx;        // the measurement's standard deviation (px) at confidence 1, > 0
+  float processPx;      // how far (px) a static surface's disparity may drift between frames, >= 0
+  float minConfidence;  // floor of the confidence in the measurement's deviation, (0, 1]
 };
 
 // The final result's confidence and the left-right round trip (Backend::resultConfidence,
@@ -162,14 +166,14 @@ struct TemporalParams {
 // give a depth at all.
 constexpr int kMaxConfidenceRadius = 4;
 struct ConfidenceParams {
-  int radius;           // window (2 radius + 1)^2 of the structure and the residual, 0..kMaxConfidenceRadius
-  float noise;          // the image's noise deviation (grey levels of [0, 1]; Params::noiseLevel)
-  float sigmaPx;        // disparity deviation (px) at which the structure term is 1/2, > 0
-  float residualScale;  // mean |n1(y + w) - n0(y)| at which the photometric term is 1/e, > 0
-  float roundTripPx;    // round-trip error (px) at which that term is 1/e, > 0
-  float roundTripMaxPx; // a round trip beyond this (or none) leaves the pixel invalid; <= 0: never
-  float infinityPx;     // |w| below this: the point is at infinity (radial +inf, points NaN), >= 0
-  float invalidBelow;   // a confidence below this leaves the pixel invalid, [0, 1]
+  int radius;            // window (2 radius + 1)^2 of the structure and the residual, 0..kMaxConfidenceRadius
+  float noise;           // the image's noise deviation (grey levels of [0, 1]; Params::noiseLevel)
+  float sigmaPx;         // disparity deviation (px) at which the structure term is 1/2, > 0
+  float residualScale;   // mean |n1(y + w) - n0(y)| at which the photometric term is 1/e, > 0
+  float roundTripPx;     // round-trip error (px) at which that term is 1/e, > 0
+  float roundTripMaxPx;  // a round trip beyond this (or none) leaves the pixel invalid; <= 0: never
+  float infinityPx;      // |w| below this: the point is at infinity (radial +inf, points NaN), >= 0
+  float invalidBelow;    // a confidence below this leaves the pixel invalid, [0, 1]
 };
 
 // The normalised Gaussian taps of standard deviation sigma > 0 over radius ceil(3 sigma)
@@ -503,8 +507,8 @@ class Backend {
                            const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) = 0;
   virtual void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
                                   const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
-                                  const Buffer& trajectory, const Buffer& sweepConfidence,
-                                  const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) = 0;
+                                  const Buffer& trajectory, const Buffer& sweepConfidence, const Buffer& roundTripError,
+                                  const Buffer& mask, const ConfidenceParams& p) = 0;
   virtual void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                              const CameraParams& cam0, const double tPrime[3]) = 0;
   virtual void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
@@ -530,6 +534,7 @@ Camera toCamera(const CameraParams& params);
 // extended unified a = w; double sphere a = w2; pinhole-radtan none. In double: a kernel
 // in float rounds them once, as the model built in float does. Throws cs::Error for an
 // unknown model.
+// KB4: a = thetaMax, b = radiusMax; unified family: a = w; MEI: a = w, b = rMax.
 struct CameraConstants {
   double a = 0, b = 0;
 };
