@@ -238,6 +238,9 @@ int cmdEval(const Args& args) {
       std::printf(
           "%-22s %-18s tau>1 %6.2f %%  tau>3 %6.2f %%  EPE %7.3f px  abs-rel %5.2f %%  density %5.1f %%  %6.0f ms\n",
           r.pair.c_str(), r.method.c_str(), r.m.tau1, r.m.tau3, r.m.epe, 100 * r.m.absRel, r.m.density, r.ms);
+      if (r.m.skyPixels > 0)
+        std::printf("%-22s %-18s sky: %.1f %% of %lld sky pixels at +inf or invalid\n", r.pair.c_str(),
+                    r.method.c_str(), r.m.sky, r.m.skyPixels);
     }
     std::fflush(stdout);
     writeCsv(csv, rows);  // rewritten after each pair so a long run leaves partial results

@@ -12,7 +12,7 @@ namespace cs::cli::eval {
 
 namespace {
 
-const char* kCsvHeader = "pair,method,tau1,tau3,epe,tau1_noc,tau3_noc,epe_noc,absrel,density,ms";
+const char* kCsvHeader = "pair,method,tau1,tau3,epe,tau1_noc,tau3_noc,epe_noc,absrel,density,ms,sky";
 
 }  // namespace
 
@@ -22,9 +22,9 @@ void writeCsv(const std::string& path, const std::vector<Row>& rows) {
   f << kCsvHeader << "\n";
   char buf[512];
   for (const Row& r : rows) {
-    std::snprintf(buf, sizeof buf, "%s,%s,%.3f,%.3f,%.4f,%.3f,%.3f,%.4f,%.5f,%.3f,%.1f\n", r.pair.c_str(),
+    std::snprintf(buf, sizeof buf, "%s,%s,%.3f,%.3f,%.4f,%.3f,%.3f,%.4f,%.5f,%.3f,%.1f,%.2f\n", r.pair.c_str(),
                   r.method.c_str(), r.m.tau1, r.m.tau3, r.m.epe, r.m.tau1Noc, r.m.tau3Noc, r.m.epeNoc, r.m.absRel,
-                  r.m.density, r.ms);
+                  r.m.density, r.ms, r.m.sky);
     f << buf;
   }
 }

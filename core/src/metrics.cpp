@@ -80,12 +80,16 @@ Metrics evaluate(const Rig& rig, const FlowImage& est, const ImageF& estDepth, c
       sum += std::isfinite(e) ? e : 0.0;
     }
   } all, nonOcc;
-  long long estimated = 0, depthCount = 0;
+  long long estimated = 0, depthCount = 0, skyPixels = 0, skyFar = 0;
   double absRelSum = 0;
 
   for (int y = 0; y < est.height; ++y)
     for (int x = 0; x < est.width; ++x) {
       Vec2f g = gt(x, y), e = est(x, y);
+      if (std::isinf(depthLeft(x, y)) && depthLeft(x, y) > 0) {
+        ++skyPixels;
+        skyFar += !(std::fabs(estDepth(x, y)) < INFINITY);  // NaN or +inf
+      }
       if (std::isnan(g.x)) continue;
       bool has = std::isfinite(e.x) && std::isfinite(e.y);
       // A missing estimate is an error of infinite size: it counts in tau, not in the mean.
@@ -118,6 +122,8 @@ Metrics evaluate(const Rig& rig, const FlowImage& est, const ImageF& estDepth, c
   m.epeNoc = nocEstimated ? nonOcc.sum / double(nocEstimated) : 0.0;
   m.absRel = depthCount ? absRelSum / double(depthCount) : 0.0;
   m.density = pct(estimated, all.n);
+  m.skyPixels = skyPixels;
+  m.sky = skyPixels ? pct(skyFar, skyPixels) : kNaN;
   return m;
 }
 

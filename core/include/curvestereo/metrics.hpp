@@ -13,7 +13,10 @@ struct Metrics {
   double tau1Noc = 0, tau3Noc = 0, epeNoc = 0;  // non-occluded pixels
   double absRel = 0;                            // mean |d_est - d_gt| / d_gt where estimated
   double density = 0;                           // percent of evaluated pixels with an estimate
-  long long evaluated = 0, nonOccluded = 0;
+  // Sky: of the pixels whose true depth is +inf (inside the image circle), the percent whose
+  // estimate is +inf or missing (NaN when there are none).
+  double sky = 0;
+  long long evaluated = 0, nonOccluded = 0, skyPixels = 0;
 };
 
 // Ground-truth warp from camera 0's radial depth. Pixels without a finite positive depth
