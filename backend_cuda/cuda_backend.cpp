@@ -79,9 +79,19 @@ std::string probeCuda(const std::string& device) {
   if (index < 0) return "CUDA device selector '" + device + "' is not an index";
   int count = 0;
   const cudaError_t e = cudaGetDeviceCount(&count);
-  if (e != cudaSuccess || count == 0)
-    return std::string("no CUDA device present") +
-           (e != cudaSuccess ? std::string(" (") + cudaGetErrorString(e) + ")" : "");
+  if (e == cudaErrorInsufficientDriver) {
+    // The runtime says this both when the driver is too old and when there is none at
+    // all (a machine without an NVIDIA GPU): only the first is worth a driver upgrade.
+    int driver = 0, runtime = 0;
+    cudaDriverGetVersion(&driver);
+    cudaRuntimeGetVersion(&runtime);
+    if (driver == 0) return "no CUDA device (no NVIDIA driver is loaded)";
+    auto version = [](int v) { return std::to_string(v / 1000) + "." + std::to_string(v % 1000 / 10); };
+    return "the NVIDIA driver supports CUDA " + version(driver) + ", older than this build's CUDA runtime " +
+           version(runtime);
+  }
+  if (e == cudaErrorNoDevice || (e == cudaSuccess && count == 0)) return "no CUDA device";
+  if (e != cudaSuccess) return std::string("no CUDA device (") + cudaGetErrorString(e) + ")";
   if (index >= count)
     return "CUDA device " + std::to_string(index) + " requested but " + std::to_string(count) + " present";
   cudaDeviceProp prop{};
@@ -366,8 +376,8 @@ void CudaBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Bu
 }
 
 void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
-                                   const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
-                                   const TemporalParams& p) {
+                                   const Buffer& radial, const Buffer& points, const Buffer& confidence,
+                                   const Buffer& mask, const TemporalParams& p) {
   flush();
   cudak::TemporalDev d{};
   d.cam = camDev(p.cam);
@@ -380,8 +390,7 @@ void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const B
   const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
   check(cudak::launchTemporalFilter(stream_, img(slot(state).dev, state), img(slot(u).dev, u), img(slot(w).dev, w),
                                     img(slot(prior).dev, prior), img(slot(radial).dev, radial),
-                                    img(slot(points).dev, points), weight,
-                                    img(slot(mask).dev, mask), d),
+                                    img(slot(points).dev, points), weight, img(slot(mask).dev, mask), d),
         "temporalFilter");
 }
 

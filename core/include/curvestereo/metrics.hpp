@@ -1,4 +1,4 @@
-// The evaluation of DESIGN.md "Evaluation definitions".
+// The evaluation of docs/accuracy.md "How accuracy is measured".
 #pragma once
 #include "curvestereo/image.hpp"
 #include "curvestereo/pose.hpp"
@@ -28,7 +28,7 @@ ImageU8 nonOccludedMask(const Rig& rig, const ImageF& depthLeft, const ImageF* d
 Metrics evaluate(const Rig& rig, const FlowImage& est, const ImageF& estDepth, const ImageF& depthLeft,
                  const ImageF* depthRight, ImageF* errorMap = nullptr);
 
-// --- sequences (DESIGN.md "Evaluation definitions", *sequences*) ---
+// --- sequences (docs/accuracy.md "How accuracy is measured", sequences) ---
 
 // tau>k in percent over the pixels where mask != 0 that errorMap (evaluate()'s) evaluates
 // (not NaN); a pixel without an estimate (+inf) counts as an error. NaN when there is no

@@ -32,7 +32,7 @@ struct Params {
   // (README "Presets").
   bool edgeUpsample = false;
 
-  // Data term (DESIGN.md "Photometry"): what the residual rho compares. Normalised: each
+  // Data term (docs/design.md "Per frame", the normalised data term): what the residual rho compares. Normalised: each
   // pyramid level's images after local contrast normalisation (zero mean, unit spread in a
   // Gaussian window of normSigma level px), so a gain and offset per camera and smooth
   // shading (vignetting) cancel and lambda is in units of the local contrast, not of grey

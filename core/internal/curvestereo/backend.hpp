@@ -32,7 +32,7 @@ struct CameraParams {
   double params[8] = {};
 };
 
-// The relative pose and options of the per-rig fields (DESIGN.md "Per rig").
+// The relative pose and options of the per-rig fields (docs/design.md "Per rig").
 struct FieldsParams {
   CameraParams cam0, cam1;  // cam0 defines the grid
   double R[9];              // row-major, X1 = R X0 + t
@@ -89,9 +89,9 @@ struct ConsistencyParams {
   float acceptConfidence;  // the sweep replaces the coarse-to-fine estimate from this confidence on
 };
 
-// Local contrast normalisation of an image (DESIGN.md "Photometry"): the data term compares
-// these instead of grey levels, so a per-camera gain and offset and smooth shading
-// (vignetting) cancel. Gaussian taps are computed once, in core (normaliseParams).
+// Local contrast normalisation of an image (docs/design.md "Per frame", the normalised data term): the data term
+// compares these instead of grey levels, so a per-camera gain and offset and smooth shading (vignetting) cancel.
+// Gaussian taps are computed once, in core (normaliseParams).
 constexpr int kMaxNormaliseRadius = 24;
 struct NormaliseParams {
   int radius;                               // taps[0 .. 2 radius]
@@ -135,8 +135,8 @@ struct EstimateUpsampleParams {
 
 // Carrying a frame's estimate into the next frame's view (Backend::carryEstimate): a
 // sequence's warm start and the temporal filter's prior.
-constexpr int kMotionFloats = 12;  // the motion buffer: R row-major, then t
-constexpr int kFrameSlots = 4;     // recorded frames a backend keeps (beginFrame)
+constexpr int kMotionFloats = 12;   // the motion buffer: R row-major, then t
+constexpr int kFrameSlots = 4;      // recorded frames a backend keeps (beginFrame)
 constexpr double kCarryTie = 1e-3;  // px: positions this close to halfway go to the lower pixel
 struct CarryParams {
   CameraParams srcCam;  // the grid of src (the previous view's camera 0)
@@ -148,13 +148,13 @@ struct CarryParams {
 // The per-pixel temporal filter of a sequence (Backend::temporalFilter): a one-state Kalman
 // filter on inverse depth, its variances in px^2 of disparity.
 struct TemporalParams {
-  CameraParams cam;      // level 0's camera 0
-  double tPrime[3];      // t' (triangulate's)
-  float strength;        // the prior weighs at most this (gain >= 1 - strength), [0, 1)
-  float gate;            // an innovation beyond gate standard deviations resets the pixel, > 0
-  float sigmaPx;         // the measurement's standard deviation (px) at confidence 1, > 0
-  float processPx;       // how far (px) a static surface's disparity may drift between frames, >= 0
-  float minConfidence;   // floor of the confidence in the measurement's deviation, (0, 1]
+  CameraParams cam;     // level 0's camera 0
+  double tPrime[3];     // t' (triangulate's)
+  float strength;       // the prior weighs at most this (gain >= 1 - strength), [0, 1)
+  float gate;           // an innovation beyond gate standard deviations resets the pixel, > 0
+  float sigmaPx;        // the measurement's standard deviation (px) at confidence 1, > 0
+  float processPx;      // how far (px) a static surface's disparity may drift between frames, >= 0
+  float minConfidence;  // floor of the confidence in the measurement's deviation, (0, 1]
 };
 
 // The normalised Gaussian taps of standard deviation sigma > 0 over radius ceil(3 sigma)
@@ -162,7 +162,7 @@ struct TemporalParams {
 // structure tensor's smoothing on every backend and normaliseParams().
 std::vector<float> gaussianTaps(float sigma);
 
-// One warp's buffers at a level (DESIGN.md "Per frame" 2.3), as warpTail() takes them: the
+// One warp's buffers at a level (docs/design.md "Per frame" 3.4), as warpTail() takes them: the
 // estimate, the tangent, the data term and what warpDerivatives() reads to make it.
 struct WarpBuffers {
   Buffer u, w, tangent, mask;  // 1, 2, 2, 1 ch
