@@ -32,7 +32,7 @@ TEST_CASE("every command's --help is its own, on stdout, exit 0") {
   const fs::path dir = cs::test::tempDir("cli_usage_help");
   for (const std::string command : {"run", "demo", "synth", "eval", "bench", "fields", "calib"}) {
     CAPTURE(command);
-    for (const std::string form : {command + " --help", command + " -h", "help " + command}) {
+    for (const std::string& form : {command + " --help", command + " -h", "help " + command}) {
       const CliOutcome o = runCli(dir, form);
       CHECK(o.exitCode == 0);
       CHECK(o.err.empty());

@@ -20,7 +20,7 @@ namespace cs::cli {
 
 namespace {
 
-// The extra depth forms for other tools (README "Outputs for ROS, Open3D and mapping").
+// The extra depth forms for other tools (docs/guide.md "Outputs for ROS, Open3D and mapping").
 struct ViewOptions {
   bool pinhole = false;
   PinholeView view;

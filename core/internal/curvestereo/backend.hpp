@@ -61,7 +61,7 @@ struct DataTermBuffers {
   Buffer iz;  // 1 ch: I1(x + w) - I0(x)
 };
 
-// The plane-sweep initialiser (README "Presets": the plane-sweep initialiser). Both images are in the
+// The plane-sweep initialiser (docs/design.md "The plane-sweep initialiser"). Both images are in the
 // reference camera's model and orientation (image 1 after the calibration warp), so the
 // other view is the reference camera translated: a point X seen from the reference is
 // X + t in the other. Hypothesis k (0..planes-1) is the sphere of inverse radial depth
