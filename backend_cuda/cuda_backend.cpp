@@ -81,9 +81,19 @@ std::string probeCuda(const std::string& device) {
   if (index < 0) return "CUDA device selector '" + device + "' is not an index";
   int count = 0;
   const cudaError_t e = cudaGetDeviceCount(&count);
-  if (e != cudaSuccess || count == 0)
-    return std::string("no CUDA device present") +
-           (e != cudaSuccess ? std::string(" (") + cudaGetErrorString(e) + ")" : "");
+  if (e == cudaErrorInsufficientDriver) {
+    // The runtime says this both when the driver is too old and when there is none at
+    // all (a machine without an NVIDIA GPU): only the first is worth a driver upgrade.
+    int driver = 0, runtime = 0;
+    cudaDriverGetVersion(&driver);
+    cudaRuntimeGetVersion(&runtime);
+    if (driver == 0) return "no CUDA device (no NVIDIA driver is loaded)";
+    auto version = [](int v) { return std::to_string(v / 1000) + "." + std::to_string(v % 1000 / 10); };
+    return "the NVIDIA driver supports CUDA " + version(driver) + ", older than this build's CUDA runtime " +
+           version(runtime);
+  }
+  if (e == cudaErrorNoDevice || (e == cudaSuccess && count == 0)) return "no CUDA device";
+  if (e != cudaSuccess) return std::string("no CUDA device (") + cudaGetErrorString(e) + ")";
   if (index >= count)
     return "CUDA device " + std::to_string(index) + " requested but " + std::to_string(count) + " present";
   cudaDeviceProp prop{};

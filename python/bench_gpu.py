@@ -14,7 +14,7 @@ it, else an 800x800 pair rendered by `curvestereo synth`):
   Py   host API                 NumPy pair -> compute() through cs::Stereo (outputs=[])
 
 and prints the medians and the binding's overhead per frame (Python minus the matching
-C++ number) as a Markdown table for the README. Every Python frame returns synchronised
+C++ number) as a Markdown table for docs/accuracy.md. Every Python frame returns synchronised
 (compute() waits for its results), as the C++ benches do.
 """
 import argparse

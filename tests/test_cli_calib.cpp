@@ -24,10 +24,11 @@ namespace {
 
 fs::path dataDir() { return fs::path(cs::test::goldenDir()).parent_path() / "data"; }
 
-// A refusal: exit 1 and one stderr line "curvestereo: error: ..." containing needle.
-void checkRefused(const CliOutcome& o, const std::string& needle) {
+// A refusal: exit 1 (2 for a malformed command line) and one stderr line
+// "curvestereo: error: ..." containing needle.
+void checkRefused(const CliOutcome& o, const std::string& needle, int exitCode = 1) {
   CAPTURE(o.err);
-  CHECK(o.exitCode == 1);
+  CHECK(o.exitCode == exitCode);
   CHECK(o.err.rfind("curvestereo: error: ", 0) == 0);
   CHECK(std::count(o.err.begin(), o.err.end(), '\n') == 1);
   CHECK(o.err.find(needle) != std::string::npos);
@@ -75,8 +76,8 @@ TEST_CASE("calib convert refuses with one line") {
   const std::string t265 = (dataDir() / "t265_camchain.yaml").string();
   checkRefused(runCli(dir, "calib convert '" + t265 + "' out.yaml"), "pass --format");
   checkRefused(runCli(dir, "calib convert '" + t265 + "' out.txt --format yaml"), "--format must be");
-  checkRefused(runCli(dir, "calib convert '" + t265 + "'"), "IN and OUT");
-  checkRefused(runCli(dir, "calib frobnicate x"), "sub-command");
+  checkRefused(runCli(dir, "calib convert '" + t265 + "'"), "IN and OUT", 2);
+  checkRefused(runCli(dir, "calib frobnicate x"), "sub-command", 2);
   checkRefused(runCli(dir, "calib convert missing.json out.json"), "missing.json: cannot open file");
   cs::Rig ds = cs::loadCalibration(t265);
   ds.cam0 = ds.cam1 = cs::Camera::doubleSphere(848, 800, 158.3, 158.2, 423.5, 399.5, -0.18, 0.59);

@@ -40,7 +40,8 @@ std::vector<float> fetch(const float* dev, size_t count, cudaStream_t stream) {
 // True (and the reason reported) when no CUDA device can run these tests.
 bool noDevice(const char* what) {
   const std::string why = cuda::probe();
-  if (!why.empty()) MESSAGE("SKIPPED " << what << ": " << why);
+  const std::string skipped = std::string("SKIPPED ") + what + ": " + why;  // not the pointer `what`
+  if (!why.empty()) MESSAGE(skipped);
   if (why.empty()) test::gpuUsed();
   return !why.empty();
 }

@@ -1,6 +1,6 @@
 // Thread safety (issue 6): Stereo objects share nothing a caller can see, so two of them
 // used from two threads at once give bit-identical results to using them one after the
-// other. (One Stereo object is not thread-safe; see README "Thread safety".)
+// other. (One Stereo object is not thread-safe; see docs/guide.md "Thread safety".)
 #include <cstring>
 #include <thread>
 #include <vector>

@@ -2,9 +2,14 @@
 #pragma once
 #include <doctest/doctest.h>
 
+#include <unistd.h>
+
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
+#include <mutex>
 #include <string>
+#include <vector>
 
 #include "synth/scene.hpp"
 
@@ -18,11 +23,40 @@ inline std::string sharedData(const std::string& rel) {
 
 inline std::string goldenDir() { return CS_GOLDEN_DIR; }
 
-// A fresh temporary directory for one test.
+// The folders tempDir() made, removed (with everything in them) when the test program
+// ends, pass or fail, so that a test run leaves nothing in the temp folder. Set
+// CURVESTEREO_KEEP_TEST_DIRS=1 to keep them for a look at a failing test's files.
+class TempDirs {
+ public:
+  static TempDirs& instance() {
+    static TempDirs dirs;
+    return dirs;
+  }
+  void add(const std::filesystem::path& p) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    paths_.push_back(p);
+  }
+  ~TempDirs() {
+    if (std::getenv("CURVESTEREO_KEEP_TEST_DIRS")) return;
+    std::error_code ec;
+    for (const auto& p : paths_) std::filesystem::remove_all(p, ec);
+  }
+
+ private:
+  TempDirs() = default;
+  std::mutex mutex_;
+  std::vector<std::filesystem::path> paths_;
+};
+
+// A fresh temporary directory for one test: curvestereo_test_<pid>_<name> (the process id
+// keeps concurrent runs of the suites apart), removed at the program's end (TempDirs).
 inline std::filesystem::path tempDir(const std::string& name) {
-  auto p = std::filesystem::temp_directory_path() / ("curvestereo_test_" + name);
+  TempDirs& dirs = TempDirs::instance();  // constructed first: destroyed after every test's use
+  const auto p =
+      std::filesystem::temp_directory_path() / ("curvestereo_test_" + std::to_string(long(::getpid())) + "_" + name);
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
+  dirs.add(p);
   return p;
 }
 

@@ -18,7 +18,7 @@ Args::Args(int argc, char** argv, const std::set<std::string>& flags) {
       } else if (flags.count(name)) {
         flags_.insert(name);
       } else {
-        if (i + 1 >= argc) throw Error("option --" + name + " needs a value");
+        if (i + 1 >= argc) throw UsageError("option --" + name + " needs a value");
         options_[name] = argv[++i];
       }
     } else {
@@ -34,7 +34,7 @@ std::string Args::get(const std::string& name, const std::string& fallback) cons
 
 std::string Args::require(const std::string& name) const {
   auto it = options_.find(name);
-  if (it == options_.end()) throw Error("missing required option --" + name);
+  if (it == options_.end()) throw UsageError("missing required option --" + name);
   return it->second;
 }
 
@@ -44,7 +44,7 @@ double Args::getDouble(const std::string& name, double fallback) const {
   char* end = nullptr;
   double v = std::strtod(it->second.c_str(), &end);
   if (end == it->second.c_str() || *end != '\0' || !std::isfinite(v))
-    throw Error("option --" + name + " expects a number, got '" + it->second + "'");
+    throw UsageError("option --" + name + " expects a number, got '" + it->second + "'");
   return v;
 }
 
@@ -55,15 +55,15 @@ int Args::getInt(const std::string& name, int fallback) const {
   errno = 0;
   long v = std::strtol(it->second.c_str(), &end, 10);
   if (end == it->second.c_str() || *end != '\0' || errno == ERANGE || v < INT_MIN || v > INT_MAX)
-    throw Error("option --" + name + " expects an integer, got '" + it->second + "'");
+    throw UsageError("option --" + name + " expects an integer, got '" + it->second + "'");
   return int(v);
 }
 
 void Args::allowOnly(const std::set<std::string>& known) const {
   for (auto& [k, v] : options_)
-    if (!known.count(k)) throw Error("unknown option --" + k);
+    if (!known.count(k)) throw UsageError("unknown option --" + k);
   for (auto& k : flags_)
-    if (!known.count(k)) throw Error("unknown option --" + k);
+    if (!known.count(k)) throw UsageError("unknown option --" + k);
 }
 
 }  // namespace cs::cli

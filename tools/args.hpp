@@ -10,6 +10,14 @@
 
 namespace cs::cli {
 
+// A malformed command line: an unknown command or option, a missing option or argument, an
+// option without its value or with a value that is not a number. main() prints it as one
+// line, like every cs::Error, and exits 2 (1 for the other errors).
+class UsageError : public Error {
+ public:
+  using Error::Error;
+};
+
 class Args {
  public:
   // flags: option names that take no value (e.g. {"help", "quiet"}).
@@ -17,11 +25,11 @@ class Args {
 
   bool has(const std::string& name) const { return options_.count(name) > 0 || flags_.count(name) > 0; }
   std::string get(const std::string& name, const std::string& fallback) const;
-  std::string require(const std::string& name) const;  // throws cs::Error "missing --name"
+  std::string require(const std::string& name) const;  // throws UsageError "missing --name"
   double getDouble(const std::string& name, double fallback) const;
   int getInt(const std::string& name, int fallback) const;
   const std::vector<std::string>& positional() const { return positional_; }
-  // Throws cs::Error naming the first option not in `known` (catches typos).
+  // Throws UsageError naming the first option not in `known` (catches typos).
   void allowOnly(const std::set<std::string>& known) const;
 
  private:

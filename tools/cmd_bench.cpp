@@ -35,7 +35,7 @@ struct Inputs {
 
 Inputs benchInputs(const Args& args) {
   if (args.has("calib")) {
-    if (args.positional().size() != 2) throw Error("bench --calib needs LEFT RIGHT images");
+    if (args.positional().size() != 2) throw UsageError("bench --calib needs LEFT RIGHT images");
     StereoInputs in = loadStereoInputs(args.require("calib"), args.positional()[0], args.positional()[1],
                                        args.has("scale-intrinsics"));
     return {std::move(in.rig), std::move(in.left), std::move(in.right), args.require("calib")};
@@ -146,7 +146,7 @@ int cmdBench(const Args& args) {
   if (args.has("runs") && args.getInt("runs", 0) < 1) throw Error("option --runs must be >= 1");
   const Params params = paramsFromArgs(args);
   if (args.has("sequence")) {
-    if (!args.positional().empty()) throw Error("bench --sequence takes no images: the sequence names them");
+    if (!args.positional().empty()) throw UsageError("bench --sequence takes no images: the sequence names them");
     SequenceOptions options;
     options.poses = args.get("poses", "");
     const Sequence sequence = Sequence::open(args.get("sequence", ""), options);

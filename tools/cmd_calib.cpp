@@ -60,7 +60,8 @@ std::string describe(const Camera& cam) {
 }
 
 int convert(const Args& args) {
-  if (args.positional().size() != 3) throw Error("calib convert needs IN and OUT: calib convert IN OUT [--format F]");
+  if (args.positional().size() != 3)
+    throw UsageError("calib convert needs IN and OUT: calib convert IN OUT [--format F]");
   const std::string in = args.positional()[1], out = args.positional()[2];
   const CalibFormat to = args.has("format") ? parseFormat(args.get("format", "")) : formatFromName(out);
   CalibFormat from{};
@@ -73,7 +74,7 @@ int convert(const Args& args) {
 }
 
 int show(const Args& args) {
-  if (args.positional().size() != 2) throw Error("calib show needs one file: calib show IN");
+  if (args.positional().size() != 2) throw UsageError("calib show needs one file: calib show IN");
   CalibFormat format{};
   const Rig rig = loadCalibration(args.positional()[1], &format, calibHintsFromArgs(args));
   const Eigen::AngleAxisd turn(rig.R);
@@ -93,10 +94,10 @@ int cmdCalib(const Args& args) {
   const std::string sub = args.positional().empty() ? "" : args.positional()[0];
   if (sub == "convert") return convert(args);
   if (sub == "show") {
-    if (args.has("format")) throw Error("calib show takes no --format (the file's content says it)");
+    if (args.has("format")) throw UsageError("calib show takes no --format (the file's content says it)");
     return show(args);
   }
-  throw Error(
+  throw UsageError(
       "calib needs a sub-command: calib convert IN OUT [--format kalibr|basalt|opencv|orbslam3|vins] "
       "[--image-size WxH] | calib show IN [--image-size WxH]");
 }

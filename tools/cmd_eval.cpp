@@ -1,6 +1,6 @@
 // curvestereo eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR] [--methods LIST]
 //   accuracy of our method and of the paper's baselines on pairs with ground truth
-//   (DESIGN.md "Evaluation definitions"), or, with --sweep, the paper's two parameter
+//   (docs/accuracy.md "How accuracy is measured"), or, with --sweep, the paper's two parameter
 //   studies (eval_study.cpp). Tables: eval_report.cpp; pictures: eval_sheet.cpp.
 // curvestereo eval --sequence DIR [DIR...] [--cold | --compare] [--frames N] [--calib FILE]
 //                  [--csv FILE] [--md FILE]
@@ -211,8 +211,8 @@ int cmdEval(const Args& args) {
   args.allowOnly(known);
   if (args.has("sequence")) return runSequences(args, paramsFromArgs(args), backendFromArgs(args));
   for (const char* sequenceOnly : {"cold", "compare", "frames", "calib"})
-    if (args.has(sequenceOnly)) throw Error(std::string("--") + sequenceOnly + " is for --sequence folders");
-  if (args.positional().empty()) throw Error("eval needs at least one pair folder (or --sequence DIR)");
+    if (args.has(sequenceOnly)) throw UsageError(std::string("--") + sequenceOnly + " is for --sequence folders");
+  if (args.positional().empty()) throw UsageError("eval needs at least one pair folder (or --sequence DIR)");
   const Params params = paramsFromArgs(args);
   const std::string backend = backendFromArgs(args);
   if (args.has("sweep")) return runStudy(args, params, backend);

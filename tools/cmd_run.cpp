@@ -20,7 +20,7 @@ namespace cs::cli {
 
 namespace {
 
-// The extra depth forms for other tools (README "Outputs for ROS, Open3D and mapping").
+// The extra depth forms for other tools (docs/guide.md "Outputs for ROS, Open3D and mapping").
 struct ViewOptions {
   bool pinhole = false;
   PinholeView view;
@@ -191,14 +191,14 @@ int cmdRun(const Args& args) {
   known.insert({"sequence", "poses", "cold", "pair-tolerance-ms"});
   args.allowOnly(known);
   if (args.has("sequence")) {
-    if (!args.positional().empty()) throw Error("run --sequence takes no images: the sequence names them");
+    if (!args.positional().empty()) throw UsageError("run --sequence takes no images: the sequence names them");
     const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
     requireOutputFolder(outDir);
     return runSequence(args, outDir);
   }
   for (const char* option : {"poses", "cold", "pair-tolerance-ms"})
-    if (args.has(option)) throw Error(std::string("--") + option + " is for run --sequence");
-  if (args.positional().size() != 2) throw Error("run needs exactly two images: LEFT RIGHT");
+    if (args.has(option)) throw UsageError(std::string("--") + option + " is for run --sequence");
+  if (args.positional().size() != 2) throw UsageError("run needs exactly two images: LEFT RIGHT");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   requireOutputFolder(outDir);
   const Params params = paramsFromArgs(args);

@@ -52,7 +52,7 @@ synth::SynthConfig configFromArgs(const Args& args, RenderDefaults defaults = {}
   if (size < 16 || size > 16384) throw Error("option --size expects 16..16384 pixels");
   if (args.has("calib")) {
     for (const char* option : kRigOptions)
-      if (args.has(option)) throw Error(std::string("option --") + option + " cannot be combined with --calib");
+      if (args.has(option)) throw UsageError(std::string("option --") + option + " cannot be combined with --calib");
     Rig rig = loadCalibration(args.get("calib", ""), nullptr, calibHintsFromArgs(args));
     cfg.rig = args.has("size") ? scaledRig(rig, size) : rig;
     // Ground truth where the solver solves by default (Params::maxFovDeg), so that eval does
@@ -165,7 +165,7 @@ void printSequenceSummary(const synth::SequenceRenderer& renderer, const synth::
 
 int synthSequence(const Args& args) {
   const std::string outDir = args.get("o", args.get("output", ""));
-  if (outDir.empty()) throw Error("synth: missing output folder (-o OUTDIR)");
+  if (outDir.empty()) throw UsageError("synth: missing output folder (-o OUTDIR)");
   const synth::SequenceConfig seq = sequenceFromArgs(args);
   const synth::CameraPhotometry camera = cameraModelFromArgs(args, seq.render.seed);  // checked before the render
   const synth::SequenceRenderer renderer(seq);  // plans the walk and the mover; throws before rendering
@@ -204,13 +204,13 @@ int cmdSynth(const Args& given) {
   for (const char* option : kSequenceOptions) known.insert(option);
   given.allowOnly(known);
   if (!given.get("sequence", "").empty())
-    throw Error("option --sequence takes no value, got '" + given.get("sequence", "") + "'");
+    throw UsageError("option --sequence takes no value, got '" + given.get("sequence", "") + "'");
   if (given.has("sequence")) return synthSequence(given);
   const Args& args = given;
   for (const char* option : kSequenceOptions)
-    if (args.has(option)) throw Error(std::string("option --") + option + " needs --sequence");
+    if (args.has(option)) throw UsageError(std::string("option --") + option + " needs --sequence");
   const std::string outDir = args.get("o", args.get("output", ""));
-  if (outDir.empty()) throw Error("synth: missing output folder (-o OUTDIR)");
+  if (outDir.empty()) throw UsageError("synth: missing output folder (-o OUTDIR)");
   const synth::SynthConfig cfg = configFromArgs(args);
   const synth::CameraPhotometry camera = cameraModelFromArgs(args, cfg.seed);  // checked before the long render
 

@@ -3,7 +3,7 @@
 # evaluated on the clean and the T265-like development pairs and timed on one real pair,
 # one summary line each (mean tau>1 / tau>3 % of the binocular pairs, per-pair tau>1,
 # mean non-occluded tau>1 of the forward pairs, frame and sweep medians). This is how the
-# presets' schedules were chosen (README "Presets").
+# presets' schedules were chosen (docs/accuracy.md "How realtime was chosen").
 #
 #   tools/eval_grid.sh CLI BACKEND DATA CONFIGS [REALPAIR]
 #

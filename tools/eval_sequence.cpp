@@ -2,7 +2,7 @@
 // ../shared/data/sequences/README.md describes it) run frame after frame through
 // Stereo::next, warm (the default) or --cold (every frame solved on its own), or both with
 // --compare; per frame tau>1 / tau>3 (all and non-occluded), tau>1 on the moving object's
-// pixels and the flicker against the previous frame (DESIGN.md "Evaluation definitions",
+// pixels and the flicker against the previous frame (docs/accuracy.md "How accuracy is measured",
 // *sequences*; metrics.hpp maskedTau / flicker), then a summary per run.
 #include <unistd.h>
 
@@ -407,7 +407,7 @@ bool flag(const Args& args, const std::string& name) {
   const std::string v = args.get(name, "on");
   if (v == "on" || v == "1" || v == "true" || v == "yes") return true;
   if (v == "off" || v == "0" || v == "false" || v == "no") return false;
-  throw Error("--" + name + " takes no value, got '" + v + "' (write --" + name + "=on)");
+  throw UsageError("--" + name + " takes no value, got '" + v + "' (write --" + name + "=on)");
 }
 
 }  // namespace
@@ -415,9 +415,9 @@ bool flag(const Args& args, const std::string& name) {
 int runSequences(const Args& args, const Params& params, const std::string& backend) {
   for (const char* pairOnly : {"methods", "maps", "sweep", "fov", "sgbm-fov", "ps-scale", "ps-window", "ps-step",
                                "min-depth", "warps-list", "step", "plot", "replot"})
-    if (args.has(pairOnly)) throw Error(std::string("--") + pairOnly + " is for pair folders, not --sequence");
+    if (args.has(pairOnly)) throw UsageError(std::string("--") + pairOnly + " is for pair folders, not --sequence");
   const bool cold = flag(args, "cold"), compare = flag(args, "compare");
-  if (cold && compare) throw Error("--cold and --compare exclude each other (--compare runs cold, then warm)");
+  if (cold && compare) throw UsageError("--cold and --compare exclude each other (--compare runs cold, then warm)");
   const int maxFrames = args.getInt("frames", 0);
   if (maxFrames < 0) throw Error("--frames expects a count >= 1 (0: every frame)");
   std::vector<std::string> dirs{args.get("sequence", "")};

@@ -35,7 +35,7 @@ PixelFields fieldsAtPixel(const BuiltCamera& cam0, const BuiltCamera& cam1, cons
   // field of view holds for camera 1 too: when the cameras are not parallel, a crescent
   // of camera 0's rim lies outside camera 1's, and image 1 there is whatever surrounds its
   // image circle (black on the renders). Solved, those pixels matched that surround and
-  // pulled their neighbours with them (README "Presets": the rim).
+  // pulled their neighbours with them (docs/accuracy.md "How realtime was chosen": the rim).
   const Vec3<double> ray1 = R * ray;
   if (opt.maxFovDeg > 0 && offAxisAngle(ray1) > halfFov) return f;
   Vec2<double> px1;

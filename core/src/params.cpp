@@ -49,7 +49,7 @@ Params preset(const std::string& name) {
     // (bilinear upsampling: 5.8 / 3.5, 7.3 / 4.0, 10.0 / 17.2; quality: 4.7 / 3.4,
     // 6.5 / 3.8, 6.6 / 16.3 in 12.6 ms). Bands of 16 and 24 lost 0.1 to 0.2 points for
     // 0.1 ms; 30 warps at all coarse levels cost 0.9 ms more, 20 / 12 / 4 lost 0.1 to 0.2
-    // points, dropping levels 3 and 4 lost 4 to 6 (README "Presets").
+    // points, dropping levels 3 and 4 lost 4 to 6 (docs/accuracy.md "How realtime was chosen").
     p.init = Params::Init::PlaneSweep;
     p.edgeUpsample = true;
     p.initLevel = 1;

@@ -1,4 +1,4 @@
-// The per-frame algorithm (DESIGN.md "Per frame"), written once against Backend.
+// The per-frame algorithm (docs/design.md "Per frame"), written once against Backend.
 #pragma once
 #include <functional>
 #include <memory>

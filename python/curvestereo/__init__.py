@@ -16,7 +16,7 @@ A recording, frame after frame (warm start and temporal filter; poses optional):
         print(f.timestamp_ns, r.warm, r.consistent_share)
 
 Every failure raises curvestereo.Error (a RuntimeError) with the library's one-line
-message. See help(curvestereo.Stereo) and the README's "Python" section.
+message. See help(curvestereo.Stereo) and docs/guide.md, "Python".
 """
 
 # NumPy first: the extension needs it at run time, and this names what is missing.
@@ -26,7 +26,7 @@ try:
     from . import _curvestereo  # noqa: F401
 except ImportError as e:  # e.g. python/curvestereo itself on sys.path, not the build's copy
     raise ImportError(
-        f"curvestereo's compiled module is missing beside {__file__}: build it (README 'Python': "
+        f"curvestereo's compiled module is missing beside {__file__}: build it (docs/guide.md 'Python': "
         "cmake ... then PYTHONPATH=build/python) or pip install the project"
     ) from e
 

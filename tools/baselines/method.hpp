@@ -1,6 +1,6 @@
 // What every evaluated method returns, and the shared conversion from a per-pixel radial
-// depth of camera 0 to the 2-D warp that `evaluate` scores (DESIGN.md "Evaluation
-// definitions": baselines are converted from depth to w the same way as ground truth).
+// depth of camera 0 to the 2-D warp that `evaluate` scores (docs/accuracy.md "How accuracy
+// is measured": baselines are converted from depth to w the same way as ground truth).
 #pragma once
 #include <chrono>
 #include <string>

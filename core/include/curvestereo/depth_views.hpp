@@ -1,7 +1,7 @@
 // Depth in the forms that ROS, Open3D and mapping stacks take, from camera 0's radial
 // depth (DepthMaps::radial): z-depth in a virtual pinhole camera with its CameraInfo
 // (ROS REP 118), an equirectangular range image, and an organised point cloud (PCD).
-// README "Outputs for ROS, Open3D and mapping" documents every file byte for byte.
+// docs/guide.md "Outputs for ROS, Open3D and mapping" documents every file byte for byte.
 #pragma once
 #include <string>
 

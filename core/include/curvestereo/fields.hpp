@@ -1,4 +1,4 @@
-// The per-rig fields of the method (DESIGN.md "Per rig"), computed in double precision.
+// The per-rig fields of the method (docs/design.md "Per rig"), computed in double precision.
 #pragma once
 #include <Eigen/Core>
 

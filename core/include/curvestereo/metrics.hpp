@@ -1,4 +1,4 @@
-// The evaluation of DESIGN.md "Evaluation definitions".
+// The evaluation of docs/accuracy.md "How accuracy is measured".
 #pragma once
 #include <vector>
 
@@ -47,7 +47,7 @@ struct Sparsification {
 };
 Sparsification sparsification(const ImageF& errorMap, const ImageF& confidence, double k);
 
-// --- sequences (DESIGN.md "Evaluation definitions", *sequences*) ---
+// --- sequences (docs/accuracy.md "How accuracy is measured", sequences) ---
 
 // tau>k in percent over the pixels where mask != 0 that errorMap (evaluate()'s) evaluates
 // (not NaN); a pixel without an estimate (+inf) counts as an error. NaN when there is no

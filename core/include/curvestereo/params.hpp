@@ -29,10 +29,10 @@ struct Params {
   // displacement its 5x5 window matches best (Backend::upsampleEstimate). On in the presets
   // with the plane sweep; off here (variational, paper): without the sweep the coarse
   // estimate is least reliable at edges, and the solver alone measured worse with it
-  // (README "Presets").
+  // (docs/accuracy.md "How realtime was chosen").
   bool edgeUpsample = false;
 
-  // Data term (DESIGN.md "Photometry"): what the residual rho compares. Normalised: each
+  // Data term (docs/design.md "Per frame", the normalised data term): what the residual rho compares. Normalised: each
   // pyramid level's images after local contrast normalisation (zero mean, unit spread in a
   // Gaussian window of normSigma level px), so a gain and offset per camera and smooth
   // shading (vignetting) cancel and lambda is in units of the local contrast, not of grey
@@ -65,7 +65,7 @@ struct Params {
   // estimate gamma; gamma = 0 gives constant steps and theta = 1.
   float gamma = 0.f;
 
-  // Initialisation (README "Presets": the plane-sweep initialiser). None: the coarsest level starts at zero
+  // Initialisation (docs/design.md "The plane-sweep initialiser"). None: the coarsest level starts at zero
   // disparity, so coarse-to-fine warping reaches about levels x warps x duMax px and
   // larger displacements are lost. PlaneSweep: a plane sweep (spheres uniform in inverse
   // depth, ZNCC aggregated along scanlines, both views) at pyramid level initLevel gives

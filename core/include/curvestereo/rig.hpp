@@ -33,7 +33,7 @@ Rig parseKalibr(const std::string& yaml, const std::string& name = "<camchain>")
 void saveKalibr(const Rig& rig, const std::string& path);
 
 // ------------------------------------------------------------------------------------------
-// Other calibration formats (README "Calibration formats" states each convention).
+// Other calibration formats (docs/calibration.md states each convention).
 
 enum class CalibFormat { Kalibr, Basalt, OpenCv, OrbSlam3, VinsFusion };
 // "kalibr", "basalt", "opencv", "orbslam3", "vins".

@@ -36,7 +36,7 @@ struct CameraParams {
   double params[kMaxCameraParams] = {};
 };
 
-// The relative pose and options of the per-rig fields (DESIGN.md "Per rig").
+// The relative pose and options of the per-rig fields (docs/design.md "Per rig").
 struct FieldsParams {
   CameraParams cam0, cam1;  // cam0 defines the grid
   double R[9];              // row-major, X1 = R X0 + t
@@ -65,7 +65,7 @@ struct DataTermBuffers {
   Buffer iz;  // 1 ch: I1(x + w) - I0(x)
 };
 
-// The plane-sweep initialiser (README "Presets": the plane-sweep initialiser). Both images are in the
+// The plane-sweep initialiser (docs/design.md "The plane-sweep initialiser"). Both images are in the
 // reference camera's model and orientation (image 1 after the calibration warp), so the
 // other view is the reference camera translated: a point X seen from the reference is
 // X + t in the other. Hypothesis k (0..planes-1) is the sphere of inverse radial depth
@@ -93,9 +93,9 @@ struct ConsistencyParams {
   float acceptConfidence;  // the sweep replaces the coarse-to-fine estimate from this confidence on
 };
 
-// Local contrast normalisation of an image (DESIGN.md "Photometry"): the data term compares
-// these instead of grey levels, so a per-camera gain and offset and smooth shading
-// (vignetting) cancel. Gaussian taps are computed once, in core (normaliseParams).
+// Local contrast normalisation of an image (docs/design.md "Per frame", the normalised data term): the data term
+// compares these instead of grey levels, so a per-camera gain and offset and smooth shading (vignetting) cancel.
+// Gaussian taps are computed once, in core (normaliseParams).
 constexpr int kMaxNormaliseRadius = 24;
 struct NormaliseParams {
   int radius;                               // taps[0 .. 2 radius]
@@ -181,7 +181,7 @@ struct ConfidenceParams {
 // structure tensor's smoothing on every backend and normaliseParams().
 std::vector<float> gaussianTaps(float sigma);
 
-// One warp's buffers at a level (DESIGN.md "Per frame" 2.3), as warpTail() takes them: the
+// One warp's buffers at a level (docs/design.md "Per frame" 3.4), as warpTail() takes them: the
 // estimate, the tangent, the data term and what warpDerivatives() reads to make it.
 struct WarpBuffers {
   Buffer u, w, tangent, mask;  // 1, 2, 2, 1 ch

@@ -1,0 +1,222 @@
+#include "help.hpp"
+
+#include "common.hpp"
+
+#ifndef CURVESTEREO_VERSION
+#define CURVESTEREO_VERSION "unknown"
+#endif
+
+namespace cs::cli {
+
+namespace {
+
+// What a command's help is made of: its own text, then the shared option blocks it takes.
+struct CommandText {
+  const char* name;
+  const char* summary;  // the overview's line
+  const char* text;     // usage lines and the command's own options
+  bool solver;          // takes the solver options
+  bool camera;          // takes the camera-model options
+};
+
+const CommandText kCommands[] = {
+    {"demo", "render a synthetic fisheye pair, solve it, report accuracy",
+     R"(usage: curvestereo demo [-o OUTDIR] [--size N] [--scene urban|indoor] [--seed N] [--min-confidence C]
+                        [camera-model options] [solver options]
+
+Renders a synthetic binocular fisheye pair (12 cm baseline) with exact ground truth, solves
+it and prints tau>1, tau>3, the end-point error, depth abs-rel and the time per frame.
+
+  -o, --output DIR     where the inputs, the ground truth and the outputs go (default demo_out)
+  --size N             image side in pixels (default 480)
+  --scene urban|indoor the procedural scene (default urban)
+  --seed N             the scene's random seed (default 7)
+)",
+     true, true},
+    {"run", "solve a calibrated pair (or a sequence) and write depth, points and flow",
+     R"(usage: curvestereo run --calib CALIB LEFT RIGHT -o OUTDIR [options] [solver options]
+       curvestereo run --sequence SRC -o OUTDIR [--calib CALIB] [--poses FILE] [--cold] [solver options]
+
+Writes depth.exr (radial metres), depth.png, disparity.exr, flow.flo, points.ply,
+points.pcd and confidence.exr/.png (docs/confidence.md) into OUTDIR.
+
+  --calib CALIB          Kalibr / OpenVINS camchain, Basalt calibration.json, OpenCV
+                         FileStorage (YAML or XML), ORB-SLAM3 settings or a VINS-Fusion config;
+                         the format is told by the content (docs/calibration.md)
+  --image-size WxH       the images' size, for a calibration file that holds none
+  -o, --output DIR       the output folder (created)
+  --scale-intrinsics     images at a uniform rescale of the calibrated resolution (e.g. half)
+                         get the cameras scaled to them
+  --min-confidence C     points.ply / points.pcd keep points of confidence >= C
+  --lr-check on          also solve the other direction and leave invalid the pixels whose
+                         round trip misses by more than --lr-check-px (default 1); prints the
+                         share that passes
+  --pinhole FOV[,WxH]    also depth_pinhole.exr, depth_pinhole.png (mm) and camera_info.yaml:
+                         z-depth in a virtual pinhole camera of FOV degrees
+  --equirect W           also range_equirect.exr, W x W/2 radial range around camera 0's axis
+  --sampling nearest|bilinear   how --pinhole and --equirect sample the depth (default nearest)
+sequences:
+  --sequence SRC         an ASL/EuRoC folder (mav0/cam0, mav0/cam1; its poses_cam0.csv and
+                         camchain.yaml are used) or "LEFT,RIGHT" folders or globs paired by
+                         sorted name; each frame's outputs go to OUTDIR/<t_ns>/
+  --poses FILE           camera 0's pose per frame, T_world_cam0: CSV t_ns,px,py,pz,qx,qy,qz,qw
+                         or TUM text
+  --pair-tolerance-ms T  left and right timestamps further apart are not paired (default 1)
+  --cold                 every frame solved alone (no warm start, no temporal filter)
+)",
+     true, false},
+    {"eval", "accuracy against ground truth: pairs, baselines, parameter studies, sequences",
+     R"(usage: curvestereo eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR] [--methods LIST] [--sparsification FILE]
+                         [solver options]
+       curvestereo eval PAIRDIR... --sweep warps=A..B|dumax=A..B --csv FILE [--warps-list 5,10,20] [--step X]
+       curvestereo eval --sequence DIR... [--cold | --compare] [--blind] [--frames N] [--csv FILE] [--md FILE]
+
+A PAIRDIR holds left.png, right.png, camchain.yaml and depth_left.exr (optional
+depth_right.exr for the non-occluded scores), as `curvestereo synth` writes it.
+The CSV's columns: pair,method,tau1,tau3,epe,tau1_noc,tau3_noc,epe_noc,absrel,density,ms,sky
+(sky: the percent of ground-truth sky pixels at +inf or invalid; NaN without sky).
+
+  --csv FILE             the results table (required for pairs)
+  --md FILE              the same as a Markdown table
+  --maps DIR             a picture sheet per pair: input, ground truth, each method's depth
+                         and its error map
+  --sparsification FILE  ours's pixels ranked by its confidence: tau>1 of the most confident
+                         100..50 % beside the oracle's (ranked by true error), the curves' area
+                         and the ratio at 80 %, as CSV FILE and a plot FILE's .png
+  --methods LIST         comma-separated, default ours: ours, rectified-tgv[-FOV] (the same
+                         solver on perspective-rectified images), planesweep, planesweep-valid
+                         (with a left-right check), opencv-sgbm[-FOV] (built with OpenCV), all
+  --fov LIST             rectified-tgv's fields of view in degrees (default 90,165)
+  --sgbm-fov LIST        opencv-sgbm's fields of view (default 120)
+  --ps-scale S  --ps-window N  --ps-step PX  --min-depth M
+                         the planesweep baseline: working scale (1), ZNCC window (7),
+                         image motion between hypotheses (1 px), nearest sphere (0.8 m)
+parameter studies (the paper's two):
+  --sweep warps=A..B     error and time against the warps per level N = A..B
+  --sweep dumax=A..B     error against du_max from A to B in steps of --step X (default 0.1),
+                         for each N of --warps-list (default 5,10,20)
+  --plot FILE            the study's line plot (default: the CSV's name with .png)
+  --replot on            redraw the plot from an existing --csv without solving
+sequences (synth --sequence's layout, with ground truth):
+  --sequence DIR         tau per frame, on the moving object, and flicker
+  --cold                 every frame solved alone
+  --compare              cold, then warm, and the ratios
+  --blind                the solver gets no poses (a camera without odometry)
+  --frames N             the first N frames only (default: all)
+  --calib CALIB          instead of the sequence's camchain.yaml
+)",
+     true, false},
+    {"bench", "time per frame and per stage",
+     R"(usage: curvestereo bench [--calib CALIB LEFT RIGHT | --size WxH] [--runs N] [--outputs depth|all] [solver options]
+       curvestereo bench --sequence SRC [--calib CALIB] [--poses FILE] [--runs N] [solver options]
+
+Times frames after one warm-up frame and prints the median, min and max per frame and per
+stage, with the device, the settings and the frame's buffer memory.
+
+  --calib CALIB LEFT RIGHT   a calibrated pair (default: a rendered 800x800 pair)
+  --size WxH             the rendered pair's size (default 800x800)
+  --scale-intrinsics     as for run
+  --runs N               timed frames (default 50 on a GPU, 3 on the CPU; for --sequence,
+                         passes over the sequence: 5 on a GPU, 1 on the CPU)
+  --outputs depth|all    depth: radial depth and the valid mask come back (default); all:
+                         also disparity, warp, points and confidence
+  --sequence SRC  --poses FILE   a sequence's frames through Stereo::next (see run --help)
+)",
+     true, false},
+    {"fields", "write the valid mask, the calibration field and the trajectory field",
+     R"(usage: curvestereo fields --calib CALIB -o OUTDIR [--max-fov DEG] [--epipole DEG]
+
+Writes mask.png, calibration.flo / .png (where image 1 is sampled for each pixel of image
+0) and trajectory.flo / .png (the epipolar curve's unit tangent) into OUTDIR.
+
+  --calib CALIB          any calibration format run reads
+  -o, --output DIR       the output folder
+  --max-fov DEG          the field of view used, degrees (default 180; 0: all the model holds)
+  --epipole DEG          rays this close to the baseline are invalid, degrees (default 3)
+)",
+     false, false},
+    {"calib", "convert calibration files between Kalibr, Basalt, OpenCV, ORB-SLAM3 and VINS-Fusion, or show one",
+     R"(usage: curvestereo calib convert IN OUT [--format kalibr|basalt|opencv|orbslam3|vins] [--image-size WxH]
+       curvestereo calib show IN [--image-size WxH]
+
+convert: rewrites IN in another format, chosen by --format or by OUT's name (.json: Basalt,
+*camchain*.yaml: Kalibr, .xml: OpenCV; any other name needs --format). A camera model the
+target format cannot hold is refused before anything is written.
+show: prints the format read, both cameras' models and parameters, the baseline and the pose.
+--image-size: the images' size for a file that holds none (OpenCV lists, ORB-SLAM3).
+See docs/calibration.md for every format and an example of each.
+)",
+     false, false},
+    {"synth", "render a synthetic pair or sequence with exact ground truth",
+     R"(usage: curvestereo synth -o OUTDIR [--scene urban|indoor] [--motion binocular|forward|sideways] [options]
+       curvestereo synth --sequence -o OUTDIR [--frames N] [--fps F] [--speed V] [--turn D] [--mover on|off] [options]
+
+A pair: left.png, right.png, camchain.yaml, depth_left.exr, depth_right.exr (radial metres,
++inf sky, 0 outside the image circle). A sequence: the ASL layout (mav0/cam0, mav0/cam1,
+mav0/depth0, poses_cam0.csv, camchain.yaml) of a walking rig, with a moving object's masks.
+
+  -o, --output DIR       the output folder
+  --scene urban|indoor   the procedural scene (default urban)
+  --seed N               the scene's random seed (default 1)
+  --size N               image side in pixels (default 800; a sequence 400)
+  --samples N            samples per pixel and axis, 1..16 (default 3; a sequence 2)
+  --nearest M            the nearest object's distance in metres (default 2)
+  --motion binocular|forward|sideways   where camera 1 is (default binocular)
+  --baseline M           camera 1's distance (default 0.12)
+  --rotation DEG         camera 1 turned about camera 0's y axis (default 0)
+  --fov DEG              the rendered field of view (default 180)
+  --calib CALIB          render through this rig's cameras instead (--size scales it; not
+                         with --motion, --baseline, --rotation)
+  --quiet                no progress display
+sequences:
+  --sequence             render a sequence instead of a pair
+  --frames N (12)  --fps F (30)  --speed M/S (1)  --turn DEG/S (20)  --mover on|off (on)
+)",
+     false, true},
+};
+
+const char* kCameraText = R"(camera-model options (off unless asked; depth untouched; writes photometry.json):
+  --camera none|t265     a profile (t265: dark, vignetted, noisy, 8 bits), then overrides:
+  --exposure MEDIAN      the left image's median grey (0: as rendered)
+  --vignette RIM         both cameras' rim/centre in (0, 1]; --vignette-left, --vignette-right
+  --vignette-mode radius|angle
+  --gain-left G  --gain-right G  --offset-left O  --offset-right O
+  --camera-gamma G       response I^(1/G)
+  --blur SIGMA_PX        Gaussian optics blur
+  --shot S  --read R     noise variance S*I + R^2 in 8-bit grey levels
+  --bits 8|16            the PNGs' bit depth
+  --noise-seed N         default: the scene's --seed
+)";
+
+const CommandText* find(const std::string& name) {
+  for (const CommandText& c : kCommands)
+    if (name == c.name) return &c;
+  return nullptr;
+}
+
+}  // namespace
+
+std::string overviewHelp() {
+  std::string s = "usage: curvestereo <command> [options]\n\ncommands:\n";
+  for (const CommandText& c : kCommands) {
+    std::string name = std::string("  ") + c.name;
+    name.resize(10, ' ');
+    s += name + c.summary + "\n";
+  }
+  s += "\n'curvestereo <command> --help' prints a command's options; 'curvestereo --version' the version.\n"
+       "Exit status: 0 done, 1 an error in the inputs or while solving, 2 a malformed command line.\n";
+  return s;
+}
+
+std::string commandHelp(const std::string& command) {
+  const CommandText* c = find(command);
+  if (!c) return {};
+  std::string s = c->text;
+  if (c->camera) s += std::string("\n") + kCameraText;
+  if (c->solver) s += "\n" + solverUsage();
+  return s;
+}
+
+std::string versionText() { return std::string("curvestereo ") + CURVESTEREO_VERSION; }
+
+}  // namespace cs::cli
