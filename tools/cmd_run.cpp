@@ -228,6 +228,9 @@ int cmdRun(const Args& args) {
   std::printf("stages: %s\n", formatStages(r.stages).c_str());
   std::printf("total %.1f ms, %lld valid pixels (%.1f %% of the image); outputs in %s\n", r.totalMs, valid,
               100.0 * double(valid) / double(r.valid.size()), outDir.c_str());
+  if (stereo.params().lrCheck)
+    std::printf("lr-check: %.1f %% of the pixels in the field of view passed the round trip (%g px)\n",
+                100.0 * r.lrPassShare, stereo.params().lrCheckPx);
   return 0;
 }
 

@@ -48,9 +48,6 @@ points.pcd and confidence.exr/.png (docs/confidence.md) into OUTDIR.
   --scale-intrinsics     images at a uniform rescale of the calibrated resolution (e.g. half)
                          get the cameras scaled to them
   --min-confidence C     points.ply / points.pcd keep points of confidence >= C
-  --lr-check on          also solve the other direction and leave invalid the pixels whose
-                         round trip misses by more than --lr-check-px (default 1); prints the
-                         share that passes
   --pinhole FOV[,WxH]    also depth_pinhole.exr, depth_pinhole.png (mm) and camera_info.yaml:
                          z-depth in a virtual pinhole camera of FOV degrees
   --equirect W           also range_equirect.exr, W x W/2 radial range around camera 0's axis

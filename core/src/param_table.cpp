@@ -182,7 +182,7 @@ std::vector<ParamInfo> buildTable() {
               });
   ParamInfo lrCheck =
       base("lr_check", Type::Bool, {},
-           "solve the other direction too and leave invalid the pixels whose round trip fails", Shown::Always);
+           "solve the other direction too; pixels whose round trip fails become invalid (run prints the share that passes)", Shown::Always);
   lrCheck.boolField = &Params::lrCheck;
   std::vector<ParamInfo> trust =
       grouped("confidence and validity (every preset)",

@@ -211,7 +211,7 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
     // tangent buffer (overwritten by every warp) to receive theirs.
     backend_.fields(L.mask, l == 0 ? calibration_ : L.tangent, L.trajectory, fp);
   }
-  sweepMaskPixels_ = -1;  // the mask changed: counted again by the next consistentShare()
+  sweepMaskPixels_ = maskPixels_ = -1;  // the mask changed: counted again when next needed
   if (reverse_) reverse_->setPose(R.transpose(), -(R.transpose() * t));
   backend_.synchronize();
 }
@@ -229,6 +229,21 @@ double Pipeline::consistentShare(float accept) {
   if (sweepMaskPixels_ < 0) sweepMaskPixels_ = countDownloaded(S.mask, [](float m) { return m != 0.f; });
   const long long consistent = countDownloaded(S.confidence, [&](float c) { return c >= accept; });
   return sweepMaskPixels_ ? double(consistent) / double(sweepMaskPixels_) : 0.0;
+}
+
+double Pipeline::roundTripShare() {
+  if (!reverse_) return std::numeric_limits<double>::quiet_NaN();
+  const Level& L0 = levels_[0];
+  sweepScratch_.resize(L0.mask.count());
+  if (maskPixels_ < 0) {
+    backend_.download(L0.mask, sweepScratch_.data());
+    maskPixels_ = (long long)std::count_if(sweepScratch_.begin(), sweepScratch_.end(), [](float m) { return m != 0.f; });
+  }
+  backend_.download(roundTripError_, sweepScratch_.data());
+  const float limit = params_.lrCheckPx;
+  const long long passed =
+      (long long)std::count_if(sweepScratch_.begin(), sweepScratch_.end(), [&](float e) { return e <= limit; });
+  return maskPixels_ ? double(passed) / double(maskPixels_) : 0.0;
 }
 
 void Pipeline::stage(const char* name) {

@@ -78,6 +78,10 @@ class Pipeline {
   // just solved (NaN without the initialiser): a warm frame's health, read at the sweep's
   // resolution (a sixteenth of the full frame's transfer with realtime).
   double consistentShare(float accept);
+  // Params::lrCheck: the share of the valid pixels (the mask at full resolution) whose round
+  // trip passed in the frame just solved (NaN without lrCheck): the figure a real pair has
+  // without ground truth. Downloads the round trip's error.
+  double roundTripShare();
 
   // For callers whose images are already on the backend's device (cs::cuda::DeviceStereo):
   // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
@@ -168,6 +172,7 @@ class Pipeline {
   // frame's view; `motion` the kMotionFloats of camera 0's motion. Created by resetSequence.
   Buffer state_, next_, prior_, motion_;
   long long sweepMaskPixels_ = -1;   // valid pixels at the sweep's level (-1: not counted since setPose)
+  long long maskPixels_ = -1;        // valid pixels at level 0 (roundTripShare; -1: not counted since setPose)
   std::vector<float> sweepScratch_;  // consistentShare's downloads
 };
 

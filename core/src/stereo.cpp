@@ -148,6 +148,7 @@ void Stereo::compute(const ImageF& left, const ImageF& right, DepthResult& resul
   timedSolve(core_->rig(), left, right, result, [&] {
     core_->pipeline().run(left, right, profiling_, progress_, result);
     finish(result);
+    result.lrPassShare = core_->pipeline().roundTripShare();
     result.warm = result.redone = false;
     result.consistentShare = std::numeric_limits<double>::quiet_NaN();
   });
@@ -160,6 +161,7 @@ void Stereo::next(const ImageF& left, const ImageF& right, DepthResult& result, 
     auto solve = [&] {
       pipeline.run(left, right, profiling_, progress_, result, {frame.warm, frame.filter});
       finish(result);
+      result.lrPassShare = pipeline.roundTripShare();
       // warmFailRatio 0 turns the check off, and with it the read of the sweep's confidence.
       result.consistentShare = core_->params().warmFailRatio > 0.f
                                    ? pipeline.consistentShare(core_->params().initAccept)

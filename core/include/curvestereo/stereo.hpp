@@ -52,6 +52,10 @@ struct DepthResult {
   bool warm = false;
   bool redone = false;
   double consistentShare = 0;
+  // Params::lrCheck: the share of the pixels in the field of view whose left-right round
+  // trip passed (NaN without it): how much of a real pair survives the check, the figure
+  // there is without ground truth.
+  double lrPassShare = 0;
 };
 
 class Stereo {
