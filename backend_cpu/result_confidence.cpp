@@ -61,7 +61,8 @@ void resultConfidence(const View& confidence, const View& radial, const View& po
     for (int x = 0; x < confidence.width; ++x) {
       confidence.at(x, y) = 0.f;
       if (!masked(mask, x, y) || std::isnan(radial.at(x, y))) continue;
-      float c = structureTerm(x, y, image, trajectory, mask, p) * photometricTerm(x, y, n0, n1, w, mask, p);
+      const float structure = structureTerm(x, y, image, trajectory, mask, p);
+      float c = structure * photometricTerm(x, y, n0, n1, w, mask, p);
       if (sweepConfidence) c *= std::min(1.f, std::max(0.f, sweepConfidence->at(x, y)));
       bool invalid = false;
       if (roundTripError) {
@@ -70,7 +71,9 @@ void resultConfidence(const View& confidence, const View& radial, const View& po
         const float r = e / p.roundTripPx;
         c *= invalid ? 0.f : std::exp(-r * r);
       }
-      if (invalid || c < p.invalidBelow) {
+      const float ratio = p.maxDeviationPx / p.sigmaPx;
+      const bool unobservable = p.maxDeviationPx > 0.f && structure < 1.f / (1.f + ratio * ratio);
+      if (invalid || unobservable || c < p.invalidBelow) {
         radial.at(x, y) = nan;
         for (int k = 0; k < 3; ++k) points.at(x, y, k) = nan;
         continue;

@@ -412,7 +412,8 @@ void CudaBackend::doResultConfidence(const Buffer& confidence, const Buffer& rad
                                      const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
   flush();
   const cudak::ConfidenceDev d{p.radius,      p.noise,          p.sigmaPx,    p.residualScale,
-                               p.roundTripPx, p.roundTripMaxPx, p.infinityPx, p.invalidBelow};
+                               p.roundTripPx, p.roundTripMaxPx, p.infinityPx, p.invalidBelow,
+                               p.maxDeviationPx};
   auto optional = [&](const Buffer& b) { return b.id >= 0 ? img(slot(b).dev, b) : cudak::Img{nullptr, 0, 0, 0}; };
   check(
       cudak::launchResultConfidence(stream_, img(slot(confidence).dev, confidence), img(slot(radial).dev, radial),

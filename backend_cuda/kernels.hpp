@@ -152,7 +152,7 @@ cudaError_t launchRoundTrip(cudaStream_t s, Img error, Img w, Img calibration, I
                             Img reverseMask, Img mask);
 struct ConfidenceDev {  // cs::ConfidenceParams
   int radius;
-  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow;
+  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow, maxDeviationPx;
 };
 // sweepConfidence.data, roundTripError.data null: absent.
 cudaError_t launchResultConfidence(cudaStream_t s, Img confidence, Img radial, Img points, Img image, Img n0, Img n1,

@@ -54,7 +54,8 @@ __global__ void resultConfidenceKernel(Img confidence, Img radial, Img points, I
   const float nan = __int_as_float(0x7fc00000);
   at(confidence, x, y) = 0.f;
   if (!masked(mask, x, y) || isnan(at(radial, x, y))) return;
-  float c = __fmul_rn(structureTerm(x, y, image, trajectory, mask, p), photometricTerm(x, y, n0, n1, w, mask, p));
+  const float structure = structureTerm(x, y, image, trajectory, mask, p);
+  float c = __fmul_rn(structure, photometricTerm(x, y, n0, n1, w, mask, p));
   if (sweepConfidence.data) c = __fmul_rn(c, fminf(1.f, fmaxf(0.f, at(sweepConfidence, x, y))));
   bool invalid = false;
   if (roundTripError.data) {
@@ -63,7 +64,9 @@ __global__ void resultConfidenceKernel(Img confidence, Img radial, Img points, I
     const float r = e / p.roundTripPx;
     c = __fmul_rn(c, invalid ? 0.f : expf(-__fmul_rn(r, r)));
   }
-  if (invalid || c < p.invalidBelow) {
+  const float ratio = p.maxDeviationPx / p.sigmaPx;
+  const bool unobservable = p.maxDeviationPx > 0.f && structure < 1.f / __fadd_rn(1.f, __fmul_rn(ratio, ratio));
+  if (invalid || unobservable || c < p.invalidBelow) {
     at(radial, x, y) = nan;
     for (int k = 0; k < 3; ++k) at(points, x, y, k) = nan;
     return;

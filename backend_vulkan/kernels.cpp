@@ -63,7 +63,7 @@ struct VkTemporalParams {
 // result_confidence.comp's block.
 struct VkConfidenceParams {
   int32_t radius;
-  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow;
+  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow, maxDeviationPx;
 };
 
 template <class S>
@@ -730,7 +730,7 @@ void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& r
                                        const Buffer& trajectory, const Buffer& sweepConfidence,
                                        const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
   VkConfidenceParams prm{p.radius,      p.noise,          p.sigmaPx,    p.residualScale,
-                         p.roundTripPx, p.roundTripMaxPx, p.infinityPx, p.invalidBelow};
+                         p.roundTripPx, p.roundTripMaxPx, p.infinityPx, p.invalidBelow, p.maxDeviationPx};
   const bool hasSweep = sweepConfidence.id >= 0, hasTrip = roundTripError.id >= 0;
   PcResultConfidence pc{addr(confidence),
                         addr(radial),

@@ -9,7 +9,7 @@
 // Mirrors VkConfidenceParams in backend_vulkan/kernels.cpp.
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer ConfidenceParamsRef {
   int radius;
-  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow;
+  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow, maxDeviationPx;
 };
 
 layout(push_constant) uniform PC {
@@ -63,7 +63,8 @@ void main() {
   pc.confidence.v[i] = 0.0;
   if (!m(x, y) || isnan(pc.radial.v[i])) return;
   const int r = pc.prm.radius;
-  float c = structureTerm(x, y, r) * photometricTerm(x, y, r);
+  const float structure = structureTerm(x, y, r);
+  float c = structure * photometricTerm(x, y, r);
   if (pc.hasSweep != 0) c *= min(1.0, max(0.0, pc.sweepConfidence.v[i]));
   bool invalid = false;
   if (pc.hasRoundTrip != 0) {
@@ -72,7 +73,9 @@ void main() {
     const float q = e / pc.prm.roundTripPx;
     c *= invalid ? 0.0 : exp(-q * q);
   }
-  if (invalid || c < pc.prm.invalidBelow) {
+  const float ratio = pc.prm.maxDeviationPx / pc.prm.sigmaPx;
+  const bool unobservable = pc.prm.maxDeviationPx > 0.0 && structure < 1.0 / (1.0 + ratio * ratio);
+  if (invalid || unobservable || c < pc.prm.invalidBelow) {
     pc.radial.v[i] = quietNaN();
     for (int k = 0; k < 3; ++k) pc.points.v[3 * i + k] = quietNaN();
     return;

@@ -864,7 +864,7 @@ std::vector<Output> roundTripCase(Backend& b) {
 // first where w says in the top half and not in the bottom (photometric), a falling sweep
 // confidence, round-trip errors across the threshold, disparities near zero in a corner and
 // depths NaN in places.
-ConfidenceParams confidenceCaseParams() { return {3, 0.01f, 0.5f, 0.6f, 1.f, 1.5f, 0.3f, 0.f}; }
+ConfidenceParams confidenceCaseParams() { return {3, 0.01f, 0.5f, 0.6f, 1.f, 1.5f, 0.3f, 0.05f, 0.f}; }
 
 std::vector<Output> resultConfidenceRun(Backend& b, bool optional, const ConfidenceParams& p, const std::string& tag) {
   Session s{b};
@@ -897,7 +897,8 @@ std::vector<Output> resultConfidenceAloneCase(Backend& b) {
   ConfidenceParams p = confidenceCaseParams();
   p.radius = 1;
   p.infinityPx = 0.f;
-  p.invalidBelow = 0.05f;
+  p.invalidBelow = 0.f;
+  p.maxDeviationPx = 2.f;
   return resultConfidenceRun(b, false, p, "alone");
 }
 

@@ -337,8 +337,7 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
   CHECK(!fs::exists(dir / "synth_out"));  // nothing written for a refused model
 
   // ---- the plane-sweep initialiser
-  cases.refused("--min-confidence without the initialiser", good + " --min-confidence 0.5",
-                "--min-confidence needs the plane-sweep initialiser");
+  cases.handled("--min-confidence without the initialiser", good + " --min-confidence 0.5", "");
   cases.refused("--min-confidence 2", good + " --init planesweep --min-confidence 2",
                 "--min-confidence must be in [0, 1]");
   cases.refused("--min-confidence -0.1 with the initialiser", good + " --init planesweep --min-confidence -0.1",
@@ -358,7 +357,7 @@ TEST_CASE("curvestereo run: every bad input is one error line and a non-zero exi
     CHECK(fs::exists(dir / "out" / "confidence.png"));
     fs::remove_all(dir / "out");
     REQUIRE(runCli(dir, good).exitCode == 0);
-    CHECK(!fs::exists(dir / "out" / "confidence.exr"));  // none without the initialiser
+    CHECK(fs::exists(dir / "out" / "confidence.exr"));  // every preset has a confidence
     fs::remove_all(dir / "out");
   }
 }

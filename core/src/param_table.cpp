@@ -192,6 +192,9 @@ std::vector<ParamInfo> buildTable() {
                              "lr_check: a round trip beyond this (px) leaves the pixel invalid", Shown::Always),
                   floatParam("infinity_px", &Params::infinityPx, closed(0, 10),
                              "a disparity below this (px) is a point at infinity", Shown::Never),
+                  floatParam("max_deviation_px", &Params::maxDeviationPx, closed(0, 1000),
+                             "leave invalid the pixels whose image fixes the disparity no better than this (px; 0: keep)",
+                             Shown::Always),
                   floatParam("reject_below", &Params::rejectBelow, closed(0, 1),
                              "leave invalid the pixels whose confidence is below this", Shown::Always),
               });

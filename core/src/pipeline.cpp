@@ -45,6 +45,7 @@ static Rig reversedRig(const Rig& rig) {
 static Params reverseParams(Params p) {
   p.lrCheck = false;
   p.rejectBelow = 0.f;
+  p.maxDeviationPx = 0.f;
   return p;
 }
 
@@ -523,6 +524,7 @@ void Pipeline::finishResult() {
   p.roundTripMaxPx = params_.lrCheckPx;
   p.infinityPx = params_.infinityPx;
   p.invalidBelow = params_.rejectBelow;
+  p.maxDeviationPx = params_.maxDeviationPx;
   backend_.resultConfidence(confidence_, radial_, points_, L0.i0, L0.n0, L0.n1, L0.w, L0.trajectory,
                             initialising() ? L0.confidence : Buffer{}, reverse_ ? roundTripError_ : Buffer{}, L0.mask,
                             p);

@@ -172,10 +172,16 @@ struct Params {
   // subpixel estimate resolves about a tenth of a pixel, so a smaller disparity does not
   // tell a far point from one at infinity. A pixel whose confidence is below rejectBelow
   // is left invalid (0: every solved pixel is kept).
+  // A pixel whose image cannot fix its disparity along the curve to within maxDeviationPx
+  // (the Cramer-Rao deviation of the structure term) is left invalid rather than given the
+  // depth the regulariser carried into it: on plain surfaces and the sky that depth is
+  // whatever the nearest texture had, and a sky pixel made a near obstacle is worse than a
+  // hole (0: keep them).
   bool lrCheck = false;
   float lrCheckPx = 1.f;
   float infinityPx = 0.1f;
   float rejectBelow = 0.f;
+  float maxDeviationPx = 0.f;
 
   // This data term with its default lambda.
   Params withDataTerm(DataTerm term) const;

@@ -174,6 +174,7 @@ struct ConfidenceParams {
   float roundTripMaxPx;  // a round trip beyond this (or none) leaves the pixel invalid; <= 0: never
   float infinityPx;      // |w| below this: the point is at infinity (radial +inf, points NaN), >= 0
   float invalidBelow;    // a confidence below this leaves the pixel invalid, [0, 1]
+  float maxDeviationPx;  // a structure deviation noise sqrt(2 / S) above this leaves it invalid; 0: never
 };
 
 // The normalised Gaussian taps of standard deviation sigma > 0 over radius ceil(3 sigma)
@@ -411,8 +412,9 @@ class Backend {
   //   with a finite w(y) of |n1(y + w(y)) - n0(y)| (bilinear; 0 terms: r = +inf);
   // - sweep: sweepConfidence(x) clamped to [0, 1] (id -1: 1);
   // - round trip: exp(-(e / roundTripPx)^2) for roundTrip's error e (id -1: 1).
-  // Then, in order: a pixel whose e is NaN or above roundTripMaxPx (> 0), or whose
-  // confidence is below invalidBelow, is invalid: radial and points NaN, confidence 0; else
+  // Then, in order: a pixel whose e is NaN or above roundTripMaxPx (> 0), whose confidence is
+  // below invalidBelow, or whose structure term is below 1 / (1 + (maxDeviationPx /
+  // sigmaPx)^2) (maxDeviationPx > 0: the deviation beyond maxDeviationPx) is invalid: radial and points NaN, confidence 0; else
   // where |w(x)| < infinityPx radial is +inf and points NaN. image, n0, n1, radial, mask 1 ch;
   // w, trajectory 2 ch; points 3 ch; one grid.
   void resultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,
