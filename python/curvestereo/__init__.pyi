@@ -122,6 +122,10 @@ class Result:
     def consistent_share(self) -> float:
         """next(): share of the valid pixels at the sweep's level that passed its left-right
         check; NaN from compute(), without the initialiser and on the GPU-array path."""
+    @property
+    def lr_pass_share(self) -> float:
+        """lr_check: share of the field of view whose left-right round trip passed; NaN
+        without lr_check and on the GPU-array path."""
 
 class Stereo:
     """The solver for one rig: set up once, then compute() per frame. Not for two threads
@@ -179,6 +183,13 @@ class Stereo:
         warm_fail_ratio: float = ...,
         temporal_strength: float = ...,
         temporal_gate: float = ...,
+        # Confidence and validity (docs/confidence.md): the other direction's round trip,
+        # points at infinity, pixels the image cannot fix, a confidence floor.
+        lr_check: bool = ...,
+        lr_check_px: float = ...,
+        infinity_px: float = ...,
+        max_deviation_px: float = ...,
+        reject_below: float = ...,
         **more: Any,
     ) -> None: ...
     def compute(

@@ -104,6 +104,7 @@ struct Result {
   // Sequences (Stereo.next): DepthResult's warm, redone and consistentShare.
   bool warm = false, redone = false;
   double consistentShare = 0;
+  double lrPassShare = 0;  // DepthResult's (lr_check)
 };
 Result resultFromDepth(DepthResult&& r, const std::shared_ptr<ResultPool>& pool = nullptr);
 

@@ -563,6 +563,10 @@ PYBIND11_MODULE(_curvestereo, m) {
           "consistent_share", [](const Result& r) { return r.consistentShare; },
           "next(): share of the valid pixels at the sweep's level that passed its left-right check, in [0, 1] (what "
           "a warm frame is judged by); NaN from compute(), without the initialiser and on the GPU-array path.")
+      .def_property_readonly(
+          "lr_pass_share", [](const Result& r) { return r.lrPassShare; },
+          "lr_check: share of the pixels in the field of view whose left-right round trip passed, in [0, 1] (the "
+          "figure a real pair has without ground truth); NaN without lr_check and on the GPU-array path.")
       .def("__repr__", [](const Result& r) {
         const std::string shape = pb::str(r.depth.attr("shape"));
         return "<curvestereo.Result " + shape + ", " + std::to_string(r.totalMs) + " ms>";
