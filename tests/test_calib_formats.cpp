@@ -481,3 +481,29 @@ TEST_CASE("a written Basalt file has what Basalt's loader reads") {
     CHECK(text.find(key) != std::string::npos);
   }
 }
+
+// Files print rotations coarsely (as float, to six digits): within a thousandth of
+// orthonormal they are rotations, read as the nearest exact one; farther, refused.
+TEST_CASE("a rotation printed to six digits is read as the nearest rotation, a wrong one is refused") {
+  const auto dir = cs::test::tempDir("coarse_rotation");
+  auto write = [&](const std::string& rotation) {
+    const std::string path = (dir / "settings.yaml").string();
+    std::ofstream(path) << "%YAML:1.0\nFile.version: \"1.0\"\nCamera.type: \"KannalaBrandt8\"\n"
+                           "Camera1.fx: 285.0\nCamera1.fy: 285.1\nCamera1.cx: 420.5\nCamera1.cy: 400.7\n"
+                           "Camera1.k1: -0.005\nCamera1.k2: 0.042\nCamera1.k3: -0.039\nCamera1.k4: 0.0068\n"
+                           "Camera2.fx: 285.2\nCamera2.fy: 284.9\nCamera2.cx: 411.9\nCamera2.cy: 403.4\n"
+                           "Camera2.k1: -0.004\nCamera2.k2: 0.038\nCamera2.k3: -0.035\nCamera2.k4: 0.0055\n"
+                           "Stereo.T_c1_c2: !!opencv-matrix\n  rows: 4\n  cols: 4\n  dt: f\n  data: ["
+                        << rotation << "]\nCamera.width: 848\nCamera.height: 800\n";
+    return path;
+  };
+  // A turn of about 0.4 degrees, each entry rounded to six decimals (|R^T R - I| ~ 1e-6).
+  const cs::Rig rig =
+      cs::loadCalibration(write("0.999983, 0.00445, 0.003859, 0.0637, -0.004437, 0.999984, -0.003476, "
+                                "-0.00025, -0.003874, 0.003459, 0.999986, -0.0000888, 0, 0, 0, 1"));
+  CHECK((rig.R.transpose() * rig.R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-12);
+  CHECK(rig.t.norm() == doctest::Approx(0.0637).epsilon(1e-3));
+  // A shear of 1 %: not a rotation written coarsely.
+  CHECK_THROWS_WITH_AS(cs::loadCalibration(write("1, 0.01, 0, 0.0637, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1")),
+                       doctest::Contains("not a rotation"), cs::Error);
+}

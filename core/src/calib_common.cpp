@@ -2,6 +2,7 @@
 #include "calib_common.hpp"
 
 #include <Eigen/LU>  // determinant()
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -80,10 +81,21 @@ void checkCamera(const Camera& cam, const std::string& name) {
   }
 }
 
-void checkRig(const Rig& rig, const std::string& file, const std::string& poseName) {
+// Files print rotations to a few significant digits (ORB-SLAM3's T265 example: 6, as float,
+// |R^T R - I| = 1e-6): a rotation within a thousandth of orthonormal is a rotation written
+// coarsely and becomes the nearest exact one; anything farther is a wrong matrix.
+constexpr double kPrintedRotationTolerance = 1e-3;
+
+void checkRig(Rig& rig, const std::string& file, const std::string& poseName) {
   try {
     checkCamera(rig.cam0, "cam0");
     checkCamera(rig.cam1, "cam1");
+    const double orthoError = (rig.R.transpose() * rig.R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    // Only where the strict check would refuse it: a rotation read exactly stays bit for bit.
+    if (rig.R.allFinite() && rig.R.determinant() > 0 && orthoError > 1e-6 && orthoError <= kPrintedRotationTolerance) {
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(rig.R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      rig.R = svd.matrixU() * svd.matrixV().transpose();
+    }
     checkPose(rig.R, rig.t, poseName);
   } catch (const Error& e) {
     throw Error(oneLine(file + ": " + e.what()));

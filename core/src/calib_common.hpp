@@ -34,7 +34,7 @@ void checkPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const std::st
 // Camera::validate with the camera's name in front ("cam0: ...").
 void checkCamera(const Camera& cam, const std::string& name);
 // Both cameras and the pose; a failure becomes "<file>: <problem>".
-void checkRig(const Rig& rig, const std::string& file, const std::string& poseName);
+void checkRig(Rig& rig, const std::string& file, const std::string& poseName);
 // Throws "<path>: not saving an invalid rig: ..." for a rig a reader would refuse.
 void checkRigBeforeSaving(const Rig& rig, const std::string& path);
 
