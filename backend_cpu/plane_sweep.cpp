@@ -307,7 +307,7 @@ RoundTrip roundTrip(const BuiltCamera& cam, const View& best, const View& other,
     return r;
   const double e = std::hypot(returned.x() - x, returned.y() - y) / c.tolerancePx;
   r.evaluated = true;
-  r.consistency = float(std::exp(-e * e));
+  r.consistency = best.at(x, y, 1) > c.maxCost ? 0.f : float(std::exp(-e * e));
   return r;
 }
 

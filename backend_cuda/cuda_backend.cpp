@@ -468,7 +468,7 @@ void CudaBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Buff
   check(cudak::launchSweepInitialise(stream_, img(slot(u).dev, u), img(slot(w).dev, w),
                                      img(slot(confidence).dev, confidence), img(slot(best).dev, best),
                                      img(slot(other).dev, other), img(slot(mask).dev, mask), d,
-                                     cudak::ConsistencyDev{c.tolerancePx, c.acceptConfidence}),
+                                     cudak::ConsistencyDev{c.tolerancePx, c.acceptConfidence, c.maxCost}),
         "sweepInitialise");
 }
 

@@ -50,7 +50,7 @@ constexpr int kMaxSweepBand = 32;     // the band aggregation: one lane a hypoth
 constexpr int kBandMargin = 2;        // = cs::kBandMargin (sweepBandWarp's contract)
 // The left-right check (ConsistencyParams).
 struct ConsistencyDev {
-  float tolerancePx, acceptConfidence;
+  float tolerancePx, acceptConfidence, maxCost;
 };
 
 constexpr int kMaxTaps = 255;  // Gaussian pre-smoothing radius up to 127 px

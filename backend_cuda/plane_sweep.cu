@@ -353,7 +353,7 @@ __global__ void __launch_bounds__(kSelectThreads)
 // (confidence 0) where the reference has no hypothesis or the round trip fails (the
 // oracle's RoundTrip::evaluated).
 __device__ bool roundTrip(const Img& best, const Img& other, const Img& mask, const SweepDev& p, float tolerancePx,
-                          int x, int y, V3& ray, V2& there, float& confidence) {
+                          float maxCost, int x, int y, V3& ray, V2& there, float& confidence) {
   const float q = at(best, x, y, 0);
   if (!masked(mask, x, y) || q < 0.f || !cameraUnproject(p.cam, double(x), double(y), ray) ||
       !projectHypothesis(p.cam, ray, p.t, double(q), there))
@@ -370,7 +370,7 @@ __device__ bool roundTrip(const Img& best, const Img& other, const Img& mask, co
       !projectHypothesis(p.cam, rayOther, back, double(qOther), returned))
     return false;
   const double e = hypot(returned.x - x, returned.y - y) / double(tolerancePx);
-  confidence = float(exp(-e * e));
+  confidence = at(best, x, y, 1) > maxCost ? 0.f : float(exp(-e * e));
   return true;
 }
 
@@ -391,7 +391,7 @@ __global__ void sweepInitialiseKernel(Img u, Img w, Img confidence, Img best, Im
   V3 ray{0, 0, 0};
   V2 there{0, 0};
   float consistency = 0.f;
-  const bool matched = roundTrip(best, other, mask, p, c.tolerancePx, x, y, ray, there, consistency);
+  const bool matched = roundTrip(best, other, mask, p, c.tolerancePx, c.maxCost, x, y, ray, there, consistency);
   at(confidence, x, y) = consistency;
   // Where the round trip fails or the sweep is not sure, u and w keep the coarse-to-fine
   // estimate (the oracle's test, so a NaN confidence would replace them).
@@ -447,7 +447,7 @@ __global__ void sweepOcclusionKernel(Img u, Img w, Img confidence, Img best, Img
   V3 ray{0, 0, 0};
   V2 there{0, 0};
   float consistency = 0.f;
-  if (!roundTrip(best, other, mask, p, c.tolerancePx, x, y, ray, there, consistency)) return;
+  if (!roundTrip(best, other, mask, p, c.tolerancePx, c.maxCost, x, y, ray, there, consistency)) return;
   const double q = occludedSurface(best, confidence, mask, p, c.acceptConfidence, ray, x, y, p.planes);
   if (q >= 0.0 && projectHypothesis(p.cam, ray, p.t, q, there)) storeWarp(u, w, there, x, y);
 }

@@ -195,7 +195,7 @@ struct PcSweepSelect {
 struct PcSweepInitialise {
   Addr u, w, confidence, best, other, mask, params;
   int32_t width, height;
-  float tolerancePx, acceptConfidence;
+  float tolerancePx, acceptConfidence, maxCost;
   int32_t pass, planes;
 };
 struct PcSweepBandWarp {
@@ -581,7 +581,7 @@ void VulkanBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Bu
   const Addr params = sweepParamBlock(p);
   for (int32_t pass = 0; pass < 2; ++pass) {
     PcSweepInitialise pc{addr(u), addr(w),  addr(confidence), addr(best),         addr(other), addr(mask), params,
-                         u.width, u.height, c.tolerancePx,    c.acceptConfidence, pass,        p.planes};
+                         u.width, u.height, c.tolerancePx,    c.acceptConfidence, c.maxCost,   pass,       p.planes};
     dispatch(shader, pc, u.width, u.height);
   }
 }
@@ -729,8 +729,8 @@ void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& r
                                        const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
                                        const Buffer& trajectory, const Buffer& sweepConfidence,
                                        const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
-  VkConfidenceParams prm{p.radius,      p.noise,          p.sigmaPx,    p.residualScale,
-                         p.roundTripPx, p.roundTripMaxPx, p.infinityPx, p.invalidBelow, p.maxDeviationPx};
+  VkConfidenceParams prm{p.radius,         p.noise,      p.sigmaPx,      p.residualScale, p.roundTripPx,
+                         p.roundTripMaxPx, p.infinityPx, p.invalidBelow, p.maxDeviationPx};
   const bool hasSweep = sweepConfidence.id >= 0, hasTrip = roundTripError.id >= 0;
   PcResultConfidence pc{addr(confidence),
                         addr(radial),

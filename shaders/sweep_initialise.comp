@@ -20,7 +20,7 @@ layout(push_constant) uniform PC {
   FBuf u, w, confidence, best, other, mask;  // w, best, other: 2 channels
   SweepParamsRef prm;  // t: the reference sweep's translation (`other` was swept with -t)
   int width, height;
-  float tolerancePx, acceptConfidence;
+  float tolerancePx, acceptConfidence, maxCost;
   int pass;    // 0: confidence and consistent pixels; 1: occlusions (after pass 0)
   int planes;  // pass 1's reach in steps each way
 } pc;
@@ -83,7 +83,7 @@ bool roundTripAt(Cam cam, int x, int y, out vec3r ray, out vec2r there, out floa
   const real e = roundTripError(cam, px, there);
   if (e < R(0.0)) return false;
   precise real scaled = e / real(pc.tolerancePx);
-  consistency = float(expNonPositive(-scaled * scaled));
+  consistency = pc.best.v[idx(pc.width, 2, x, y, 1)] > pc.maxCost ? 0.0 : float(expNonPositive(-scaled * scaled));
   return true;
 }
 

@@ -641,6 +641,7 @@ std::vector<Output> sweepInitialiseCase(Backend& b) {
   ConsistencyParams consistency{};
   consistency.tolerancePx = 1.5f;
   consistency.acceptConfidence = 0.3f;
+  consistency.maxCost = 0.85f;  // the costs below span 0.05 .. 1.15: some winners are refused
   const double eAccept = std::sqrt(-std::log(double(consistency.acceptConfidence)));
   const BuiltCamera cam(toCamera(p.cam));
   Host field = stretched(texture(kW, kH, 34)), mask = discMask(kW, kH), best(kW, kH, 2), other(kW, kH, 2);

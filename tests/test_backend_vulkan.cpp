@@ -213,7 +213,7 @@ SweepRun runSweep(Backend& b, const synth::SynthPair& pair) {
   };
   sweep(other, right, left, reverse);
   sweep(best, left, right, p);  // last, so the volume and costs compared are camera 0's
-  b.sweepInitialise(u, w, confidence, best, other, mask, p, {1.f, 0.5f});
+  b.sweepInitialise(u, w, confidence, best, other, mask, p, {1.f, 0.5f, 2.f});
   auto get = [&](const Buffer& buf) {
     std::vector<float> host(buf.count());
     b.download(buf, host.data());

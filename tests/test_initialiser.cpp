@@ -332,6 +332,7 @@ TEST_CASE("sweepInitialise: w = project(ray + q t) - x where the round trip agre
   ConsistencyParams c{};
   c.tolerancePx = 1.f;
   c.acceptConfidence = 0.5f;
+  c.maxCost = 2.f;
   // The coarse-to-fine estimate the sweep may replace.
   const float keptU = -5.f;
   Grid u(w, h, 1, keptU), warp(w, h, 2), confidence(w, h, 1, 9.f), start(w, h, 2);

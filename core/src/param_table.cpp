@@ -143,6 +143,8 @@ std::vector<ParamInfo> buildTable() {
                              "left-right error (level px) where confidence is 1/e", Shown::Never),
                   floatParam("init_accept", &Params::initAccept, closed(0, 1),
                              "confidence from which the sweep replaces the coarse estimate", Shown::Never),
+                  floatParam("init_max_cost", &Params::initMaxCost, closed(0, 2),
+                             "a sweep winner of a higher cost (1 - ZNCC) is not accepted (2: all)", Shown::Never),
                   floatParam("occlusion_weight", &Params::occlusionWeight, closed(0, 1),
                              "data-term weight floor of low-confidence pixels", Shown::PlaneSweep),
                   intParam("init_warps", &Params::initWarps, closed(0, 1000),
@@ -180,24 +182,25 @@ std::vector<ParamInfo> buildTable() {
                   floatParam("temporal_gate", &Params::temporalGate, above(0),
                              "temporal filter: reset a pixel beyond this many standard deviations", Shown::Never),
               });
-  ParamInfo lrCheck =
-      base("lr_check", Type::Bool, {},
-           "solve the other direction too; pixels whose round trip fails become invalid (run prints the share that passes)", Shown::Always);
+  ParamInfo lrCheck = base(
+      "lr_check", Type::Bool, {},
+      "solve the other direction too; pixels whose round trip fails become invalid (run prints the share that passes)",
+      Shown::Always);
   lrCheck.boolField = &Params::lrCheck;
-  std::vector<ParamInfo> trust =
-      grouped("confidence and validity (every preset)",
-              {
-                  lrCheck,
-                  floatParam("lr_check_px", &Params::lrCheckPx, above(0),
-                             "lr_check: a round trip beyond this (px) leaves the pixel invalid", Shown::Always),
-                  floatParam("infinity_px", &Params::infinityPx, closed(0, 10),
-                             "a disparity below this (px) is a point at infinity", Shown::Never),
-                  floatParam("max_deviation_px", &Params::maxDeviationPx, closed(0, 1000),
-                             "leave invalid the pixels whose image fixes the disparity no better than this (px; 0: keep)",
-                             Shown::Always),
-                  floatParam("reject_below", &Params::rejectBelow, closed(0, 1),
-                             "leave invalid the pixels whose confidence is below this", Shown::Always),
-              });
+  std::vector<ParamInfo> trust = grouped(
+      "confidence and validity (every preset)",
+      {
+          lrCheck,
+          floatParam("lr_check_px", &Params::lrCheckPx, above(0),
+                     "lr_check: a round trip beyond this (px) leaves the pixel invalid", Shown::Always),
+          floatParam("infinity_px", &Params::infinityPx, closed(0, 10),
+                     "a disparity below this (px) is a point at infinity", Shown::Never),
+          floatParam("max_deviation_px", &Params::maxDeviationPx, closed(0, 1000),
+                     "leave invalid the pixels whose image fixes the disparity no better than this (px; 0: keep)",
+                     Shown::Always),
+          floatParam("reject_below", &Params::rejectBelow, closed(0, 1),
+                     "leave invalid the pixels whose confidence is below this", Shown::Always),
+      });
   table.insert(table.end(), trust.begin(), trust.end());
   table.insert(table.end(), sweep.begin(), sweep.end());
   table.insert(table.end(), sequence.begin(), sequence.end());

@@ -238,7 +238,8 @@ double Pipeline::roundTripShare() {
   sweepScratch_.resize(L0.mask.count());
   if (maskPixels_ < 0) {
     backend_.download(L0.mask, sweepScratch_.data());
-    maskPixels_ = (long long)std::count_if(sweepScratch_.begin(), sweepScratch_.end(), [](float m) { return m != 0.f; });
+    maskPixels_ =
+        (long long)std::count_if(sweepScratch_.begin(), sweepScratch_.end(), [](float m) { return m != 0.f; });
   }
   backend_.download(roundTripError_, sweepScratch_.data());
   const float limit = params_.lrCheckPx;
@@ -356,7 +357,7 @@ void Pipeline::runSweep() {
 void Pipeline::checkSweep(Level& L, const SweepParams& p, const Buffer& best, const Buffer& other) {
   stage("sweep: check");
   backend_.sweepInitialise(L.pd.u, L.w, L.confidence, best, other, L.mask, p,
-                           {params_.lrTolerancePx, params_.initAccept});
+                           {params_.lrTolerancePx, params_.initAccept, params_.initMaxCost});
 }
 
 // Reverses a sweep's translation: the other view as the reference.

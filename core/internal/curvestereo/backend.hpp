@@ -91,6 +91,9 @@ struct SweepParams {
 struct ConsistencyParams {
   float tolerancePx;       // reprojection error (level px) at which confidence falls to 1/e
   float acceptConfidence;  // the sweep replaces the coarse-to-fine estimate from this confidence on
+  // A winner whose own cost (best's second channel, 1 - ZNCC) is above this matched nothing
+  // distinct: its confidence is 0 whatever the round trip (2: never).
+  float maxCost;
 };
 
 // Local contrast normalisation of an image (docs/design.md "Per frame", the normalised data term): the data term
