@@ -171,6 +171,7 @@ class Stereo:
         init_p2: float = ...,
         lr_tolerance_px: float = ...,
         init_accept: float = ...,
+        init_max_cost: float = ...,
         occlusion_weight: float = ...,
         init_warps: int = ...,
         init_band: int = ...,
