@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "calib_checks.hpp"
 #include "curvestereo/image.hpp"
 #include "curvestereo/rig.hpp"
 #include "test_util.hpp"
@@ -23,27 +24,6 @@ std::string replaceFirst(std::string text, const std::string& from, const std::s
   const size_t at = text.find(from);
   REQUIRE(at != std::string::npos);
   return text.replace(at, from.size(), to);
-}
-
-std::string errorOf(const std::string& text, const std::string& name = "calib.txt") {
-  try {
-    cs::parseCalibration(text, name);
-  } catch (const cs::Error& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
-
-// One line, naming the file, containing every key word.
-void checkError(const std::string& text, const std::vector<std::string>& keyWords) {
-  const std::string msg = errorOf(text);
-  CAPTURE(msg);
-  CHECK(msg.rfind("calib.txt: ", 0) == 0);
-  CHECK(msg.find('\n') == std::string::npos);
-  for (const auto& word : keyWords) {
-    CAPTURE(word);
-    CHECK(msg.find(word) != std::string::npos);
-  }
 }
 
 double maxDifference(const Rig& a, const Rig& b) {

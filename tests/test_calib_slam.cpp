@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "calib_checks.hpp"
 #include "curvestereo/image.hpp"
 #include "curvestereo/rig.hpp"
 #include "test_util.hpp"
@@ -22,27 +23,6 @@ using cs::Rig;
 namespace {
 
 fs::path dataDir() { return fs::path(cs::test::goldenDir()).parent_path() / "data"; }
-
-std::string errorOf(const std::string& text, const cs::CalibHints& hints = {}) {
-  try {
-    cs::parseCalibration(text, "calib.txt", nullptr, hints);
-  } catch (const cs::Error& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
-
-// One line naming the file, the format recognised and every key word.
-void checkError(const std::string& text, const std::vector<std::string>& keyWords) {
-  const std::string msg = errorOf(text);
-  CAPTURE(msg);
-  CHECK(msg.rfind("calib.txt: ", 0) == 0);
-  CHECK(msg.find('\n') == std::string::npos);
-  for (const auto& word : keyWords) {
-    CAPTURE(word);
-    CHECK(msg.find(word) != std::string::npos);
-  }
-}
 
 double rigDifference(const Rig& a, const Rig& b) {
   if (a.cam0.model != b.cam0.model || a.cam1.model != b.cam1.model) return INFINITY;
