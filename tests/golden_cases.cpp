@@ -11,6 +11,7 @@
 #include "curvestereo/camera.hpp"
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/stereo.hpp"
+#include "golden_inputs.hpp"
 #include "synth/scene.hpp"
 
 namespace cs::golden {
@@ -27,92 +28,6 @@ PrimalDualParams primalDualCaseParams(int iterations) {
 }
 
 namespace {
-
-// Odd sizes on purpose: no kernel may assume even or aligned dimensions.
-constexpr int kW = 45, kH = 37;
-
-float hashNoise(uint32_t i) { return hash01(i); }
-
-// Interleaved host data for one buffer.
-struct Host {
-  int w, h, c;
-  std::vector<float> v;
-  Host(int w_, int h_, int c_) : w(w_), h(h_), c(c_), v(size_t(w_) * h_ * c_, 0.f) {}
-  float& at(int x, int y, int ch = 0) { return v[(size_t(y) * w + x) * c + ch]; }
-  cpu::View view() { return cpu::View{v.data(), w, h, c}; }
-};
-
-// Smooth random texture in [0, 1]: hash noise blurred by `passes` 3x3 box passes.
-Host texture(int w, int h, uint32_t seed, int passes = 3) {
-  Host t(w, h, 1);
-  for (size_t i = 0; i < t.v.size(); ++i) t.v[i] = hashNoise(uint32_t(i) * 747796405U + seed);
-  for (int pass = 0; pass < passes; ++pass) {
-    Host s = t;
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        float sum = 0;
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) sum += s.at(std::clamp(x + dx, 0, w - 1), std::clamp(y + dy, 0, h - 1));
-        t.at(x, y) = sum / 9.f;
-      }
-  }
-  return t;
-}
-
-// Values in [-amp, amp] per channel, no smoothing.
-Host noise(int w, int h, int c, uint32_t seed, float amp) {
-  Host n(w, h, c);
-  for (size_t i = 0; i < n.v.size(); ++i) n.v[i] = amp * (2.f * hashNoise(uint32_t(i) * 2891336453U + seed) - 1.f);
-  return n;
-}
-
-// A disc filling most of the image, with a small hole, like a fisheye image circle.
-Host discMask(int w, int h) {
-  Host m(w, h, 1);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) m.at(x, y) = std::hypot(x - 0.5 * (w - 1), y - 0.5 * (h - 1)) <= 0.45 * std::min(w, h);
-  m.at(w / 2, h / 2) = 0.f;
-  return m;
-}
-
-// A smoothly turning unit vector field (a stand-in for an epipolar tangent field).
-Host tangentField(int w, int h) {
-  Host t(w, h, 2);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      float a = 0.4f + 0.03f * x - 0.02f * y;
-      t.at(x, y, 0) = std::cos(a);
-      t.at(x, y, 1) = std::sin(a);
-    }
-  return t;
-}
-
-struct Session {
-  Backend& b;
-  Buffer put(Host& h) {
-    Buffer buf = b.create(h.w, h.h, h.c);
-    b.upload(buf, h.v.data());
-    return buf;
-  }
-  Buffer make(int w, int h, int c) {
-    Buffer buf = b.create(w, h, c);
-    b.fill(buf, 0.f);
-    return buf;
-  }
-  Output get(const std::string& name, const Buffer& buf) {
-    std::vector<float> data(buf.count());
-    b.download(buf, data.data());
-    Output o{name, ImageF(buf.width, buf.height * buf.channels)};
-    for (int c = 0; c < buf.channels; ++c)
-      for (int y = 0; y < buf.height; ++y)
-        for (int x = 0; x < buf.width; ++x)
-          o.planes(x, c * buf.height + y) = data[(size_t(y) * buf.width + x) * buf.channels + c];
-    return o;
-  }
-};
-
-const TensorParams kTensor{9.f, 0.85f, 1e-4f, 1.f, 17.f, 1.2f};
-
 std::vector<Output> warpCase(Backend& b) {
   Session s{b};
   Host src = texture(kW, kH, 1), flow = noise(kW, kH, 2, 2, 3.f);
@@ -318,21 +233,6 @@ std::vector<Output> warpTailNoMedianCase(Backend& b) {
   return warpTailOutputs(b, "warptailnomedian", false, true, false);
 }
 
-// A T265-like Kannala-Brandt lens at the odd golden size, and a pose with rotation.
-FieldsParams fieldsParams() {
-  FieldsParams p{};
-  p.cam0 = toCameraParams(Camera::kannalaBrandt4(kW, kH, 15.2, 15.3, 22.4, 18.1, -0.0066, 0.0473, -0.0458, 0.009));
-  p.cam1 = toCameraParams(Camera::kannalaBrandt4(kW, kH, 15.1, 15.2, 22.8, 17.9, -0.005, 0.039, -0.035, 0.005));
-  // 7 degrees: a crescent of camera 0 lies beyond camera 1's field of view.
-  const double c = std::cos(0.12), sn = std::sin(0.12);
-  const double R[9] = {c, 0, sn, 0, 1, 0, -sn, 0, c};
-  std::copy(R, R + 9, p.R);
-  p.t[0] = -0.064, p.t[1] = 0.001, p.t[2] = 0.002;
-  p.maxFovDeg = 120;  // inside the disc mask, so that both cameras' limits show
-  p.epipoleDeg = 3;
-  return p;
-}
-
 std::vector<Output> fieldsCase(Backend& b) {
   Session s{b};
   Host allowed = discMask(kW, kH);
@@ -355,95 +255,6 @@ std::vector<Output> triangulateCase(Backend& b) {
   const double tPrime[3] = {-0.064, 0.001, 0.002};
   b.triangulate(radial, points, s.put(w), s.put(mask), fieldsParams().cam0, tPrime);
   return {s.get("triangulate_radial", radial), s.get("triangulate_points", points)};
-}
-
-// --- sequences ---
-
-// A state of a scene: a tilted plane 2-4 m away, a near box (q 1.5) over part of it, a
-// patch at infinity (q 0) and holes (q -1); variances in px^2.
-Host sequenceState(int w, int h) {
-  Host st(w, h, 2);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      float q = 0.25f + 0.25f * float(x) / float(w) + 0.05f * float(y) / float(h);
-      if (x >= 14 && x < 24 && y >= 10 && y < 22) q = 1.5f;
-      if (x >= 30 && y < 8) q = 0.f;
-      if ((x * 7 + y * 3) % 29 == 0) q = -1.f;
-      st.at(x, y, 0) = q;
-      st.at(x, y, 1) = 0.1f + 0.5f * hashNoise(uint32_t(y * w + x) * 613u + 7u);
-    }
-  return st;
-}
-
-// Camera 0 turns 6 degrees about y and 3 about x and moves 12 cm, mostly forward.
-Host sequenceMotion() {
-  const Eigen::Matrix3d R =
-      (Eigen::AngleAxisd(0.105, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.052, Eigen::Vector3d::UnitX()))
-          .toRotationMatrix();
-  Host m(kMotionFloats, 1, 1);
-  for (int i = 0; i < 9; ++i) m.v[size_t(i)] = float(R(i / 3, i % 3));
-  m.v[9] = 0.04f, m.v[10] = -0.02f, m.v[11] = 0.11f;
-  return m;
-}
-
-// Into the same grid from this frame's depth (the temporal filter's prior): one step from the
-// guess, which holds NaN, +inf and non-positive values too.
-std::vector<Output> carryEstimateCase(Backend& b) {
-  Session s{b};
-  Host state = sequenceState(kW, kH), motion = sequenceMotion(), mask = discMask(kW, kH);
-  Host guess = noise(kW, kH, 1, 61, 0.5f);
-  for (int y = 0; y < kH; ++y)
-    for (int x = 0; x < kW; ++x) {
-      float& g = guess.at(x, y);
-      g = 2.5f + g;
-      if (x >= 15 && x < 25 && y >= 12 && y < 22) g = 0.7f;
-      if ((x + 2 * y) % 17 == 0) g = std::numeric_limits<float>::quiet_NaN();
-      if ((x + 2 * y) % 19 == 0) g = std::numeric_limits<float>::infinity();
-      if ((3 * x + y) % 23 == 0) g = (x % 2) ? 0.f : -1.f;
-    }
-  const CameraParams cam = fieldsParams().cam0;
-  Buffer dst = s.make(kW, kH, 2);
-  b.carryEstimate(dst, s.put(state), s.put(guess), s.put(motion), s.put(mask), {cam, cam, {0, 0, 0}, 1});
-  return {s.get("carry_prior", dst)};
-}
-
-// Into a coarser grid of camera 1' (extraT = t'), by three fixed-point steps from the state
-// itself: the warm start's proposals.
-std::vector<Output> carryEstimateCoarseCase(Backend& b) {
-  Session s{b};
-  Host state = sequenceState(kW, kH), motion = sequenceMotion();
-  const int cw = (kW + 1) / 2, ch = (kH + 1) / 2;
-  Host mask = discMask(cw, ch);
-  Camera coarse = toCamera(fieldsParams().cam0).scaled(0.5);
-  coarse.width = cw, coarse.height = ch;
-  CarryParams p{fieldsParams().cam0, toCameraParams(coarse), {-0.064, 0.001, 0.002}, 3};
-  Buffer dst = s.make(cw, ch, 2);
-  b.carryEstimate(dst, s.put(state), Buffer{}, s.put(motion), s.put(mask), p);
-  return {s.get("carry_coarse", dst)};
-}
-
-// A prior that agrees in places (filtered), disagrees in others (reset: the gate), is missing
-// in some; a measurement at infinity, NaN and a confidence that falls across the image.
-std::vector<Output> temporalFilterCase(Backend& b) {
-  Session s{b};
-  Host prior = sequenceState(kW, kH), mask = discMask(kW, kH), radial(kW, kH, 1), confidence(kW, kH, 1);
-  Host u = noise(kW, kH, 1, 71, 3.f), w = noise(kW, kH, 2, 72, 3.f);
-  for (int y = 0; y < kH; ++y)
-    for (int x = 0; x < kW; ++x) {
-      const float q = prior.at(x, y, 0);
-      // Within a fraction of a px of the prior, or far off on the box (a moving object).
-      const float qm = std::max(0.f, q) + 0.004f * (2.f * hashNoise(uint32_t(y * kW + x) * 977u + 5u) - 1.f);
-      radial.at(x, y) = (x >= 14 && x < 24 && y >= 10 && y < 16) ? 1.f / 0.6f : 1.f / std::max(qm, 1e-3f);
-      if (x >= 30 && y < 6) radial.at(x, y) = std::numeric_limits<float>::infinity();
-      if ((x + 3 * y) % 31 == 0) radial.at(x, y) = std::numeric_limits<float>::quiet_NaN();
-      confidence.at(x, y) = float(x) / float(kW - 1);
-    }
-  const FieldsParams fp = fieldsParams();
-  TemporalParams p{fp.cam0, {-0.064, 0.001, 0.002}, 0.8f, 3.f, 0.5f, 0.1f, 0.1f};
-  Buffer state = s.make(kW, kH, 2), ub = s.put(u), wb = s.put(w), rb = s.put(radial), points = s.make(kW, kH, 3);
-  b.temporalFilter(state, ub, wb, s.put(prior), rb, points, s.put(confidence), s.put(mask), p);
-  return {s.get("temporal_state", state), s.get("temporal_u", ub), s.get("temporal_w", wb),
-          s.get("temporal_radial", rb), s.get("temporal_points", points)};
 }
 
 // --- plane sweep ---
@@ -837,71 +648,6 @@ std::vector<Output> sweepBandSelectCase(Backend& b) {
 }
 
 }  // namespace
-
-// --- the result's confidence ---
-
-// A small displacement field and a calibration field that nearly undo each other's
-// directions, so some round trips come home and others miss; NaN in places and a pixel
-// the reverse mask leaves out.
-std::vector<Output> roundTripCase(Backend& b) {
-  Session s{b};
-  Host w = noise(kW, kH, 2, 81, 1.5f), calibration = noise(kW, kH, 2, 82, 0.8f);
-  Host reverseW = noise(kW, kH, 2, 83, 1.5f), reverseCalibration = noise(kW, kH, 2, 84, 0.8f);
-  Host mask = discMask(kW, kH), reverseMask = discMask(kW, kH);
-  for (int y = 0; y < kH; ++y)
-    for (int x = 0; x < kW; ++x) {
-      w.at(x, y, 0) -= 1.3f;
-      reverseW.at(x, y, 0) += 1.3f;
-      if ((x + 5 * y) % 29 == 0) w.at(x, y, 1) = std::numeric_limits<float>::quiet_NaN();
-    }
-  reverseMask.at(10, 12) = 0.f;
-  Buffer error = s.make(kW, kH, 1);
-  b.roundTrip(error, s.put(w), s.put(calibration), s.put(reverseW), s.put(reverseCalibration), s.put(reverseMask),
-              s.put(mask));
-  return {s.get("roundtrip_error", error)};
-}
-
-// A textured left half and a plain right half (structure), a second image that matches the
-// first where w says in the top half and not in the bottom (photometric), a falling sweep
-// confidence, round-trip errors across the threshold, disparities near zero in a corner and
-// depths NaN in places.
-ConfidenceParams confidenceCaseParams() { return {3, 0.01f, 0.5f, 0.6f, 1.f, 1.5f, 0.3f, 0.05f, 0.f}; }
-
-std::vector<Output> resultConfidenceRun(Backend& b, bool optional, const ConfidenceParams& p, const std::string& tag) {
-  Session s{b};
-  Host image = texture(kW, kH, 91, 1), n1(kW, kH, 1), w = noise(kW, kH, 2, 92, 0.4f), mask = discMask(kW, kH);
-  Host radial(kW, kH, 1), sweep(kW, kH, 1), trip(kW, kH, 1), trajectory = tangentField(kW, kH);
-  for (int y = 0; y < kH; ++y)
-    for (int x = 0; x < kW; ++x) {
-      if (x > kW / 2) image.at(x, y) = 0.5f + 0.001f * float(x);
-      radial.at(x, y) = (x + 3 * y) % 37 == 0 ? std::numeric_limits<float>::quiet_NaN() : 2.f;
-      sweep.at(x, y) = 1.2f - float(y) / float(kH - 1);
-      trip.at(x, y) = (x * 7 + y * 3) % 11 == 0 ? std::numeric_limits<float>::quiet_NaN() : 0.25f * float(x % 9);
-      if (x < 8 && y < 8) w.at(x, y, 0) = w.at(x, y, 1) = 0.05f;
-    }
-  Host n0 = image;
-  for (int y = 0; y < kH; ++y)
-    for (int x = 0; x < kW; ++x) n1.at(x, y) = y < kH / 2 ? image.at(std::min(kW - 1, x + 1), y) : 1.f - image.at(x, y);
-  Buffer confidence = s.make(kW, kH, 1), rb = s.put(radial), points = s.make(kW, kH, 3);
-  b.fill(points, 1.f);
-  b.resultConfidence(confidence, rb, points, s.put(image), s.put(n0), s.put(n1), s.put(w), s.put(trajectory),
-                     optional ? s.put(sweep) : Buffer{}, optional ? s.put(trip) : Buffer{}, s.put(mask), p);
-  return {s.get("confidence_" + tag, confidence), s.get("confidence_radial_" + tag, rb),
-          s.get("confidence_points_" + tag, points)};
-}
-
-std::vector<Output> resultConfidenceCase(Backend& b) {
-  return resultConfidenceRun(b, true, confidenceCaseParams(), "all");
-}
-
-std::vector<Output> resultConfidenceAloneCase(Backend& b) {
-  ConfidenceParams p = confidenceCaseParams();
-  p.radius = 1;
-  p.infinityPx = 0.f;
-  p.invalidBelow = 0.f;
-  p.maxDeviationPx = 2.f;
-  return resultConfidenceRun(b, false, p, "alone");
-}
 
 const std::vector<KernelCase>& kernelCases() {
   static const std::vector<KernelCase> cases = {
