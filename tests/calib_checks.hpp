@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <doctest/doctest.h>
+#include "curvestereo/image.hpp"  // cs::Error
 #include "curvestereo/rig.hpp"
 
 // The error a calibration text gets under the name "calib.txt" ("<no error>" if none).
