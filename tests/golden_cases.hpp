@@ -24,12 +24,27 @@ inline float hash01(uint32_t i) {
   return float(i & 0xffffff) / float(0xffffff);
 }
 
+// How far another backend's output may lie from the oracle's (test_backends): the largest
+// absolute difference and the normalised mean square error. The default allows a few ulps of
+// values of order 1 (fused multiply-adds, reordered sums, device exp and pow); a case whose
+// outputs need another says so where it makes them, with the reason (within()).
+struct Tolerance {
+  double maxAbs = 1e-4, nmse = 1e-9;
+};
+
 // One output buffer of one case: channels stacked vertically (height * channels rows) so
 // it fits a single-channel EXR.
 struct Output {
   std::string name;  // "<kernel>_<buffer>", also the file name without .exr
   ImageF planes;
+  Tolerance tolerance;
 };
+
+// The outputs, each with this tolerance.
+inline std::vector<Output> within(std::vector<Output> outputs, Tolerance t) {
+  for (Output& o : outputs) o.tolerance = t;
+  return outputs;
+}
 
 struct KernelCase {
   std::string kernel;

@@ -1,5 +1,6 @@
 // Every kernel on every backend present at run time, against the CPU oracle, with an
-// explicit error metric per kernel (in the manner of ggml's test-backend-ops); then whole
+// explicit error metric per kernel output, which the case states with its reason (in the
+// manner of ggml's test-backend-ops); then whole
 // solves end to end; the coarse kernels against their fine sequences on the same backend;
 // progress on replayed frames. A backend that is absent or unusable is reported as
 // skipped, and the suite to ctest as skipped when no backend besides the CPU ran
@@ -17,59 +18,6 @@
 using namespace cs;
 
 namespace {
-
-struct Tolerance {
-  double maxAbs, nmse;
-};
-
-// Float kernels on GPUs differ from the oracle by rounding (fused multiply-adds,
-// reordered sums, device exp/pow): a few ulps of values of order 1.
-Tolerance toleranceFor(const std::string& output) {
-  if (output.rfind("fields_", 0) == 0) return {2e-3, 1e-9};       // float camera models vs double
-  if (output.rfind("triangulate_", 0) == 0) return {1e-2, 1e-8};  // metres; far points amplify rounding
-  if (output.rfind("tensor_", 0) == 0) return {2e-4, 1e-9};
-  // The oracle's order of summation, no contraction: bit-exact on lavapipe (and CUDA with
-  // IEEE division and square root). Vulkan allows 2.5-ulp division and square root: on the
-  // case's values (|output| <= 2.2, local spread down to epsilon) that moves the output by
-  // <= 1.7e-5 (the oracle re-run with each quotient and root off by 2.5 ulp, every sign).
-  if (output.rfind("normalise_", 0) == 0) return {1e-4, 1e-9};
-  // Sweep geometry like the fields (float camera models vs double): a hypothesis lands up
-  // to ~2e-3 px away. The volume is the golden texture sampled there (steps <= 0.13 per
-  // px, so <= 2.6e-4); w and u are those positions; the confidence's slope in e is at most
-  // sqrt(2/e) / tol = 0.57 per px at the case's tol = 1.5 px.
-  if (output.rfind("sweepwarp_", 0) == 0) return {5e-4, 1e-9};
-  if (output.rfind("sweepinit_", 0) == 0) return {2e-3, 1e-8};
-  // 1 - ZNCC from one-pass float sums: the oracle's own cost is ~4e-5 from the exact one
-  // (measured: float vs double sums on the case), a backend summing in another order is
-  // as far again.
-  if (output.rfind("sweepcost_", 0) == 0) return {2e-4, 1e-9};
-  // Aggregation is minima and float adds in a fixed order: exact on every backend; the
-  // bound only allows for printing. Selection: exact inputs, one float division in the
-  // parabola and q in double (float on Vulkan devices without float64): ~1e-6 of q.
-  if (output.rfind("sweepaggregate_", 0) == 0) return {1e-6, 1e-15};
-  if (output.rfind("sweepselect_", 0) == 0) return {1e-5, 1e-12};
-  // The band sweep's kernels: the same reasons. Its first hypotheses are integers from a
-  // case whose proposals lie 0.2 plane from a rounding tie: exact.
-  if (output == "sweepbandwarp_first") return {0.0, 0.0};
-  if (output.rfind("sweepbandwarp_", 0) == 0) return {5e-4, 1e-9};
-  // At radius 1 a window holds 5 to 9 samples: smaller variances, so Vulkan's 2.5-ulp
-  // division and square root move 1 - ZNCC further (2.8e-4 measured on NVIDIA's driver at
-  // one pixel, NMSE 1.7e-11; CUDA and lavapipe exact).
-  if (output == "sweepbandcost_radius1") return {5e-4, 1e-9};
-  if (output.rfind("sweepbandcost_", 0) == 0) return {2e-4, 1e-9};
-  if (output.rfind("sweepbandaggregate_", 0) == 0) return {1e-6, 1e-15};
-  if (output.rfind("sweepbandselect_", 0) == 0) return {1e-5, 1e-12};
-  // Carried states: double geometry on every backend, one nearest-pixel lookup per step
-  // (a lookup would only change at a rounding tie), q in double rounded to float once.
-  if (output.rfind("carry_", 0) == 0) return {1e-5, 1e-12};
-  // The round trip: three bilinear samples, float adds and a square root of errors of a few
-  // px; Vulkan may fuse the samples' multiply-adds and rounds sqrt to 2.5 ulp (1.7e-5 px
-  // measured on lavapipe, a few ulps of 4). The confidence: window sums in the oracle's
-  // order and the device's exp (a few ulps of a value <= 1).
-  if (output.rfind("roundtrip_", 0) == 0) return {5e-5, 1e-10};
-  if (output.rfind("confidence_", 0) == 0) return {1e-5, 1e-12};
-  return {1e-4, 1e-9};
-}
 
 std::vector<std::string> otherBackends() {
   std::vector<std::string> names;
@@ -115,7 +63,7 @@ TEST_CASE("every kernel on every backend matches the CPU oracle") {
       REQUIRE(actual.size() == expected.size());
       for (size_t i = 0; i < actual.size(); ++i) {
         INFO("backend " << name << ", kernel " << c.kernel << ", output " << actual[i].name);
-        const Tolerance tol = toleranceFor(actual[i].name);
+        const golden::Tolerance tol = expected[i].tolerance;  // the case's own (golden_cases.cpp)
         golden::Difference d = golden::compare(actual[i].planes, expected[i].planes, tol.maxAbs);
         MESSAGE(name << " " << actual[i].name << ": max abs " << d.maxAbs << ", NMSE " << d.nmse);
         CHECK(d.mismatchedNonFinite == 0);
