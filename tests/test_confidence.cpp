@@ -58,7 +58,7 @@ TEST_CASE("confidence: in [0, 1] where valid, NaN where not, and it ranks the er
 TEST_CASE("sparsification: the oracle's curve falls as fast as the errors allow") {
   ImageF error(10, 1), confidence(10, 1);
   for (int i = 0; i < 10; ++i) {
-    error.data[size_t(i)] = i < 3 ? 5.f : 0.1f;   // three bad pixels
+    error.data[size_t(i)] = i < 3 ? 5.f : 0.1f;    // three bad pixels
     confidence.data[size_t(i)] = float(i) / 10.f;  // ranked worst first: the bad ones are the least confident
   }
   error.data[9] = INFINITY;  // no estimate: ranked last whatever its confidence
@@ -73,14 +73,14 @@ TEST_CASE("sparsification: the oracle's curve falls as fast as the errors allow"
 TEST_CASE("lr_check: only round trips that pass stay valid, the rest are NaN everywhere") {
   const Solved& s = solved();
   const DepthResult &a = s.plain, &b = s.checked;
-  long long fieldOfView = 0, validA = 0, validB = 0, gained = 0, notNaN = 0;
+  long long validA = 0, validB = 0, gained = 0, notNaN = 0;
   for (size_t i = 0; i < a.valid.size(); ++i) {
     validA += a.valid.data[i];
     validB += b.valid.data[i];
     gained += b.valid.data[i] && !a.valid.data[i];
     if (!b.valid.data[i]) notNaN += !allNaN(b, i);
   }
-  fieldOfView = validA;  // realtime without the check leaves every pixel of the field of view valid
+  const long long fieldOfView = validA;  // realtime without the check leaves every pixel of it valid
   MESSAGE("lr_check keeps " << validB << " of " << validA << " pixels; pass share " << b.lrPassShare);
   CHECK(gained == 0);
   CHECK(notNaN == 0);
@@ -108,7 +108,8 @@ TEST_CASE("infinity: a disparity below infinity_px is +inf, a pixel the image ca
     const Vec2f w = r.warp.data[i];
     if (w.x * w.x + w.y * w.y >= limit * limit) continue;
     ++small;
-    wrong += !(std::isinf(r.depth.radial.data[i]) && r.depth.radial.data[i] > 0) || !std::isnan(r.depth.points.data[i].x);
+    wrong +=
+        !(std::isinf(r.depth.radial.data[i]) && r.depth.radial.data[i] > 0) || !std::isnan(r.depth.points.data[i].x);
   }
   const Metrics m = evaluate(s.pair.rig, r.warp, r.depth.radial, s.pair.depthLeft, nullptr);
   MESSAGE(small << " px below " << limit << " px of disparity; sky " << m.skyPixels << " px, " << m.sky

@@ -48,7 +48,7 @@ int cmdDemo(const Args& args) {
   saveKalibr(pair.rig, path("camchain.yaml"));
 
   const Params params = paramsFromArgs(args);
-  const float minConfidence = minConfidenceFromArgs(args, params);
+  const float minConfidence = minConfidenceFromArgs(args);
   Stereo stereo(pair.rig, params, backendFromArgs(args));
   std::printf("backend: %s - %s\nsettings: %s\n", stereo.deviceName().c_str(), stereo.backendChoice().c_str(),
               describe(params).c_str());

@@ -131,7 +131,7 @@ int runSequence(const Args& args, const std::string& outDir) {
   Params params = paramsFromArgs(args);
   const bool cold = args.has("cold");
   if (cold) params.warmStart = false, params.temporalStrength = 0.f;  // every frame alone: the baseline
-  const float minConfidence = minConfidenceFromArgs(args, params);
+  const float minConfidence = minConfidenceFromArgs(args);
   const Rig rig = loadCalibration(sequenceCalibration(args, source), nullptr, calibHintsFromArgs(args));
   const ViewOptions views = viewOptions(args, rig.cam0);
   Stereo stereo(rig, params, backendFromArgs(args));
@@ -202,7 +202,7 @@ int cmdRun(const Args& args) {
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   requireOutputFolder(outDir);
   const Params params = paramsFromArgs(args);
-  const float minConfidence = minConfidenceFromArgs(args, params);
+  const float minConfidence = minConfidenceFromArgs(args);
   const StereoInputs in =
       loadStereoInputs(args.require("calib"), args.positional()[0], args.positional()[1], args.has("scale-intrinsics"));
   const Rig& rig = in.rig;

@@ -184,8 +184,7 @@ CalibHints calibHintsFromArgs(const Args& args) {
 
 void writeDepthPng(const std::string& path, const ImageF& radialDepth) { writePngRgb(path, depthPicture(radialDepth)); }
 
-float minConfidenceFromArgs(const Args& args, const Params& params) {
-  (void)params;  // every preset has a confidence
+float minConfidenceFromArgs(const Args& args) {
   if (!args.has("min-confidence")) return 0.f;
   const double c = args.getDouble("min-confidence", 0.0);
   if (!(c >= 0 && c <= 1)) throw Error("--min-confidence must be in [0, 1]");

@@ -49,7 +49,7 @@ StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftP
 void writeOutputs(const std::string& dir, const DepthResult& result, const ImageF& left, float minConfidence = 0.f);
 
 // --min-confidence (0 when absent); an error outside [0, 1].
-float minConfidenceFromArgs(const Args& args, const Params& params);
+float minConfidenceFromArgs(const Args& args);
 
 // A colour picture of radial depth: inverse depth on a perceptual map, invalid black.
 void writeDepthPng(const std::string& path, const ImageF& radialDepth);

@@ -62,11 +62,22 @@ void writeTextFile(const std::string& path, const std::string& text) {
   if (!file.flush()) throw Error(path + ": error while writing");
 }
 
+namespace {
+
+// A rotation is one to this: what a double written with 10 or more significant digits keeps.
+constexpr double kRotationTolerance = 1e-6;
+
+double orthonormalityError(const Eigen::Matrix3d& R) {
+  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+}
+
+}  // namespace
+
 void checkPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const std::string& poseName) {
   if (!R.allFinite() || !t.allFinite()) throw Error(poseName + " has non-finite entries");
   const double det = R.determinant();
-  const double orthoError = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (std::abs(det - 1.0) > 1e-6 || orthoError > 1e-6)
+  const double orthoError = orthonormalityError(R);
+  if (std::abs(det - 1.0) > kRotationTolerance || orthoError > kRotationTolerance)
     throw Error(poseName + " rotation is not a rotation (det=" + formatNumber(det, 10) +
                 ", |R^T R - I|=" + formatNumber(orthoError, 3) + ")");
   // Depth from stereo needs a baseline; a zero t is usually a missing or mis-read pose.
@@ -90,9 +101,10 @@ void checkRig(Rig& rig, const std::string& file, const std::string& poseName) {
   try {
     checkCamera(rig.cam0, "cam0");
     checkCamera(rig.cam1, "cam1");
-    const double orthoError = (rig.R.transpose() * rig.R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    const double orthoError = orthonormalityError(rig.R);
     // Only where the strict check would refuse it: a rotation read exactly stays bit for bit.
-    if (rig.R.allFinite() && rig.R.determinant() > 0 && orthoError > 1e-6 && orthoError <= kPrintedRotationTolerance) {
+    if (rig.R.allFinite() && rig.R.determinant() > 0 && orthoError > kRotationTolerance &&
+        orthoError <= kPrintedRotationTolerance) {
       const Eigen::JacobiSVD<Eigen::Matrix3d> svd(rig.R, Eigen::ComputeFullU | Eigen::ComputeFullV);
       rig.R = svd.matrixU() * svd.matrixV().transpose();
     }

@@ -222,30 +222,28 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
 double Pipeline::consistentShare(float accept) {
   if (!initialising()) return std::numeric_limits<double>::quiet_NaN();
   const Level& S = levels_[sweep_.level];
-  auto countDownloaded = [&](const Buffer& b, auto counts) {
-    sweepScratch_.resize(b.count());
-    backend_.download(b, sweepScratch_.data());
-    return (long long)std::count_if(sweepScratch_.begin(), sweepScratch_.end(), counts);
-  };
-  if (sweepMaskPixels_ < 0) sweepMaskPixels_ = countDownloaded(S.mask, [](float m) { return m != 0.f; });
-  const long long consistent = countDownloaded(S.confidence, [&](float c) { return c >= accept; });
-  return sweepMaskPixels_ ? double(consistent) / double(sweepMaskPixels_) : 0.0;
+  return shareOf(
+      S.confidence, [&](float c) { return c >= accept; }, S.mask, sweepMaskPixels_);
 }
 
 double Pipeline::roundTripShare() {
   if (!reverse_) return std::numeric_limits<double>::quiet_NaN();
-  const Level& L0 = levels_[0];
-  sweepScratch_.resize(L0.mask.count());
-  if (maskPixels_ < 0) {
-    backend_.download(L0.mask, sweepScratch_.data());
-    maskPixels_ =
-        (long long)std::count_if(sweepScratch_.begin(), sweepScratch_.end(), [](float m) { return m != 0.f; });
-  }
-  backend_.download(roundTripError_, sweepScratch_.data());
   const float limit = params_.lrCheckPx;
-  const long long passed =
-      (long long)std::count_if(sweepScratch_.begin(), sweepScratch_.end(), [&](float e) { return e <= limit; });
-  return maskPixels_ ? double(passed) / double(maskPixels_) : 0.0;
+  return shareOf(
+      roundTripError_, [&](float e) { return e <= limit; }, levels_[0].mask, maskPixels_);
+}
+
+// Both shares download one buffer a frame; the mask's count is downloaded once per pose.
+template <class Predicate>
+double Pipeline::shareOf(const Buffer& values, Predicate counts, const Buffer& mask, long long& maskPixels) {
+  auto countDownloaded = [&](const Buffer& b, auto predicate) {
+    hostScratch_.resize(b.count());
+    backend_.download(b, hostScratch_.data());
+    return (long long)std::count_if(hostScratch_.begin(), hostScratch_.end(), predicate);
+  };
+  if (maskPixels < 0) maskPixels = countDownloaded(mask, [](float m) { return m != 0.f; });
+  const long long counted = countDownloaded(values, counts);
+  return maskPixels ? double(counted) / double(maskPixels) : 0.0;
 }
 
 void Pipeline::stage(const char* name) {

@@ -138,6 +138,10 @@ class Pipeline {
   bool normalising() const { return params_.dataTerm == Params::DataTerm::Normalised; }
   bool initialising() const { return params_.init == Params::Init::PlaneSweep; }
 
+  // The share of mask's pixels (counted into maskPixels when it is negative) whose value in
+  // `values` (same grid) satisfies `counts`.
+  template <class Predicate>
+  double shareOf(const Buffer& values, Predicate counts, const Buffer& mask, long long& maskPixels);
   void upload(const ImageF& left, const ImageF& right);
   void issueFrame(const std::function<void(double)>& progress, FrameKind kind);
   void issueOrReplay(const std::function<void(double)>& progress, FrameKind kind);
@@ -171,9 +175,9 @@ class Pipeline {
   // frame's, `next` this frame's filtered result, `prior` the state carried into this
   // frame's view; `motion` the kMotionFloats of camera 0's motion. Created by resetSequence.
   Buffer state_, next_, prior_, motion_;
-  long long sweepMaskPixels_ = -1;   // valid pixels at the sweep's level (-1: not counted since setPose)
-  long long maskPixels_ = -1;        // valid pixels at level 0 (roundTripShare; -1: not counted since setPose)
-  std::vector<float> sweepScratch_;  // consistentShare's downloads
+  long long sweepMaskPixels_ = -1;  // valid pixels at the sweep's level (-1: not counted since setPose)
+  long long maskPixels_ = -1;       // valid pixels at level 0 (roundTripShare; -1: not counted since setPose)
+  std::vector<float> hostScratch_;  // shareOf's downloads
 };
 
 }  // namespace cs
