@@ -610,8 +610,8 @@ static_assert(sizeof(Point3f) == 3 * sizeof(float) && std::is_standard_layout_v<
 // need not be downloaded: one branch-free pass the compiler vectorises.
 static void validFromRadial(DepthResult& out) {
   const size_t n = out.depth.radial.size();
-  const float* radial = out.depth.radial.data.data();
-  uint8_t* valid = fitImage(out.valid, out.depth.radial.width, out.depth.radial.height);
+  const float* __restrict radial = out.depth.radial.data.data();
+  uint8_t* __restrict valid = fitImage(out.valid, out.depth.radial.width, out.depth.radial.height);
   for (size_t i = 0; i < n; ++i) valid[i] = uint8_t(radial[i] == radial[i]);
 }
 
