@@ -1,4 +1,4 @@
-// The kernel interface's helpers (gaussianTaps, the CameraParams conversions, cameraConstants)
+// The kernel interface's helpers (gaussianTaps, the CameraParams conversions)
 // and Backend's default stage clock (host wall time between boundaries).
 #include "curvestereo/backend.hpp"
 
@@ -19,39 +19,7 @@ double nowMs() {
   return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
 }
 
-}  // namespace
-
-std::vector<float> gaussianTaps(float sigma) {
-  const int radius = int(std::ceil(3.f * sigma));
-  std::vector<float> taps(size_t(2 * radius + 1));
-  float sum = 0.f;
-  for (int i = -radius; i <= radius; ++i)
-    sum += taps[size_t(i + radius)] = std::exp(-float(i * i) / (2.f * sigma * sigma));
-  for (float& t : taps) t /= sum;
-  return taps;
-}
-
-static_assert(models::Mei<double>::kNumParams <= kMaxCameraParams, "the kernels' camera blocks are too small");
-
-CameraParams toCameraParams(const Camera& camera) {
-  CameraParams p;
-  p.model = int(camera.model);
-  p.width = camera.width;
-  p.height = camera.height;
-  if (camera.params.size() > size_t(kMaxCameraParams)) throw Error("camera has more parameters than kernels take");
-  std::copy(camera.params.begin(), camera.params.end(), p.params);
-  return p;
-}
-
-Camera toCamera(const CameraParams& p) {
-  Camera c;
-  c.model = CameraModel(p.model);
-  c.width = p.width;
-  c.height = p.height;
-  c.params.assign(p.params, p.params + std::max(0, models::paramCount(c.model)));
-  return c;
-}
-
+// What the model's constructor precomputes (CameraParams::constants).
 CameraConstants cameraConstants(const CameraParams& c) {
   CameraConstants k;
   const double* p = c.params;
@@ -81,6 +49,40 @@ CameraConstants cameraConstants(const CameraParams& c) {
     }
   }
   throw Error("unknown camera model " + std::to_string(c.model));
+}
+
+}  // namespace
+
+std::vector<float> gaussianTaps(float sigma) {
+  const int radius = int(std::ceil(3.f * sigma));
+  std::vector<float> taps(size_t(2 * radius + 1));
+  float sum = 0.f;
+  for (int i = -radius; i <= radius; ++i)
+    sum += taps[size_t(i + radius)] = std::exp(-float(i * i) / (2.f * sigma * sigma));
+  for (float& t : taps) t /= sum;
+  return taps;
+}
+
+static_assert(models::Mei<double>::kNumParams <= kMaxCameraParams, "the kernels' camera blocks are too small");
+
+CameraParams toCameraParams(const Camera& camera) {
+  CameraParams p;
+  p.model = int(camera.model);
+  p.width = camera.width;
+  p.height = camera.height;
+  if (camera.params.size() > size_t(kMaxCameraParams)) throw Error("camera has more parameters than kernels take");
+  std::copy(camera.params.begin(), camera.params.end(), p.params);
+  p.constants = cameraConstants(p);
+  return p;
+}
+
+Camera toCamera(const CameraParams& p) {
+  Camera c;
+  c.model = CameraModel(p.model);
+  c.width = p.width;
+  c.height = p.height;
+  c.params.assign(p.params, p.params + std::max(0, models::paramCount(c.model)));
+  return c;
 }
 
 void Backend::beginStage(const std::string& name) {
