@@ -7,6 +7,7 @@
 #include "curvestereo/image.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 
@@ -21,34 +22,10 @@ double nowMs() {
 
 // What the model's constructor precomputes (CameraParams::constants).
 CameraConstants cameraConstants(const CameraParams& c) {
-  CameraConstants k;
-  const double* p = c.params;
-  switch (CameraModel(c.model)) {
-    case CameraModel::KannalaBrandt4: {
-      const models::KannalaBrandt4<double> kb(p);
-      k.a = kb.thetaMax;
-      k.b = kb.radiusMax;
-      return k;
-    }
-    case CameraModel::Unified:
-      k.a = models::Unified<double>(p).w;
-      return k;
-    case CameraModel::ExtendedUnified:
-      k.a = models::ExtendedUnified<double>(p).w;
-      return k;
-    case CameraModel::DoubleSphere:
-      k.a = models::DoubleSphere<double>(p).w2;
-      return k;
-    case CameraModel::PinholeRadtan:
-      return k;
-    case CameraModel::Mei: {
-      const models::Mei<double> mei(p);
-      k.a = mei.w;
-      k.b = mei.rMax;
-      return k;
-    }
-  }
-  throw Error("unknown camera model " + std::to_string(c.model));
+  if (models::paramCount(CameraModel(c.model)) < 0) throw Error("unknown camera model " + std::to_string(c.model));
+  const auto model = models::makeModel<double>(CameraModel(c.model), c.params, c.width, c.height);
+  const std::array<double, 2> k = std::visit([](const auto& m) { return m.precomputed(); }, model);
+  return CameraConstants{k[0], k[1]};
 }
 
 }  // namespace
