@@ -1,7 +1,7 @@
 // The camera models of core/include/curvestereo/camera_models.hpp on the device, in
 // double precision like the oracle: the same equations, branches and iteration limits.
 // What the host constructors precompute (Kannala-Brandt turning angle, valid-region
-// bounds) arrives in CamDev::a / CamDev::b (cs::cameraConstants).
+// bounds) arrives in CameraParams::constants (toCameraParams).
 #pragma once
 #include "common.cuh"
 
@@ -31,57 +31,57 @@ struct J23 {
   double m[2][3];
 };
 
-__device__ __forceinline__ V2 toNormalized(const CamDev& c, double px, double py) {
-  return {(px - c.p[2]) / c.p[0], (py - c.p[3]) / c.p[1]};
+__device__ __forceinline__ V2 toNormalized(const CameraParams& c, double px, double py) {
+  return {(px - c.params[2]) / c.params[0], (py - c.params[3]) / c.params[1]};
 }
-__device__ __forceinline__ V2 toPixel(const CamDev& c, double mx, double my) {
-  return {c.p[0] * mx + c.p[2], c.p[1] * my + c.p[3]};
+__device__ __forceinline__ V2 toPixel(const CameraParams& c, double mx, double my) {
+  return {c.params[0] * mx + c.params[2], c.params[1] * my + c.params[3]};
 }
 
-__device__ __forceinline__ void projectRational(const CamDev& c, const V3& p, double den, const V3& gradDen, V2& px,
-                                                J23* J) {
+__device__ __forceinline__ void projectRational(const CameraParams& c, const V3& p, double den, const V3& gradDen,
+                                                V2& px, J23* J) {
   const double inv = 1.0 / den;
   px = toPixel(c, p.x * inv, p.y * inv);
   if (!J) return;
   const double inv2 = inv * inv;
-  const double r0 = -c.p[0] * p.x * inv2, r1 = -c.p[1] * p.y * inv2;
+  const double r0 = -c.params[0] * p.x * inv2, r1 = -c.params[1] * p.y * inv2;
   J->m[0][0] = r0 * gradDen.x, J->m[0][1] = r0 * gradDen.y, J->m[0][2] = r0 * gradDen.z;
   J->m[1][0] = r1 * gradDen.x, J->m[1][1] = r1 * gradDen.y, J->m[1][2] = r1 * gradDen.z;
-  J->m[0][0] += c.p[0] * inv;
-  J->m[1][1] += c.p[1] * inv;
+  J->m[0][0] += c.params[0] * inv;
+  J->m[1][1] += c.params[1] * inv;
 }
 
 // --- Kannala-Brandt 4 ---
-__device__ __forceinline__ double kbDistort(const CamDev& c, double th) {
+__device__ __forceinline__ double kbDistort(const CameraParams& c, double th) {
   const double t2 = th * th;
-  return th * (1.0 + t2 * (c.p[4] + t2 * (c.p[5] + t2 * (c.p[6] + t2 * c.p[7]))));
+  return th * (1.0 + t2 * (c.params[4] + t2 * (c.params[5] + t2 * (c.params[6] + t2 * c.params[7]))));
 }
-__device__ __forceinline__ double kbDistortDerivative(const CamDev& c, double th) {
+__device__ __forceinline__ double kbDistortDerivative(const CameraParams& c, double th) {
   const double t2 = th * th;
-  return 1.0 + t2 * (3.0 * c.p[4] + t2 * (5.0 * c.p[5] + t2 * (7.0 * c.p[6] + t2 * 9.0 * c.p[7])));
+  return 1.0 + t2 * (3.0 * c.params[4] + t2 * (5.0 * c.params[5] + t2 * (7.0 * c.params[6] + t2 * 9.0 * c.params[7])));
 }
-__device__ inline bool kbProject(const CamDev& c, const V3& p, V2& px, J23* J) {
+__device__ inline bool kbProject(const CameraParams& c, const V3& p, V2& px, J23* J) {
   const double x = p.x, y = p.y, z = p.z;
   const double r2 = x * x + y * y;
   const double rho2 = r2 + z * z;
   if (!(rho2 > 0)) return false;
   const double r = sqrt(r2);
   const double th = atan2(r, z);
-  if (!(th < c.a)) return false;
+  if (!(th < c.constants.a)) return false;
   const double s = r > 0 ? kbDistort(c, th) / r : 1.0 / z;
   px = toPixel(c, s * x, s * y);
   if (!J) return true;
   const double dd = kbDistortDerivative(c, th);
   const bool nearAxis = z > 0 && r2 < kEpsD * rho2;
-  const double A = nearAxis ? 2.0 * (c.p[4] - 1.0 / 3.0) / (z * z * z) : (dd * z / rho2 - s) / r2;
+  const double A = nearAxis ? 2.0 * (c.params[4] - 1.0 / 3.0) / (z * z * z) : (dd * z / rho2 - s) / r2;
   const double B = -dd / rho2;
-  const double fx = c.p[0], fy = c.p[1];
+  const double fx = c.params[0], fy = c.params[1];
   J->m[0][0] = fx * (s + x * x * A), J->m[0][1] = fx * x * y * A, J->m[0][2] = fx * x * B;
   J->m[1][0] = fy * x * y * A, J->m[1][1] = fy * (s + y * y * A), J->m[1][2] = fy * y * B;
   return true;
 }
-__device__ inline double kbSolveTheta(const CamDev& c, double rd) {
-  double lo = 0, hi = c.a;
+__device__ inline double kbSolveTheta(const CameraParams& c, double rd) {
+  double lo = 0, hi = c.constants.a;
   double th = rd < hi ? rd : 0.5 * hi;
   for (int it = 0; it < 60; ++it) {
     const double f = kbDistort(c, th) - rd;
@@ -95,10 +95,10 @@ __device__ inline double kbSolveTheta(const CamDev& c, double rd) {
   }
   return th;
 }
-__device__ inline bool kbUnproject(const CamDev& c, double px, double py, V3& ray) {
+__device__ inline bool kbUnproject(const CameraParams& c, double px, double py, V3& ray) {
   const V2 m = toNormalized(c, px, py);
   const double rd = sqrt(m.x * m.x + m.y * m.y);
-  if (!(rd < c.b)) return false;
+  if (!(rd < c.constants.b)) return false;
   if (rd == 0) {
     ray = {0, 0, 1};
     return true;
@@ -110,8 +110,8 @@ __device__ inline bool kbUnproject(const CamDev& c, double px, double py, V3& ra
 }
 
 // --- Unified ---
-__device__ inline bool ucmProject(const CamDev& c, const V3& p, V2& px, J23* J) {
-  const double xi = c.p[4], w = c.a;
+__device__ inline bool ucmProject(const CameraParams& c, const V3& p, V2& px, J23* J) {
+  const double xi = c.params[4], w = c.constants.a;
   const double d = norm3(p);
   if (!(p.z > -w * d)) return false;
   const double den = p.z + xi * d;
@@ -120,8 +120,8 @@ __device__ inline bool ucmProject(const CamDev& c, const V3& p, V2& px, J23* J) 
   projectRational(c, p, den, V3{k * p.x, k * p.y, k * p.z + 1.0}, px, J);
   return true;
 }
-__device__ inline bool ucmUnproject(const CamDev& c, double px, double py, V3& ray) {
-  const double xi = c.p[4], w = c.a;
+__device__ inline bool ucmUnproject(const CameraParams& c, double px, double py, V3& ray) {
+  const double xi = c.params[4], w = c.constants.a;
   const V2 m = toNormalized(c, px, py);
   const double r2 = m.x * m.x + m.y * m.y;
   const double disc = 1.0 + (1.0 - xi * xi) * r2;
@@ -135,8 +135,8 @@ __device__ inline bool ucmUnproject(const CamDev& c, double px, double py, V3& r
 __device__ __forceinline__ double eucmDistance(double beta, const V3& p) {
   return sqrt(beta * (p.x * p.x + p.y * p.y) + p.z * p.z);
 }
-__device__ inline bool eucmProject(const CamDev& c, const V3& p, V2& px, J23* J) {
-  const double alpha = c.p[4], beta = c.p[5], w = c.a;
+__device__ inline bool eucmProject(const CameraParams& c, const V3& p, V2& px, J23* J) {
+  const double alpha = c.params[4], beta = c.params[5], w = c.constants.a;
   const double d = eucmDistance(beta, p);
   if (!(p.z > -w * d)) return false;
   const double den = alpha * d + (1.0 - alpha) * p.z;
@@ -145,8 +145,8 @@ __device__ inline bool eucmProject(const CamDev& c, const V3& p, V2& px, J23* J)
   projectRational(c, p, den, V3{alpha * gradD.x, alpha * gradD.y, alpha * gradD.z + (1.0 - alpha)}, px, J);
   return true;
 }
-__device__ inline bool eucmUnproject(const CamDev& c, double px, double py, V3& ray) {
-  const double alpha = c.p[4], beta = c.p[5], w = c.a;
+__device__ inline bool eucmUnproject(const CameraParams& c, double px, double py, V3& ray) {
+  const double alpha = c.params[4], beta = c.params[5], w = c.constants.a;
   const V2 m = toNormalized(c, px, py);
   const double r2 = m.x * m.x + m.y * m.y;
   const double disc = 1.0 - (2.0 * alpha - 1.0) * beta * r2;
@@ -157,8 +157,8 @@ __device__ inline bool eucmUnproject(const CamDev& c, double px, double py, V3& 
 }
 
 // --- Double sphere ---
-__device__ inline bool dsProject(const CamDev& c, const V3& p, V2& px, J23* J) {
-  const double xi = c.p[4], alpha = c.p[5], w2 = c.a;
+__device__ inline bool dsProject(const CameraParams& c, const V3& p, V2& px, J23* J) {
+  const double xi = c.params[4], alpha = c.params[5], w2 = c.constants.a;
   const double d1 = norm3(p);
   if (!(p.z > -w2 * d1)) return false;
   const double k = xi * d1 + p.z;
@@ -173,8 +173,8 @@ __device__ inline bool dsProject(const CamDev& c, const V3& p, V2& px, J23* J) {
   projectRational(c, p, den, gradDen, px, J);
   return true;
 }
-__device__ inline bool dsUnproject(const CamDev& c, double px, double py, V3& ray) {
-  const double xi = c.p[4], alpha = c.p[5], w2 = c.a;
+__device__ inline bool dsUnproject(const CameraParams& c, double px, double py, V3& ray) {
+  const double xi = c.params[4], alpha = c.params[5], w2 = c.constants.a;
   const V2 m = toNormalized(c, px, py);
   const double r2 = m.x * m.x + m.y * m.y;
   const double disc1 = 1.0 - (2.0 * alpha - 1.0) * r2;
@@ -243,36 +243,36 @@ __device__ inline double rtSolveRadius(const double* k, double rd, double rMax) 
   return r;
 }
 // d(px)/d(p) = diag(f) Jd Jn for the 2x3 Jacobian Jn of the undistorted point.
-__device__ __forceinline__ void rtChain(const CamDev& c, const double Jd[2][2], const double Jn[2][3], J23* J) {
-  const double f[2] = {c.p[0], c.p[1]};
+__device__ __forceinline__ void rtChain(const CameraParams& c, const double Jd[2][2], const double Jn[2][3], J23* J) {
+  const double f[2] = {c.params[0], c.params[1]};
   for (int r = 0; r < 2; ++r)
     for (int col = 0; col < 3; ++col) J->m[r][col] = f[r] * (Jd[r][0] * Jn[0][col] + Jd[r][1] * Jn[1][col]);
 }
 
 // --- Pinhole + radial-tangential ---
-__device__ inline bool rtProject(const CamDev& c, const V3& p, V2& px, J23* J) {
+__device__ inline bool rtProject(const CameraParams& c, const V3& p, V2& px, J23* J) {
   if (!(p.z > 1e-6 * norm3(p))) return false;
   const double iz = 1.0 / p.z;
   const double nx = p.x * iz, ny = p.y * iz;
   double Jd[2][2];
-  const V2 md = rtDistort(c.p + 4, nx, ny, J ? Jd : nullptr);
+  const V2 md = rtDistort(c.params + 4, nx, ny, J ? Jd : nullptr);
   px = toPixel(c, md.x, md.y);
   if (!J) return true;
   const double Jn[2][3] = {{iz, 0, -nx * iz}, {0, iz, -ny * iz}};
   rtChain(c, Jd, Jn, J);
   return true;
 }
-__device__ inline bool rtUnproject(const CamDev& c, double px, double py, V3& ray) {
+__device__ inline bool rtUnproject(const CameraParams& c, double px, double py, V3& ray) {
   const V2 m = toNormalized(c, px, py);
   V2 n;
-  if (!rtUndistort(c.p + 4, m, m, n)) return false;
+  if (!rtUndistort(c.params + 4, m, m, n)) return false;
   ray = normalized(V3{n.x, n.y, 1.0});
   return true;
 }
 
 // --- MEI: unified projection, then radial-tangential distortion ---
-__device__ inline bool meiProject(const CamDev& c, const V3& p, V2& px, J23* J) {
-  const double xi = c.p[4], w = c.a, rMax = c.b;
+__device__ inline bool meiProject(const CameraParams& c, const V3& p, V2& px, J23* J) {
+  const double xi = c.params[4], w = c.constants.a, rMax = c.constants.b;
   const double d = norm3(p);
   if (!(p.z > -w * d)) return false;
   const double den = p.z + xi * d;
@@ -281,7 +281,7 @@ __device__ inline bool meiProject(const CamDev& c, const V3& p, V2& px, J23* J) 
   const double mx = p.x * inv, my = p.y * inv;
   if (!(sqrt(mx * mx + my * my) < rMax)) return false;
   double Jd[2][2];
-  const V2 md = rtDistort(c.p + 5, mx, my, J ? Jd : nullptr);
+  const V2 md = rtDistort(c.params + 5, mx, my, J ? Jd : nullptr);
   px = toPixel(c, md.x, md.y);
   if (!J) return true;
   const double k = xi / d;
@@ -291,18 +291,18 @@ __device__ inline bool meiProject(const CamDev& c, const V3& p, V2& px, J23* J) 
   rtChain(c, Jd, Jm, J);
   return true;
 }
-__device__ inline bool meiUnproject(const CamDev& c, double px, double py, V3& ray) {
-  const double xi = c.p[4], w = c.a, rMax = c.b;
+__device__ inline bool meiUnproject(const CameraParams& c, double px, double py, V3& ray) {
+  const double xi = c.params[4], w = c.constants.a, rMax = c.constants.b;
   const V2 md = toNormalized(c, px, py);
   if (!isfinite(md.x) || !isfinite(md.y)) return false;
   const double rd = sqrt(md.x * md.x + md.y * md.y);
   V2 start = md;
   if (rd > 0) {
-    const double s = rtSolveRadius(c.p + 5, rd, rMax) / rd;
+    const double s = rtSolveRadius(c.params + 5, rd, rMax) / rd;
     start = {md.x * s, md.y * s};
   }
   V2 m;
-  if (!rtUndistort(c.p + 5, md, start, m)) return false;
+  if (!rtUndistort(c.params + 5, md, start, m)) return false;
   const double r2 = m.x * m.x + m.y * m.y;
   if (!(sqrt(r2) < rMax)) return false;
   const double disc = 1.0 + (1.0 - xi * xi) * r2;
@@ -312,7 +312,7 @@ __device__ inline bool meiUnproject(const CamDev& c, double px, double py, V3& r
   return ray.z > -w * norm3(ray);
 }
 
-__device__ inline bool cameraProject(const CamDev& c, const V3& p, V2& px, J23* J = nullptr) {
+__device__ inline bool cameraProject(const CameraParams& c, const V3& p, V2& px, J23* J = nullptr) {
   switch (c.model) {
     case kUnified:
       return ucmProject(c, p, px, J);
@@ -328,7 +328,7 @@ __device__ inline bool cameraProject(const CamDev& c, const V3& p, V2& px, J23* 
       return kbProject(c, p, px, J);
   }
 }
-__device__ inline bool cameraUnproject(const CamDev& c, double px, double py, V3& ray) {
+__device__ inline bool cameraUnproject(const CameraParams& c, double px, double py, V3& ray) {
   switch (c.model) {
     case kUnified:
       return ucmUnproject(c, px, py, ray);

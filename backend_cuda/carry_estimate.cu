@@ -16,7 +16,7 @@ struct Sample {
 };
 
 // The state at the src pixel nearest to the projection of direction d (the oracle's lookUp).
-__device__ Sample lookUp(const Img& src, const CamDev& cam, const V3& d) {
+__device__ Sample lookUp(const Img& src, const CameraParams& cam, const V3& d) {
   Sample s{-1.f, 0.f, {0, 0, 0}, false};
   V2 px;
   if (!cameraProject(cam, d, px)) return s;
@@ -29,7 +29,7 @@ __device__ Sample lookUp(const Img& src, const CamDev& cam, const V3& d) {
   return s;
 }
 
-__global__ void carryEstimateKernel(Img dst, Img src, Img guess, const float* motion, Img mask, CarryDev p) {
+__global__ void carryEstimateKernel(Img dst, Img src, Img guess, const float* motion, Img mask, CarryParams p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= dst.width || y >= dst.height) return;
@@ -86,7 +86,7 @@ __global__ void carryEstimateKernel(Img dst, Img src, Img guess, const float* mo
 }  // namespace
 
 cudaError_t launchCarryEstimate(cudaStream_t s, Img dst, Img src, Img guess, const float* motion, Img mask,
-                                const CarryDev& p) {
+                                const CarryParams& p) {
   const dim3 block(16, 8);
   CS_LAUNCH(carryEstimateKernel, grid2d(dst.width, dst.height, block), block, 0, s, dst, src, guess, motion, mask, p);
   return cudaGetLastError();

@@ -32,46 +32,8 @@ int parseDeviceIndex(const std::string& device) {
 
 std::string versionText(int v) { return std::to_string(v / 1000) + "." + std::to_string((v % 1000) / 10); }
 
-static_assert(cudak::kCamParams == kMaxCameraParams, "CamDev must hold every camera parameter");
-
-cudak::CamDev camDev(const CameraParams& c) {
-  cudak::CamDev d{};
-  d.model = c.model;
-  d.width = c.width;
-  d.height = c.height;
-  std::copy(c.params, c.params + kMaxCameraParams, d.p);
-  const CameraConstants k = cameraConstants(c);
-  d.a = k.a;
-  d.b = k.b;
-  return d;
-}
-
 cudak::Img img(float* data, const Buffer& b) { return cudak::Img{data, b.width, b.height, b.channels}; }
 
-// The sweep's parameters on the device (Backend has checked planes, radius and shapes).
-cudak::SweepDev sweepDev(const SweepParams& p) {
-  cudak::SweepDev d{};
-  d.cam = camDev(p.cam);
-  std::copy(p.t, p.t + 3, d.t);
-  d.qMax = p.qMax;
-  d.planes = p.planes;
-  d.radius = p.radius;
-  d.p1 = p.p1;
-  d.p2 = p.p2;
-  d.flatVariance = p.flatVariance;
-  d.band = p.band;
-  return d;
-}
-
-// The contracts' limits (backend.hpp) are the kernels' limits.
-static_assert(cudak::kMaxSweepPlanes == kMaxSweepPlanes,
-              "launchSweepAggregate's lanes hold kMaxSweepPlanes / 32 planes each");
-static_assert(cudak::kMaxSweepBand == kMaxSweepBand, "launchSweepBandAggregate's lanes hold one hypothesis each");
-static_assert(cudak::kBandMargin == kBandMargin, "sweepBandWarp's contract");
-static_assert(cudak::kMaxTaps == 2 * kMaxTensorRadius + 1, "structure tensor taps");
-static_assert(cudak::kMaxNormaliseTaps == 2 * kMaxNormaliseRadius + 1, "normalise taps");
-static_assert(cudak::kMotionFloats == kMotionFloats, "the motion buffer");
-static_assert(cudak::kCarryTie == kCarryTie, "kernels.hpp mirrors backend.hpp");
 static_assert(cudak::kMaxInlineFloats >= kMotionFloats, "the motion is uploaded by its launch");
 
 }  // namespace
@@ -337,20 +299,14 @@ void CudaBackend::doCopy(const Buffer& dst, const Buffer& src) {
 void CudaBackend::doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
                            const FieldsParams& p) {
   flush();
-  cudak::FieldsDev d{};
-  d.cam0 = camDev(p.cam0);
-  d.cam1 = camDev(p.cam1);
-  std::copy(p.R, p.R + 9, d.R);
-  std::copy(p.t, p.t + 3, d.t);
   // t' = R^T t and its direction, as fieldsAtPixel computes them (Eigen, double).
   const Eigen::Matrix3d R = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(p.R);
   const Eigen::Vector3d tPrime = R.transpose() * Eigen::Vector3d(p.t[0], p.t[1], p.t[2]);
   const Eigen::Vector3d dir = tPrime.normalized();
-  for (int i = 0; i < 3; ++i) d.tPrime[i] = tPrime[i], d.baselineDir[i] = dir[i];
-  d.maxFovDeg = p.maxFovDeg;
-  d.epipoleDeg = p.epipoleDeg;
+  cudak::FieldsBaseline baseline{};
+  for (int i = 0; i < 3; ++i) baseline.tPrime[i] = tPrime[i], baseline.direction[i] = dir[i];
   check(cudak::launchFields(stream_, img(slot(mask).dev, mask), img(slot(calibration).dev, calibration),
-                            img(slot(trajectory).dev, trajectory), d),
+                            img(slot(trajectory).dev, trajectory), p, baseline),
         "fields");
   dropGraph();  // a new pose changes the frame's parameters (t' of triangulate)
 }
@@ -359,21 +315,16 @@ void CudaBackend::doTriangulate(const Buffer& radial, const Buffer& points, cons
                                 const CameraParams& cam0, const double tPrime[3]) {
   flush();
   check(cudak::launchTriangulate(stream_, img(slot(radial).dev, radial), img(slot(points).dev, points),
-                                 img(slot(w).dev, w), img(slot(mask).dev, mask), camDev(cam0), tPrime),
+                                 img(slot(w).dev, w), img(slot(mask).dev, mask), cam0, tPrime),
         "triangulate");
 }
 
 void CudaBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
                                   const Buffer& mask, const CarryParams& p) {
   flush();
-  cudak::CarryDev d{};
-  d.srcCam = camDev(p.srcCam);
-  d.dstCam = camDev(p.dstCam);
-  std::copy(p.extraT, p.extraT + 3, d.extraT);
-  d.iterations = p.iterations;
   const cudak::Img guessImg = guess.id >= 0 ? img(slot(guess).dev, guess) : cudak::Img{nullptr, 0, 0, 0};
   check(cudak::launchCarryEstimate(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), guessImg,
-                                   slot(motion).dev, img(slot(mask).dev, mask), d),
+                                   slot(motion).dev, img(slot(mask).dev, mask), p),
         "carryEstimate");
 }
 
@@ -381,18 +332,10 @@ void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const B
                                    const Buffer& radial, const Buffer& points, const Buffer& confidence,
                                    const Buffer& mask, const TemporalParams& p) {
   flush();
-  cudak::TemporalDev d{};
-  d.cam = camDev(p.cam);
-  std::copy(p.tPrime, p.tPrime + 3, d.tPrime);
-  d.strength = p.strength;
-  d.gate = p.gate;
-  d.sigmaPx = p.sigmaPx;
-  d.processPx = p.processPx;
-  d.minConfidence = p.minConfidence;
   const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
   check(cudak::launchTemporalFilter(stream_, img(slot(state).dev, state), img(slot(u).dev, u), img(slot(w).dev, w),
                                     img(slot(prior).dev, prior), img(slot(radial).dev, radial),
-                                    img(slot(points).dev, points), weight, img(slot(mask).dev, mask), d),
+                                    img(slot(points).dev, points), weight, img(slot(mask).dev, mask), p),
         "temporalFilter");
 }
 
@@ -420,52 +363,45 @@ void CudaBackend::doResultConfidence(const Buffer& confidence, const Buffer& rad
                                      const Buffer& trajectory, const Buffer& sweepConfidence,
                                      const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
   flush();
-  const cudak::ConfidenceDev d{p.radius,      p.noise,          p.sigmaPx,    p.residualScale,
-                               p.roundTripPx, p.roundTripMaxPx, p.infinityPx, p.invalidBelow,
-                               p.maxDeviationPx};
   auto optional = [&](const Buffer& b) { return b.id >= 0 ? img(slot(b).dev, b) : cudak::Img{nullptr, 0, 0, 0}; };
   check(
       cudak::launchResultConfidence(stream_, img(slot(confidence).dev, confidence), img(slot(radial).dev, radial),
                                     img(slot(points).dev, points), img(slot(image).dev, image), img(slot(n0).dev, n0),
                                     img(slot(n1).dev, n1), img(slot(w).dev, w), img(slot(trajectory).dev, trajectory),
-                                    optional(sweepConfidence), optional(roundTripError), img(slot(mask).dev, mask), d),
+                                    optional(sweepConfidence), optional(roundTripError), img(slot(mask).dev, mask), p),
       "resultConfidence");
 }
 
 void CudaBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepWarp(stream_, img(slot(volume).dev, volume), img(slot(image).dev, image),
-                               img(slot(mask).dev, mask), d),
+                               img(slot(mask).dev, mask), p),
         "sweepWarp");
 }
 
 void CudaBackend::doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
                               const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepCost(stream_, img(slot(costs).dev, costs), img(slot(reference).dev, reference),
-                               img(slot(volume).dev, volume), img(slot(mask).dev, mask), d),
+                               img(slot(volume).dev, volume), img(slot(mask).dev, mask), p),
         "sweepCost");
 }
 
 void CudaBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                                    const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p);
   // The three directions walked beside +x need a buffer each (scratch, kept for the next frame).
   const cudak::Img spare{scratch(3 * aggregated.count(), 3), aggregated.width, aggregated.height, aggregated.channels};
   check(cudak::launchSweepAggregate(stream_, img(slot(aggregated).dev, aggregated), spare, img(slot(costs).dev, costs),
-                                    img(slot(mask).dev, mask), d),
+                                    img(slot(mask).dev, mask), p),
         "sweepAggregate");
 }
 
 void CudaBackend::doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                                 const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepSelect(stream_, img(slot(best).dev, best), img(slot(aggregated).dev, aggregated),
-                                 img(slot(costs).dev, costs), img(slot(mask).dev, mask), d),
+                                 img(slot(costs).dev, costs), img(slot(mask).dev, mask), p),
         "sweepSelect");
 }
 
@@ -473,11 +409,9 @@ void CudaBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Buff
                                     const Buffer& other, const Buffer& mask, const SweepParams& p,
                                     const ConsistencyParams& c) {
   flush();
-  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepInitialise(stream_, img(slot(u).dev, u), img(slot(w).dev, w),
                                      img(slot(confidence).dev, confidence), img(slot(best).dev, best),
-                                     img(slot(other).dev, other), img(slot(mask).dev, mask), d,
-                                     cudak::ConsistencyDev{c.tolerancePx, c.acceptConfidence, c.maxCost}),
+                                     img(slot(other).dev, other), img(slot(mask).dev, mask), p, c),
         "sweepInitialise");
 }
 
@@ -485,43 +419,39 @@ void CudaBackend::doSweepBandWarp(const Buffer& volume, const Buffer& first, con
                                   const Buffer& coarseBest, const Buffer& mask, const SweepParams& p,
                                   float coarseScale) {
   flush();
-  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepBandWarp(stream_, img(slot(volume).dev, volume), img(slot(first).dev, first),
                                    img(slot(image).dev, image), img(slot(coarseBest).dev, coarseBest),
-                                   img(slot(mask).dev, mask), d, coarseScale),
+                                   img(slot(mask).dev, mask), p, coarseScale),
         "sweepBandWarp");
 }
 
 void CudaBackend::doSweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume,
                                   const Buffer& first, const Buffer& mask, const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepBandCost(stream_, img(slot(costs).dev, costs), img(slot(reference).dev, reference),
                                    img(slot(volume).dev, volume), img(slot(first).dev, first),
-                                   img(slot(mask).dev, mask), d),
+                                   img(slot(mask).dev, mask), p),
         "sweepBandCost");
 }
 
 void CudaBackend::doSweepBandAggregate(const Buffer& aggregated, const Buffer& costs, const Buffer& first,
                                        const Buffer& mask, const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p);
   // As sweepAggregate: the three directions walked beside +x need a buffer each (the same
   // scratch role: the two aggregations never run at once).
   const cudak::Img spare{scratch(3 * aggregated.count(), 3), aggregated.width, aggregated.height, aggregated.channels};
   check(cudak::launchSweepBandAggregate(stream_, img(slot(aggregated).dev, aggregated), spare,
                                         img(slot(costs).dev, costs), img(slot(first).dev, first),
-                                        img(slot(mask).dev, mask), d),
+                                        img(slot(mask).dev, mask), p),
         "sweepBandAggregate");
 }
 
 void CudaBackend::doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs,
                                     const Buffer& first, const Buffer& mask, const SweepParams& p) {
   flush();
-  const cudak::SweepDev d = sweepDev(p);
   check(cudak::launchSweepBandSelect(stream_, img(slot(best).dev, best), img(slot(aggregated).dev, aggregated),
                                      img(slot(costs).dev, costs), img(slot(first).dev, first),
-                                     img(slot(mask).dev, mask), d),
+                                     img(slot(mask).dev, mask), p),
         "sweepBandSelect");
 }
 
@@ -548,37 +478,32 @@ void CudaBackend::doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buf
   flush();
   auto dev = [&](const Buffer& b) { return img(slot(b).dev, b); };
   check(cudak::launchUpsampleEstimate(stream_, dev(u), dev(w), dev(coarseU), dev(coarseW), dev(n0), dev(n1), dev(mask),
-                                      {p.scale, p.edge, p.radius}),
+                                      p),
         "upsampleEstimate");
 }
 
 void CudaBackend::doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
                               const NormaliseParams& p) {
   flush();
-  cudak::NormaliseDev d{};
-  d.radius = p.radius;
-  std::copy(p.taps, p.taps + 2 * p.radius + 1, d.taps);
-  d.epsilon = p.epsilon;
   check(cudak::launchNormalise(stream_, img(slot(dst).dev, dst), img(slot(moments).dev, moments),
-                               img(slot(src).dev, src), img(slot(mask).dev, mask), d),
+                               img(slot(src).dev, src), img(slot(mask).dev, mask), p),
         "normalise");
 }
 
 void CudaBackend::doStructureTensor(const Buffer& tensor, const Buffer& steps, const Buffer& image, const Buffer& mask,
                                     const TensorParams& p) {
   flush();
-  cudak::TensorDev d{};
-  d.beta = p.beta, d.eta = p.eta, d.wMin = p.wMin, d.alpha0 = p.alpha0, d.alpha1 = p.alpha1;
-  d.radius = -1;
+  cudak::TensorTaps taps{};
+  taps.radius = -1;
   if (p.sigma > 0.f) {
     // The oracle's taps; radius <= kMaxTensorRadius (Backend checked).
-    const std::vector<float> taps = gaussianTaps(p.sigma);
-    std::copy(taps.begin(), taps.end(), d.taps);
-    d.radius = int(taps.size() / 2);
+    const std::vector<float> t = gaussianTaps(p.sigma);
+    std::copy(t.begin(), t.end(), taps.taps);
+    taps.radius = int(t.size() / 2);
   }
   const size_t n = size_t(image.width) * image.height;
   check(cudak::launchStructureTensor(stream_, img(slot(tensor).dev, tensor), img(slot(steps).dev, steps),
-                                     img(slot(image).dev, image), img(slot(mask).dev, mask), d, scratch(n, 0),
+                                     img(slot(image).dev, image), img(slot(mask).dev, mask), p, taps, scratch(n, 0),
                                      scratch(n, 1)),
         "structureTensor");
 }
@@ -648,11 +573,11 @@ void CudaBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& da
   d.u0 = slot(data.u0).dev, d.iu = slot(data.iu).dev, d.iz = slot(data.iz).dev;
   d.tensor = slot(tensor).dev, d.steps = slot(steps).dev, d.mask = slot(mask).dev;
   d.width = w, d.height = h;
-  d.lambda = params.lambda, d.alpha0 = params.alpha0, d.alpha1 = params.alpha1;
-  std::vector<cudak::StepDev> schedule;
+  d.weights = params;
+  std::vector<cudak::DeviceStep> schedule;
   for (const PrimalDualStep& s : params.schedule) {
     const float sigmaQ = s.sigmaScale * 0.5f / params.alpha0;  // as cpu/primal_dual.cpp
-    schedule.push_back({s.tauScale, s.sigmaScale, s.theta, sigmaQ * params.alpha0});
+    schedule.push_back({s, sigmaQ * params.alpha0});
   }
   if (schedule.empty()) {  // no iteration to read u, v in their place: the copies themselves
     if (barsFromPrimals) doCopy(pd.uBar, pd.u), doCopy(pd.vBar, pd.v);

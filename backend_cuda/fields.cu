@@ -9,11 +9,11 @@ namespace {
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 // The ray lies farther than halfFov from its camera's optical axis (z); off without a limit.
-__device__ bool beyondFov(const V3& ray, const FieldsDev& p) {
+__device__ bool beyondFov(const V3& ray, const FieldsParams& p) {
   return p.maxFovDeg > 0 && atan2(sqrt(ray.x * ray.x + ray.y * ray.y), ray.z) > 0.5 * p.maxFovDeg * kDegToRad;
 }
 
-__global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsDev p) {
+__global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsParams p, FieldsBaseline b) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= mask.width || y >= mask.height) return;
@@ -23,7 +23,7 @@ __global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsDe
   do {
     if (!cameraUnproject(p.cam0, double(x), double(y), ray)) break;
     if (beyondFov(ray, p)) break;
-    const double c = fabs(ray.x * p.baselineDir[0] + ray.y * p.baselineDir[1] + ray.z * p.baselineDir[2]);
+    const double c = fabs(ray.x * b.direction[0] + ray.y * b.direction[1] + ray.z * b.direction[2]);
     if (acos(fmin(1.0, c)) < p.epipoleDeg * kDegToRad) break;
     const V3 r1{p.R[0] * ray.x + p.R[1] * ray.y + p.R[2] * ray.z, p.R[3] * ray.x + p.R[4] * ray.y + p.R[5] * ray.z,
                 p.R[6] * ray.x + p.R[7] * ray.y + p.R[8] * ray.z};
@@ -34,8 +34,8 @@ __global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsDe
     V2 proj;
     J23 J;
     if (!cameraProject(p.cam0, ray, proj, &J)) break;
-    double gx = J.m[0][0] * p.tPrime[0] + J.m[0][1] * p.tPrime[1] + J.m[0][2] * p.tPrime[2];
-    double gy = J.m[1][0] * p.tPrime[0] + J.m[1][1] * p.tPrime[1] + J.m[1][2] * p.tPrime[2];
+    double gx = J.m[0][0] * b.tPrime[0] + J.m[0][1] * b.tPrime[1] + J.m[0][2] * b.tPrime[2];
+    double gy = J.m[1][0] * b.tPrime[0] + J.m[1][1] * b.tPrime[1] + J.m[1][2] * b.tPrime[2];
     const double n = sqrt(gx * gx + gy * gy);
     if (!(n > 1e-12)) break;
     gx /= n;
@@ -55,9 +55,11 @@ __global__ void fieldsKernel(Img mask, Img calibration, Img trajectory, FieldsDe
 
 }  // namespace
 
-cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsDev& p) {
+cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsParams& p,
+                         const FieldsBaseline& baseline) {
   const dim3 block(16, 8);
-  CS_LAUNCH(fieldsKernel, grid2d(mask.width, mask.height, block), block, 0, s, mask, calibration, trajectory, p);
+  CS_LAUNCH(fieldsKernel, grid2d(mask.width, mask.height, block), block, 0, s, mask, calibration, trajectory, p,
+            baseline);
   return cudaGetLastError();
 }
 

@@ -1,9 +1,13 @@
-// The CUDA kernels' host-side interface: plain-data descriptions of buffers and
-// parameters, and one launcher per stage (each defined in the .cu file named after the
-// stage). Launchers enqueue on the given stream and return cudaGetLastError().
-// Included by host C++ (cuda_backend.cpp) and by the .cu files; no Eigen, no core types.
+// The CUDA kernels' host-side interface: one launcher per stage (each defined in the .cu
+// file named after the stage), taking the kernel parameters of the Backend interface
+// (curvestereo/kernel_params.hpp) as they are, plus device buffer views and the few values
+// derived from those parameters on the host. Launchers enqueue on the given stream and
+// return cudaGetLastError(). Included by host C++ (cuda_backend.cpp) and by the .cu files;
+// no Eigen.
 #pragma once
 #include <cuda_runtime_api.h>
+
+#include "curvestereo/kernel_params.hpp"
 
 namespace cs::cudak {
 
@@ -13,65 +17,24 @@ struct Img {
   int width, height, channels;
 };
 
-// A camera in the form the device camera models take (double precision, as the oracle).
-// a, b: what each model's constructor precomputes on the host, from cs::cameraConstants
-// (core): Kannala-Brandt 4: thetaMax, radiusMax;  unified, extended unified: w;  double sphere: w2;
-// MEI: w, rMax. kCamParams is cs::kMaxCameraParams (cuda_backend.cpp checks it).
-constexpr int kCamParams = 12;
-struct CamDev {
-  int model;  // CameraModel
-  int width, height;
-  double p[kCamParams];
-  double a, b;
+// What the fields take besides FieldsParams: t' = R^T t and its direction, derived on the
+// host with Eigen in double, as fieldsAtPixel (core/src/fields.cpp) derives them.
+struct FieldsBaseline {
+  double tPrime[3];
+  double direction[3];  // tPrime normalised
 };
 
-struct FieldsDev {
-  CamDev cam0, cam1;
-  double R[9], t[3];
-  double tPrime[3];       // R^T t
-  double baselineDir[3];  // tPrime normalised
-  double maxFovDeg, epipoleDeg;
-};
-
-// The plane sweep (SweepParams): the level's camera, the translation to the other view,
-// the nearest sphere's inverse depth, the number of spheres, the ZNCC window radius and
-// the aggregation penalties.
-struct SweepDev {
-  CamDev cam;
-  double t[3];
-  double qMax;
-  int planes, radius;
-  float p1, p2;
-  float flatVariance;
-  int band;  // the band sweep's hypotheses a pixel (SweepParams::band)
-};
-constexpr int kMaxSweepPlanes = 512;  // launchSweepAggregate: 16 planes a lane (= cs::kMaxSweepPlanes)
-constexpr int kMaxSweepBand = 32;     // the band aggregation: one lane a hypothesis (= cs::kMaxSweepBand)
-constexpr int kBandMargin = 2;        // = cs::kBandMargin (sweepBandWarp's contract)
-// The left-right check (ConsistencyParams).
-struct ConsistencyDev {
-  float tolerancePx, acceptConfidence, maxCost;
-};
-
-constexpr int kMaxTaps = 255;  // Gaussian pre-smoothing radius up to 127 px
-struct TensorDev {
-  float beta, eta, wMin, alpha0, alpha1;
-  int radius;  // -1: no smoothing (copy)
-  float taps[kMaxTaps];
-};
-
-// Local contrast normalisation (NormaliseParams): taps[0 .. 2 radius], 0 <= radius <= 24.
-constexpr int kMaxNormaliseTaps = 49;
-struct NormaliseDev {
+// The structure tensor's Gaussian pre-smoothing, derived from TensorParams::sigma on the
+// host (cs::gaussianTaps, the oracle's taps): taps[0 .. 2 radius]; radius -1: none (copy).
+struct TensorTaps {
   int radius;
-  float taps[kMaxNormaliseTaps];
-  float epsilon;
+  float taps[2 * kMaxTensorRadius + 1];
 };
 
-struct StepDev {
-  float tauScale, sigmaScale, theta;
-  // sigmaScale * 0.5 / alpha0 * alpha0, the q ascent's factor: the oracle's per-pixel
-  // expression, evaluated once on the host in the same order (stepDev()).
+// One primal-dual iteration's steps and the q ascent's factor sigmaScale * 0.5 / alpha0 *
+// alpha0: the oracle's per-pixel expression, evaluated once on the host in the same order
+// (CudaBackend::iterate).
+struct DeviceStep : PrimalDualStep {
   float qAscent;
 };
 
@@ -96,7 +59,7 @@ struct PrimalDualDev {
   const float* steps;   // 4 ch
   const float* mask;
   int width, height;
-  float lambda, alpha0, alpha1;
+  PrimalDualWeights weights;
 };
 
 // Queued copies and fills that touch disjoint buffers, run by one launch (src null: fill).
@@ -121,60 +84,42 @@ struct InlineFloats {
   float value[kMaxInlineFloats];
 };
 cudaError_t launchSetFloats(cudaStream_t s, float* dst, const InlineFloats& values);
-cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsDev& p);
-cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img mask, const CamDev& cam0,
+cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsParams& p,
+                         const FieldsBaseline& baseline);
+cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img mask, const CameraParams& cam0,
                               const double tPrime[3]);
 
 // Sequences (carry_estimate.cu, temporal_filter.cu; backend.hpp carryEstimate,
 // temporalFilter). motion: kMotionFloats floats on the device (R row-major, then t), read
 // by the kernel, so that a recorded frame uses each frame's upload.
-constexpr int kMotionFloats = 12;   // = cs::kMotionFloats
-constexpr double kCarryTie = 1e-3;  // = cs::kCarryTie
-struct CarryDev {                   // cs::CarryParams
-  CamDev srcCam, dstCam;
-  double extraT[3];
-  int iterations;
-};
 // guess.data null: none (the first q from src).
 cudaError_t launchCarryEstimate(cudaStream_t s, Img dst, Img src, Img guess, const float* motion, Img mask,
-                                const CarryDev& p);
-struct TemporalDev {  // cs::TemporalParams
-  CamDev cam;
-  double tPrime[3];
-  float strength, gate, sigmaPx, processPx, minConfidence;
-};
+                                const CarryParams& p);
 // confidence.data null: 1 everywhere.
 cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img points,
-                                 Img confidence, Img mask, const TemporalDev& p);
+                                 Img confidence, Img mask, const TemporalParams& p);
 // The result's confidence (round_trip.cu, result_confidence.cu; backend.hpp roundTrip,
 // resultConfidence).
 cudaError_t launchRoundTrip(cudaStream_t s, Img error, Img w, Img calibration, Img reverseW, Img reverseCalibration,
                             Img reverseMask, Img mask);
-struct ConfidenceDev {  // cs::ConfidenceParams
-  int radius;
-  float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow, maxDeviationPx;
-};
-// sweepConfidence.data, roundTripError.data null: absent.
+// sweepConfidence.data, roundTripError.data null: absent. scratch: 4 floats a pixel
+// (16-byte aligned).
 cudaError_t launchResultConfidence(cudaStream_t s, Img confidence, Img radial, Img points, Img image, Img n0, Img n1,
                                    Img w, Img trajectory, Img sweepConfidence, Img roundTripError, Img mask,
-                                   const ConfidenceDev& p);
+                                   const ConfidenceParams& p, float* scratch);
 // The result as the user sees it (finish_result.cu; backend.hpp finishResult).
 cudaError_t launchFinishResult(cudaStream_t s, Img valid, Img z, Img radial, Img points, Img disparity, Img warp,
                                Img confidence);
 cudaError_t launchWarp(cudaStream_t s, Img dst, Img src, Img flow);
 cudaError_t launchDownsample(cudaStream_t s, Img dst, Img src, float scale);
 cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float valueScale);
-struct EstimateUpsampleDev {  // cs::EstimateUpsampleParams
-  float scale, edge;
-  int radius;
-};
 cudaError_t launchUpsampleEstimate(cudaStream_t s, Img u, Img w, Img coarseU, Img coarseW, Img n0, Img n1, Img mask,
-                                   const EstimateUpsampleDev& p);
+                                   const EstimateUpsampleParams& p);
 // moments: 3 ch scratch (the horizontal pass's sums of weight, weight src, weight src^2).
-cudaError_t launchNormalise(cudaStream_t s, Img dst, Img moments, Img src, Img mask, const NormaliseDev& p);
+cudaError_t launchNormalise(cudaStream_t s, Img dst, Img moments, Img src, Img mask, const NormaliseParams& p);
 // tmpRows, tmpSmooth: scratch of image.width * image.height floats each.
-cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorDev& p,
-                                  float* tmpRows, float* tmpSmooth);
+cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorParams& p,
+                                  const TensorTaps& taps, float* tmpRows, float* tmpSmooth);
 // What warpDerivatives writes besides u0 (the data term's slope and offset, and the
 // tangent of the epipolar curve at x + w), and what it reads besides w and u.
 struct DataTermOut {
@@ -196,7 +141,7 @@ int primalDualTiledResidentBlocks(int device);
 // .steps (the first launch then loads them before it waits for that kernel to finish).
 // endSet: the set that holds the result (0 or 1; the caller swaps the sets' roles rather
 // than copying). Pixels outside the mask keep their values.
-cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
+cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const DeviceStep* steps, int count,
                              int residentTiledBlocks, bool geometrySettled, int& endSet);
 cudaError_t launchMedian(cudaStream_t s, Img dst, Img src, Img mask);
 // With `next` (not null), each pixel then goes on to the next warp's launchWarpDerivatives
@@ -217,12 +162,12 @@ cudaError_t launchMedianAccumulate(cudaStream_t s, Img uOut, Img median, Img u, 
 // reverse sweep's best. launchSweepAggregate: p.planes <= kMaxSweepPlanes (else
 // cudaErrorInvalidValue); aggregated and costs must not alias; spare: scratch of three
 // times aggregated's size (the directions other than +x, walked at the same time).
-cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepDev& p);
-cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume, Img mask, const SweepDev& p);
-cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p);
-cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img mask, const SweepDev& p);
+cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepParams& p);
+cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume, Img mask, const SweepParams& p);
+cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepParams& p);
+cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img mask, const SweepParams& p);
 cudaError_t launchSweepInitialise(cudaStream_t s, Img u, Img w, Img confidence, Img best, Img other, Img mask,
-                                  const SweepDev& p, const ConsistencyDev& c);
+                                  const SweepParams& p, const ConsistencyParams& c);
 
 // The band sweep (sweep_band.cu): volume, costs and aggregated have p.band channels
 // (2 <= p.band <= kMaxSweepBand, else cudaErrorInvalidValue), channel k hypothesis
@@ -230,12 +175,12 @@ cudaError_t launchSweepInitialise(cudaStream_t s, Img u, Img w, Img confidence, 
 // coarser level's sweepSelect) and the fine-per-coarse pixel scale. launchSweepBandAggregate:
 // aggregated and costs must not alias; spare: scratch of three times aggregated's size.
 cudaError_t launchSweepBandWarp(cudaStream_t s, Img volume, Img first, Img image, Img coarseBest, Img mask,
-                                const SweepDev& p, float coarseScale);
+                                const SweepParams& p, float coarseScale);
 cudaError_t launchSweepBandCost(cudaStream_t s, Img costs, Img reference, Img volume, Img first, Img mask,
-                                const SweepDev& p);
+                                const SweepParams& p);
 cudaError_t launchSweepBandAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img first, Img mask,
-                                     const SweepDev& p);
+                                     const SweepParams& p);
 cudaError_t launchSweepBandSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img first, Img mask,
-                                  const SweepDev& p);
+                                  const SweepParams& p);
 
 }  // namespace cs::cudak

@@ -10,7 +10,7 @@ namespace cs::cudak {
 
 namespace {
 
-__global__ void normaliseMomentsKernel(Img moments, Img src, Img mask, NormaliseDev p) {
+__global__ void normaliseMomentsKernel(Img moments, Img src, Img mask, NormaliseParams p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= src.width || y >= src.height) return;
@@ -30,7 +30,7 @@ __global__ void normaliseMomentsKernel(Img moments, Img src, Img mask, Normalise
   m[0] = s0, m[1] = s1, m[2] = s2;
 }
 
-__global__ void normaliseKernel(Img dst, Img moments, Img src, Img mask, NormaliseDev p) {
+__global__ void normaliseKernel(Img dst, Img moments, Img src, Img mask, NormaliseParams p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= dst.width || y >= dst.height) return;
@@ -56,7 +56,7 @@ __global__ void normaliseKernel(Img dst, Img moments, Img src, Img mask, Normali
 
 }  // namespace
 
-cudaError_t launchNormalise(cudaStream_t s, Img dst, Img moments, Img src, Img mask, const NormaliseDev& p) {
+cudaError_t launchNormalise(cudaStream_t s, Img dst, Img moments, Img src, Img mask, const NormaliseParams& p) {
   const dim3 block(32, 8), grid = grid2d(src.width, src.height, block);
   CS_LAUNCH(normaliseMomentsKernel, grid, block, 0, s, moments, src, mask, p);
   CS_LAUNCH(normaliseKernel, grid, block, 0, s, dst, moments, src, mask, p);

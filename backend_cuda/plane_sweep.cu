@@ -44,7 +44,7 @@ constexpr int kMaxRingRadius = 4;  // radii with a register ring; wider windows 
 constexpr int kSelectThreads = 256;
 constexpr int kSelectPixels = kSelectThreads / 32;
 
-__global__ void __launch_bounds__(kWarpThreads) sweepWarpKernel(Img volume, Img image, Img mask, SweepDev p) {
+__global__ void __launch_bounds__(kWarpThreads) sweepWarpKernel(Img volume, Img image, Img mask, SweepParams p) {
   beginKernel();
   __shared__ V3 rays[kWarpPixels];
   __shared__ bool usable[kWarpPixels];
@@ -111,7 +111,7 @@ __device__ __forceinline__ bool costWork(const Img& costs, int planes, CostSourc
 // column per output, summed in dx order (the oracle's order).
 template <int R>
 __global__ void __launch_bounds__(kCostThreads)
-    sweepCostKernel(Img costs, Img reference, Img volume, Img mask, SweepDev p) {
+    sweepCostKernel(Img costs, Img reference, Img volume, Img mask, SweepParams p) {
   beginKernel();
   constexpr int kSide = 2 * R + 1;
   CostSource src{mask.data, reference.data, volume.data, costs.width, costs.height, p.planes};
@@ -136,7 +136,7 @@ __global__ void __launch_bounds__(kCostThreads)
 
 // Larger radii: each window's columns summed afresh (the same order, no ring).
 __global__ void __launch_bounds__(kCostThreads)
-    sweepCostWideKernel(Img costs, Img reference, Img volume, Img mask, SweepDev p) {
+    sweepCostWideKernel(Img costs, Img reference, Img volume, Img mask, SweepParams p) {
   beginKernel();
   CostSource src{mask.data, reference.data, volume.data, costs.width, costs.height, p.planes};
   int x0, x1;
@@ -291,7 +291,8 @@ __device__ Img directionBuffer(const Img& aggregated, const Img& spare, int dire
 }
 
 template <int J>
-__global__ void __launch_bounds__(32) sweepDirectionKernel(Img aggregated, Img spare, Img costs, Img mask, SweepDev p) {
+__global__ void __launch_bounds__(32)
+    sweepDirectionKernel(Img aggregated, Img spare, Img costs, Img mask, SweepParams p) {
   beginKernel();
   const int direction = blockIdx.y, line = blockIdx.x, width = costs.width;
   const bool rows = direction < 2;
@@ -322,7 +323,7 @@ __global__ void sweepCombineKernel(Img aggregated, Img spare) {
 }
 
 __global__ void __launch_bounds__(kSelectThreads)
-    sweepSelectKernel(Img best, Img aggregated, Img costs, Img mask, SweepDev p) {
+    sweepSelectKernel(Img best, Img aggregated, Img costs, Img mask, SweepParams p) {
   beginKernel();
   const int lane = threadIdx.x & 31;
   const long long pixel = (long long)blockIdx.x * kSelectPixels + threadIdx.x / 32;
@@ -352,7 +353,7 @@ __global__ void __launch_bounds__(kSelectThreads)
 // The round-trip confidence of pixel (x, y), its ray and x_q (`there`); false
 // (confidence 0) where the reference has no hypothesis or the round trip fails (the
 // oracle's RoundTrip::evaluated).
-__device__ bool roundTrip(const Img& best, const Img& other, const Img& mask, const SweepDev& p, float tolerancePx,
+__device__ bool roundTrip(const Img& best, const Img& other, const Img& mask, const SweepParams& p, float tolerancePx,
                           float maxCost, int x, int y, V3& ray, V2& there, float& confidence) {
   const float q = at(best, x, y, 0);
   if (!masked(mask, x, y) || q < 0.f || !cameraUnproject(p.cam, double(x), double(y), ray) ||
@@ -383,8 +384,8 @@ __device__ void storeWarp(const Img& u, const Img& w, const V2& there, int x, in
 }
 
 // Pass 1: confidence everywhere; consistent pixels take the sweep's hypothesis.
-__global__ void sweepInitialiseKernel(Img u, Img w, Img confidence, Img best, Img other, Img mask, SweepDev p,
-                                      ConsistencyDev c) {
+__global__ void sweepInitialiseKernel(Img u, Img w, Img confidence, Img best, Img other, Img mask, SweepParams p,
+                                      ConsistencyParams c) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= u.width || y >= u.height) return;
@@ -406,7 +407,7 @@ __global__ void sweepInitialiseKernel(Img u, Img w, Img confidence, Img best, Im
 // image motion of growing inverse depth), rounded to the nearest pixel and stopping at
 // the mask, find the first consistent pixel on each side within `reach`. When the one
 // behind is nearer (larger q) than the one ahead: the one ahead's q; -1 otherwise.
-__device__ double occludedSurface(const Img& best, const Img& confidence, const Img& mask, const SweepDev& p,
+__device__ double occludedSurface(const Img& best, const Img& confidence, const Img& mask, const SweepParams& p,
                                   float accept, const V3& ray, int x, int y, int reach) {
   V2 px;
   J23 J;
@@ -438,8 +439,8 @@ __device__ double occludedSurface(const Img& best, const Img& confidence, const 
 // occlusion) keep the coarse-to-fine estimate. Reads confidence around the pixel, writes
 // u and w at the pixel only. An occluded band is at most as wide as the largest motion,
 // about `planes` px, hence the reach.
-__global__ void sweepOcclusionKernel(Img u, Img w, Img confidence, Img best, Img other, Img mask, SweepDev p,
-                                     ConsistencyDev c) {
+__global__ void sweepOcclusionKernel(Img u, Img w, Img confidence, Img best, Img other, Img mask, SweepParams p,
+                                     ConsistencyParams c) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= u.width || y >= u.height) return;
@@ -454,13 +455,13 @@ __global__ void sweepOcclusionKernel(Img u, Img w, Img confidence, Img best, Img
 
 }  // namespace
 
-cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepDev& p) {
+cudaError_t launchSweepWarp(cudaStream_t s, Img volume, Img image, Img mask, const SweepParams& p) {
   const dim3 grid((volume.width + kWarpPixels - 1) / kWarpPixels, volume.height);
   CS_LAUNCH(sweepWarpKernel, grid, kWarpThreads, 0, s, volume, image, mask, p);
   return cudaGetLastError();
 }
 
-cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume, Img mask, const SweepDev& p) {
+cudaError_t launchSweepCost(cudaStream_t s, Img costs, Img reference, Img volume, Img mask, const SweepParams& p) {
   const int runs = (costs.width + kCostRun - 1) / kCostRun;
   const dim3 grid(unsigned((runs * p.planes + kCostThreads - 1) / kCostThreads), unsigned(costs.height));
   switch (p.radius) {
@@ -490,7 +491,7 @@ namespace {
 
 // The aggregation for J chunks of 32 planes: the four directions' walks, then their sum.
 template <int J>
-cudaError_t launchAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p) {
+cudaError_t launchAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepParams& p) {
   const dim3 grid(unsigned(max(costs.width, costs.height)), 4);
   CS_LAUNCH(sweepDirectionKernel<J>, grid, dim3(32), 0, s, aggregated, spare, costs, mask, p);
   const size_t n = size_t(aggregated.width) * aggregated.height * aggregated.channels;
@@ -502,7 +503,7 @@ cudaError_t launchAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs
 }  // namespace
 
 // Planes rounded up to a chunk count with a kernel (every count up to 6, then 8 and 16).
-cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepDev& p) {
+cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img mask, const SweepParams& p) {
   static_assert(kMaxSweepPlanes == 16 * 32, "the largest chunk count");
   switch ((p.planes + 31) / 32) {
     case 1:
@@ -534,7 +535,7 @@ cudaError_t launchSweepAggregate(cudaStream_t s, Img aggregated, Img spare, Img 
   }
 }
 
-cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img mask, const SweepDev& p) {
+cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img mask, const SweepParams& p) {
   const long long pixels = (long long)best.width * best.height;
   const dim3 grid(unsigned((pixels + kSelectPixels - 1) / kSelectPixels));
   CS_LAUNCH(sweepSelectKernel, grid, kSelectThreads, 0, s, best, aggregated, costs, mask, p);
@@ -544,7 +545,7 @@ cudaError_t launchSweepSelect(cudaStream_t s, Img best, Img aggregated, Img cost
 // Two launches: the occlusion pass reads the confidence of pixels around its own, which
 // the first pass must have written everywhere.
 cudaError_t launchSweepInitialise(cudaStream_t s, Img u, Img w, Img confidence, Img best, Img other, Img mask,
-                                  const SweepDev& p, const ConsistencyDev& c) {
+                                  const SweepParams& p, const ConsistencyParams& c) {
   const dim3 block(16, 8);
   CS_LAUNCH(sweepInitialiseKernel, grid2d(u.width, u.height, block), block, 0, s, u, w, confidence, best, other, mask,
             p, c);

@@ -17,13 +17,13 @@ constexpr float kPaths = 4.f;  // the aggregation's directions
 // std::min(a, b) exactly (b < a ? b : a), including which operand a NaN leaves.
 __device__ __forceinline__ float stdMin(float a, float b) { return b < a ? b : a; }
 
-__device__ __forceinline__ double planeInverseDepth(const SweepDev& p, double k) {
+__device__ __forceinline__ double planeInverseDepth(const SweepParams& p, double k) {
   return p.qMax * k / double(p.planes - 1);
 }
 
 // Where the reference ray, on the sphere of inverse depth q, lands in the other view
 // (BuiltCamera::project && inImage).
-__device__ __forceinline__ bool projectHypothesis(const CamDev& cam, const V3& ray, const double t[3], double q,
+__device__ __forceinline__ bool projectHypothesis(const CameraParams& cam, const V3& ray, const double t[3], double q,
                                                   V2& px) {
   const V3 moved{ray.x + q * t[0], ray.y + q * t[1], ray.z + q * t[2]};
   return cameraProject(cam, moved, px) && px.x >= -0.5 && px.y >= -0.5 && px.x <= cam.width - 0.5 &&
@@ -45,7 +45,7 @@ __device__ __forceinline__ float parabolaOffset(float before, float best, float 
 // being hypothesis start + k: the oracle's select after the winner is chosen. a, c: the
 // pixel's aggregated costs and window costs.
 __device__ __forceinline__ float refinedInverseDepth(const float* a, const float* c, int n, int start, int winner,
-                                                     const SweepDev& p) {
+                                                     const SweepParams& p) {
   auto score = [&](int k) { return k < 0 || k >= n || c[k] >= kNoCost ? kNoCost : a[k] / kPaths; };
   // float, as the oracle's int + float
   const float k = float(start + winner) + parabolaOffset(score(winner - 1), score(winner), score(winner + 1));

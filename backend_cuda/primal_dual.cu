@@ -52,7 +52,7 @@ struct SharedTile {
 // balls; the same expressions, in the same order, as backend_cpu/primal_dual.cpp.
 __device__ __forceinline__ void dualPixel(float2& p, float4& q, const float4 t, const float2 sigmaP, bool ex, bool ey,
                                           float ub, float ur, float ud, float2 vb, float2 vr, float2 vd,
-                                          const StepDev step, float alpha1) {
+                                          const DeviceStep step, float alpha1) {
   float gx = 0.f, gy = 0.f;
   float2 vgx = make_float2(0.f, 0.f), vgy = make_float2(0.f, 0.f);
   if (ex) {
@@ -116,9 +116,9 @@ __device__ __forceinline__ PrimalConstants loadPrimalConstants(const PrimalDualD
 
 template <class Tile>
 __device__ __forceinline__ void primalPixel(const PrimalDualDev& pd, const Tile& s, int lx, int ly,
-                                            const PrimalConstants& c, const StepDev step, float uOld, float2 vOld,
+                                            const PrimalConstants& c, const DeviceStep step, float uOld, float2 vOld,
                                             float& uNew, float2& vNew, float& uBar, float2& vBar) {
-  const float alpha0 = pd.alpha0, alpha1 = pd.alpha1;
+  const float alpha0 = pd.weights.alpha0, alpha1 = pd.weights.alpha1;
   const unsigned char f = s.flags[ly][lx];
   const bool ex = f & kLinkX, ey = f & kLinkY;
   const bool exLeft = s.flags[ly][lx - 1] & kLinkX, eyUp = s.flags[ly - 1][lx] & kLinkY;
@@ -130,7 +130,7 @@ __device__ __forceinline__ void primalPixel(const PrimalDualDev& pd, const Tile&
   if (ey) divDp += s.dp[ly][lx].y;
   if (eyUp) divDp -= s.dp[ly - 1][lx].y;
   const float uHat = uOld + tauU * alpha1 * divDp;
-  uNew = dataProx(uHat, c.u0, c.iu, c.iz, tauU * pd.lambda);
+  uNew = dataProx(uHat, c.u0, c.iu, c.iz, tauU * pd.weights.lambda);
   uBar = uNew + step.theta * (uNew - uOld);
   const float4 q = s.q[ly][lx], qLeft = s.q[ly][lx - 1], qUp = s.q[ly - 1][lx];
   float div0 = 0.f, div1 = 0.f;
@@ -151,7 +151,7 @@ __device__ __forceinline__ void primalPixel(const PrimalDualDev& pd, const Tile&
 // One iteration over the block's tile (the dual pass over the tile and its halo into
 // shared memory, a barrier, the primal pass). Pixels outside the mask keep their values
 // (copied from the read set to the written one).
-__device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepDev step, int parity, SharedTile& s) {
+__device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const DeviceStep step, int parity, SharedTile& s) {
   const int w = pd.width, h = pd.height;
   const int x0 = blockIdx.x * kTileW, y0 = blockIdx.y * kTileH;
   const int tid = threadIdx.y * kTileW + threadIdx.x;
@@ -163,7 +163,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
   float4* qOut = reinterpret_cast<float4*>(pd.q[1 - parity]);
   const float4* __restrict__ tensor = reinterpret_cast<const float4*>(pd.tensor);
   const float4* __restrict__ steps = reinterpret_cast<const float4*>(pd.steps);
-  const float alpha1 = pd.alpha1;
+  const float alpha1 = pd.weights.alpha1;
   // u and v go from set `parity` to the other one, so that this kernel can alternate with
   // the tiled kernel.
   float* uIn = pd.u[parity];
@@ -246,7 +246,7 @@ __device__ __forceinline__ void iterateTile(const PrimalDualDev& pd, const StepD
 
 // One iteration per launch (levels with more tiles than the device holds at once).
 __global__ void __launch_bounds__(kTileW* kTileH, kMinBlocks)
-    primalDualKernel(PrimalDualDev pd, StepDev step, int parity) {
+    primalDualKernel(PrimalDualDev pd, DeviceStep step, int parity) {
   beginKernel();
   __shared__ SharedTile s;
   iterateTile(pd, step, parity, s);
@@ -297,7 +297,7 @@ struct MaskedOutCopy {
 // the written tile is [kIters, 32 - kIters] (pixel (0, 0) of the tile at cell kIters).
 template <int kIters>
 struct StepBatch {
-  StepDev step[kIters];
+  DeviceStep step[kIters];
 };
 
 enum : int { kNothingSettled, kGeometrySettled, kAllSettled };
@@ -316,7 +316,7 @@ __global__ void __launch_bounds__(kCellsW* kCellsH, kMinBlocksTiled)
   const int i = blockIdx.x * kTileW - kIters + lx, j = blockIdx.y * kTileH - kIters + ly;
   const bool inImage = i >= 0 && j >= 0 && i < w && j < h;
   const int idx = inImage ? j * w + i : 0;
-  const float alpha1 = pd.alpha1;
+  const float alpha1 = pd.weights.alpha1;
   const bool right = i + 1 < w, down = j + 1 < h;
   const float m = inImage ? __ldg(&pd.mask[idx]) : 0.f;
   const bool live = inImage && (m != 0.f || outside.copy);
@@ -459,7 +459,7 @@ static dim3 tiledGrid(const PrimalDualDev& pd, int iterations) {
 
 // One launch of primalDualTiledKernel<kIters>: steps[0 .. kIters) from set `parity`.
 template <int kIters>
-static cudaError_t launchTiled(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int parity,
+static cudaError_t launchTiled(cudaStream_t s, const PrimalDualDev& pd, const DeviceStep* steps, int parity,
                                MaskedOutCopy outside, int settled) {
   StepBatch<kIters> batch{};
   for (int i = 0; i < kIters; ++i) batch.step[i] = steps[i];
@@ -468,7 +468,7 @@ static cudaError_t launchTiled(cudaStream_t s, const PrimalDualDev& pd, const St
   return cudaSuccess;
 }
 
-cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const StepDev* steps, int count,
+cudaError_t launchPrimalDual(cudaStream_t s, const PrimalDualDev& pd, const DeviceStep* steps, int count,
                              int residentTiledBlocks, bool geometrySettled, int& endSet) {
   endSet = 0;
   const dim3 block(kTileW, kTileH), grid = grid2d(pd.width, pd.height, block);

@@ -9,7 +9,7 @@ namespace cs::cudak {
 namespace {
 
 __device__ float structureTerm(int x, int y, const Img& image, const Img& trajectory, const Img& mask,
-                               const ConfidenceDev& p) {
+                               const ConfidenceParams& p) {
   const float gx = at(trajectory, x, y, 0), gy = at(trajectory, x, y, 1);
   float s = 0.f;
   for (int dy = -p.radius; dy <= p.radius; ++dy)
@@ -28,7 +28,7 @@ __device__ float structureTerm(int x, int y, const Img& image, const Img& trajec
 }
 
 __device__ float photometricTerm(int x, int y, const Img& n0, const Img& n1, const Img& w, const Img& mask,
-                                 const ConfidenceDev& p) {
+                                 const ConfidenceParams& p) {
   float sum = 0.f;
   int count = 0;
   for (int dy = -p.radius; dy <= p.radius; ++dy)
@@ -47,7 +47,7 @@ __device__ float photometricTerm(int x, int y, const Img& n0, const Img& n1, con
 
 __global__ void resultConfidenceKernel(Img confidence, Img radial, Img points, Img image, Img n0, Img n1, Img w,
                                        Img trajectory, Img sweepConfidence, Img roundTripError, Img mask,
-                                       ConfidenceDev p) {
+                                       ConfidenceParams p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= confidence.width || y >= confidence.height) return;
@@ -83,7 +83,7 @@ __global__ void resultConfidenceKernel(Img confidence, Img radial, Img points, I
 
 cudaError_t launchResultConfidence(cudaStream_t s, Img confidence, Img radial, Img points, Img image, Img n0, Img n1,
                                    Img w, Img trajectory, Img sweepConfidence, Img roundTripError, Img mask,
-                                   const ConfidenceDev& p) {
+                                   const ConfidenceParams& p) {
   const dim3 block(32, 8);
   CS_LAUNCH(resultConfidenceKernel, grid2d(confidence.width, confidence.height, block), block, 0, s, confidence, radial,
             points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError, mask, p);

@@ -9,7 +9,7 @@ namespace cs::cudak {
 
 namespace {
 
-__global__ void blurRowsKernel(float* out, const float* image, int w, int h, TensorDev p) {
+__global__ void blurRowsKernel(float* out, const float* image, int w, int h, TensorTaps p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= w || y >= h) return;
@@ -23,7 +23,7 @@ __global__ void blurRowsKernel(float* out, const float* image, int w, int h, Ten
   out[size_t(y) * w + x] = s;
 }
 
-__global__ void blurColumnsKernel(float* out, const float* rows, int w, int h, TensorDev p) {
+__global__ void blurColumnsKernel(float* out, const float* rows, int w, int h, TensorTaps p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= w || y >= h) return;
@@ -41,7 +41,7 @@ struct Tensor {
   float d11, d12, d22;
 };
 
-__device__ Tensor tensorAt(const float* smooth, int w, int h, int x, int y, const TensorDev& p) {
+__device__ Tensor tensorAt(const float* smooth, int w, int h, int x, int y, const TensorParams& p) {
   auto at = [&](int i, int j) { return __ldg(&smooth[size_t(min(max(j, 0), h - 1)) * w + min(max(i, 0), w - 1)]); };
   const float gx = 0.5f * (at(x + 1, y) - at(x - 1, y));
   const float gy = 0.5f * (at(x, y + 1) - at(x, y - 1));
@@ -51,7 +51,7 @@ __device__ Tensor tensorAt(const float* smooth, int w, int h, int x, int y, cons
   return {weight * nx * nx + ny * ny, (weight - 1.f) * nx * ny, weight * ny * ny + nx * nx};
 }
 
-__global__ void tensorStepsKernel(Img tensor, Img steps, const float* smooth, Img mask, TensorDev p) {
+__global__ void tensorStepsKernel(Img tensor, Img steps, const float* smooth, Img mask, TensorParams p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   const int w = tensor.width, h = tensor.height;
@@ -87,11 +87,11 @@ __global__ void tensorStepsKernel(Img tensor, Img steps, const float* smooth, Im
 
 }  // namespace
 
-cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorDev& p,
-                                  float* tmpRows, float* tmpSmooth) {
+cudaError_t launchStructureTensor(cudaStream_t s, Img tensor, Img steps, Img image, Img mask, const TensorParams& p,
+                                  const TensorTaps& taps, float* tmpRows, float* tmpSmooth) {
   const dim3 block(32, 8), grid = grid2d(image.width, image.height, block);
-  CS_LAUNCH(blurRowsKernel, grid, block, 0, s, tmpRows, image.data, image.width, image.height, p);
-  CS_LAUNCH(blurColumnsKernel, grid, block, 0, s, tmpSmooth, tmpRows, image.width, image.height, p);
+  CS_LAUNCH(blurRowsKernel, grid, block, 0, s, tmpRows, image.data, image.width, image.height, taps);
+  CS_LAUNCH(blurColumnsKernel, grid, block, 0, s, tmpSmooth, tmpRows, image.width, image.height, taps);
   CS_LAUNCH(tensorStepsKernel, grid, block, 0, s, tensor, steps, tmpSmooth, mask, p);
   return cudaGetLastError();
 }

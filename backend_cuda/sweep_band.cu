@@ -34,7 +34,7 @@ constexpr int kTileThreads = 256;
 constexpr int kSelectThreads = 128;
 
 // A coarse winner as a plane index, rounded half up (double); -1 for none.
-__device__ int coarsePlane(const Img& coarseBest, const SweepDev& p, int cx, int cy) {
+__device__ int coarsePlane(const Img& coarseBest, const SweepParams& p, int cx, int cy) {
   const float q = at(coarseBest, cx, cy, 0);
   return q < 0.f ? -1 : int(floor(double(q) * double(p.planes - 1) / p.qMax + 0.5));
 }
@@ -42,7 +42,8 @@ __device__ int coarsePlane(const Img& coarseBest, const SweepDev& p, int cx, int
 // The oracle's start of the band at pixel (x, y): centred on the coarse 3x3 neighbourhood's
 // winners where they fit with kBandMargin to spare, else on the nearest coarse pixel's;
 // -1 outside the mask or where the nearest coarse pixel found nothing.
-__device__ int bandStart(const Img& coarseBest, const Img& mask, const SweepDev& p, float coarseScale, int x, int y) {
+__device__ int bandStart(const Img& coarseBest, const Img& mask, const SweepParams& p, float coarseScale, int x,
+                         int y) {
   const int cx = min(coarseBest.width - 1, int((float(x) + 0.5f) * coarseScale));
   const int cy = min(coarseBest.height - 1, int((float(y) + 0.5f) * coarseScale));
   const int nearest = coarsePlane(coarseBest, p, cx, cy);
@@ -58,7 +59,7 @@ __device__ int bandStart(const Img& coarseBest, const Img& mask, const SweepDev&
 }
 
 __global__ void __launch_bounds__(kWarpThreads)
-    sweepBandWarpKernel(Img volume, Img first, Img image, Img coarseBest, Img mask, SweepDev p, float coarseScale) {
+    sweepBandWarpKernel(Img volume, Img first, Img image, Img coarseBest, Img mask, SweepParams p, float coarseScale) {
   beginKernel();
   __shared__ V3 rays[kWarpPixels];
   __shared__ int starts[kWarpPixels];  // -1: no band, or no ray (every sample -1)
@@ -135,7 +136,7 @@ __device__ __forceinline__ bool bandCostWork(const Img& costs, const BandCostSou
 
 // Radii past kMaxUnrolledRadius (the smaller ones take the tiled kernel below): a loop.
 __global__ void __launch_bounds__(kCostThreads)
-    sweepBandCostKernel(Img costs, Img reference, Img volume, Img first, Img mask, SweepDev p) {
+    sweepBandCostKernel(Img costs, Img reference, Img volume, Img first, Img mask, SweepParams p) {
   beginKernel();
   const BandCostSource src{mask.data, reference.data, first.data, volume.data, costs.width, costs.height, p.band};
   int x, y, h;
@@ -214,7 +215,7 @@ constexpr int kRowHypotheses = 64;
 
 template <int R>
 __global__ void __launch_bounds__(kTileThreads)
-    sweepBandCostTileKernel(Img costs, Img reference, Img volume, Img first, Img mask, SweepDev p) {
+    sweepBandCostTileKernel(Img costs, Img reference, Img volume, Img first, Img mask, SweepParams p) {
   beginKernel();
   constexpr int kW = kTileX + 2 * R, kH = kTileY + 2 * R, kFields = 6;
   __shared__ TilePixel pixels[kW * kH];
@@ -377,7 +378,7 @@ __device__ void bandWalkLine(const BandWalk& w) {
 // -x, +y, -y), each into its own buffer: `aggregated` for +x, slices of `spare` for the
 // rest; sweepBandCombineKernel then adds them in the oracle's order.
 __global__ void __launch_bounds__(32)
-    sweepBandDirectionKernel(Img aggregated, Img spare, Img costs, Img first, Img mask, SweepDev p) {
+    sweepBandDirectionKernel(Img aggregated, Img spare, Img costs, Img first, Img mask, SweepParams p) {
   beginKernel();
   const int direction = blockIdx.y, line = blockIdx.x, width = costs.width;
   const bool rows = direction < 2;
@@ -409,7 +410,7 @@ __global__ void sweepBandCombineKernel(Img aggregated, Img spare) {
 // copies its 32 pixels' bands (contiguous in memory) into shared memory with coalesced
 // loads, transposed so that each lane then reads its own pixel's row without bank conflicts.
 __global__ void __launch_bounds__(kSelectThreads)
-    sweepBandSelectKernel(Img best, Img aggregated, Img costs, Img first, Img mask, SweepDev p) {
+    sweepBandSelectKernel(Img best, Img aggregated, Img costs, Img first, Img mask, SweepParams p) {
   beginKernel();
   __shared__ float sharedA[kSelectThreads / 32][32][33], sharedC[kSelectThreads / 32][32][33];
   const int n = p.band, lane = threadIdx.x & 31, warp = threadIdx.x / 32;
@@ -445,12 +446,12 @@ __global__ void __launch_bounds__(kSelectThreads)
   at(best, x, y, 1) = winnerCost;
 }
 
-bool bandValid(const SweepDev& p) { return p.band >= 2 && p.band <= kMaxSweepBand && p.band <= p.planes; }
+bool bandValid(const SweepParams& p) { return p.band >= 2 && p.band <= kMaxSweepBand && p.band <= p.planes; }
 
 }  // namespace
 
 cudaError_t launchSweepBandWarp(cudaStream_t s, Img volume, Img first, Img image, Img coarseBest, Img mask,
-                                const SweepDev& p, float coarseScale) {
+                                const SweepParams& p, float coarseScale) {
   if (!bandValid(p)) return cudaErrorInvalidValue;
   const dim3 grid((volume.width + kWarpPixels - 1) / kWarpPixels, volume.height);
   CS_LAUNCH(sweepBandWarpKernel, grid, kWarpThreads, 0, s, volume, first, image, coarseBest, mask, p, coarseScale);
@@ -458,7 +459,7 @@ cudaError_t launchSweepBandWarp(cudaStream_t s, Img volume, Img first, Img image
 }
 
 cudaError_t launchSweepBandCost(cudaStream_t s, Img costs, Img reference, Img volume, Img first, Img mask,
-                                const SweepDev& p) {
+                                const SweepParams& p) {
   if (!bandValid(p)) return cudaErrorInvalidValue;
   const long long threads = (long long)costs.width * costs.height * p.band;
   const dim3 grid(unsigned((threads + kCostThreads - 1) / kCostThreads));
@@ -484,7 +485,7 @@ cudaError_t launchSweepBandCost(cudaStream_t s, Img costs, Img reference, Img vo
 }
 
 cudaError_t launchSweepBandAggregate(cudaStream_t s, Img aggregated, Img spare, Img costs, Img first, Img mask,
-                                     const SweepDev& p) {
+                                     const SweepParams& p) {
   if (!bandValid(p)) return cudaErrorInvalidValue;
   const dim3 grid(unsigned(max(costs.width, costs.height)), 4);
   CS_LAUNCH(sweepBandDirectionKernel, grid, dim3(32), 0, s, aggregated, spare, costs, first, mask, p);
@@ -495,7 +496,7 @@ cudaError_t launchSweepBandAggregate(cudaStream_t s, Img aggregated, Img spare, 
 }
 
 cudaError_t launchSweepBandSelect(cudaStream_t s, Img best, Img aggregated, Img costs, Img first, Img mask,
-                                  const SweepDev& p) {
+                                  const SweepParams& p) {
   if (!bandValid(p)) return cudaErrorInvalidValue;
   const long long pixels = (long long)best.width * best.height;
   const dim3 grid(unsigned((pixels + kSelectThreads - 1) / kSelectThreads));

@@ -12,7 +12,7 @@ namespace {
 __device__ __forceinline__ double stdMax(double a, double b) { return a < b ? b : a; }
 
 __global__ void temporalFilterKernel(Img state, Img u, Img w, Img prior, Img radial, Img points, Img confidence,
-                                     Img mask, TemporalDev p) {
+                                     Img mask, TemporalParams p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= state.width || y >= state.height) return;
@@ -64,7 +64,7 @@ __global__ void temporalFilterKernel(Img state, Img u, Img w, Img prior, Img rad
 }  // namespace
 
 cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img points,
-                                 Img confidence, Img mask, const TemporalDev& p) {
+                                 Img confidence, Img mask, const TemporalParams& p) {
   const dim3 block(16, 8);
   CS_LAUNCH(temporalFilterKernel, grid2d(state.width, state.height, block), block, 0, s, state, u, w, prior, radial,
             points, confidence, mask, p);

@@ -15,7 +15,7 @@ __device__ __forceinline__ V3 cross(const V3& a, const V3& b) {
 }
 __device__ __forceinline__ double dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 
-__global__ void triangulateKernel(Img radial, Img points, Img w, Img mask, CamDev cam0, T3 tPrime) {
+__global__ void triangulateKernel(Img radial, Img points, Img w, Img mask, CameraParams cam0, T3 tPrime) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= radial.width || y >= radial.height) return;
@@ -57,7 +57,7 @@ __global__ void triangulateKernel(Img radial, Img points, Img w, Img mask, CamDe
 
 }  // namespace
 
-cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img mask, const CamDev& cam0,
+cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img mask, const CameraParams& cam0,
                               const double tPrime[3]) {
   const dim3 block(16, 8);
   const T3 t{{tPrime[0], tPrime[1], tPrime[2]}};

@@ -97,7 +97,7 @@ __global__ void upsampleEstimateKernel(Img u, Img w, Img coarseU, Img coarseW, I
 }  // namespace
 
 cudaError_t launchUpsampleEstimate(cudaStream_t s, Img u, Img w, Img coarseU, Img coarseW, Img n0, Img n1, Img mask,
-                                   const EstimateUpsampleDev& p) {
+                                   const EstimateUpsampleParams& p) {
   const dim3 block(32, 8);
   const dim3 grid = grid2d(u.width, u.height, block);
   switch (p.radius) {  // 0 to kMaxUpsampleRadius (the contract)

@@ -80,9 +80,8 @@ VkCam<S> toVkCam(const CameraParams& c) {
   out.width = c.width;
   out.height = c.height;
   for (int i = 0; i < kMaxCameraParams; ++i) out.p[i] = S(c.params[i]);
-  const CameraConstants k = cameraConstants(c);
-  out.d[0] = S(k.a);
-  out.d[1] = S(k.b);
+  out.d[0] = S(c.constants.a);
+  out.d[1] = S(c.constants.b);
   return out;
 }
 

@@ -1,4 +1,4 @@
-// The kernel interface's helpers (gaussianTaps, the CameraParams conversions, cameraConstants)
+// The kernel interface's helpers (gaussianTaps, the CameraParams conversions)
 // and Backend's default stage clock (host wall time between boundaries).
 #include "curvestereo/backend.hpp"
 
@@ -7,6 +7,7 @@
 #include "curvestereo/image.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -18,6 +19,14 @@ namespace {
 double nowMs() {
   using namespace std::chrono;
   return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
+}
+
+// What the model's constructor precomputes (CameraParams::constants).
+CameraConstants cameraConstants(const CameraParams& c) {
+  if (models::paramCount(CameraModel(c.model)) < 0) throw Error("unknown camera model " + std::to_string(c.model));
+  const auto model = models::makeModel<double>(CameraModel(c.model), c.params, c.width, c.height);
+  const std::array<double, 2> k = std::visit([](const auto& m) { return m.precomputed(); }, model);
+  return CameraConstants{k[0], k[1]};
 }
 
 }  // namespace
@@ -62,6 +71,7 @@ CameraParams toCameraParams(const Camera& camera) {
   p.height = camera.height;
   if (camera.params.size() > size_t(kMaxCameraParams)) throw Error("camera has more parameters than kernels take");
   std::copy(camera.params.begin(), camera.params.end(), p.params);
+  p.constants = cameraConstants(p);
   return p;
 }
 
@@ -72,37 +82,6 @@ Camera toCamera(const CameraParams& p) {
   c.height = p.height;
   c.params.assign(p.params, p.params + std::max(0, models::paramCount(c.model)));
   return c;
-}
-
-CameraConstants cameraConstants(const CameraParams& c) {
-  CameraConstants k;
-  const double* p = c.params;
-  switch (CameraModel(c.model)) {
-    case CameraModel::KannalaBrandt4: {
-      const models::KannalaBrandt4<double> kb(p);
-      k.a = kb.thetaMax;
-      k.b = kb.radiusMax;
-      return k;
-    }
-    case CameraModel::Unified:
-      k.a = models::Unified<double>(p).w;
-      return k;
-    case CameraModel::ExtendedUnified:
-      k.a = models::ExtendedUnified<double>(p).w;
-      return k;
-    case CameraModel::DoubleSphere:
-      k.a = models::DoubleSphere<double>(p).w2;
-      return k;
-    case CameraModel::PinholeRadtan:
-      return k;
-    case CameraModel::Mei: {
-      const models::Mei<double> mei(p);
-      k.a = mei.w;
-      k.b = mei.rMax;
-      return k;
-    }
-  }
-  throw Error("unknown camera model " + std::to_string(c.model));
 }
 
 void Backend::beginStage(const std::string& name) {

@@ -17,18 +17,7 @@ namespace {
 std::string shapeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 std::string shapeText(const Buffer& b) { return shapeText(b.width, b.height) + "x" + std::to_string(b.channels); }
 
-bool knownModel(int model) {
-  switch (CameraModel(model)) {
-    case CameraModel::KannalaBrandt4:
-    case CameraModel::Unified:
-    case CameraModel::ExtendedUnified:
-    case CameraModel::DoubleSphere:
-    case CameraModel::PinholeRadtan:
-    case CameraModel::Mei:
-      return true;
-  }
-  return false;
-}
+bool knownModel(int model) { return models::paramCount(CameraModel(model)) >= 0; }
 
 }  // namespace
 

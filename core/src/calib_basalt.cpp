@@ -7,11 +7,13 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "calib_common.hpp"
+#include "curvestereo/camera_models.hpp"
 #include "curvestereo/rig.hpp"
 
 namespace cs {
@@ -40,6 +42,12 @@ const std::vector<BasaltType>& basaltTypes() {
       {"pinhole-radtan8", {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "rpmax"}},
   };
   return types;
+}
+
+// type's parameters are `names`, in that order.
+template <size_t N>
+bool sameNames(const BasaltType& type, const char* const (&names)[N]) {
+  return std::equal(type.params.begin(), type.params.end(), std::begin(names), std::end(names));
 }
 
 const char* kSupportedTypes = "supported: kb4, ds, eucm, ucm, pinhole, pinhole-radtan8 with k3..k6 = 0";
@@ -163,10 +171,12 @@ class BasaltReader {
                     ": pinhole-radtan8 is read only with k3..k6 = 0 (k1 k2 p1 p2 radtan)");
       return Camera::pinholeRadtan(0, 0, v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
     }
+    // kb4, ds, eucm: the model whose parameters Basalt lists as Camera does (sameLayout).
     Camera cam;
-    cam.model = name == "kb4"  ? CameraModel::KannalaBrandt4
-                : name == "ds" ? CameraModel::DoubleSphere
-                               : CameraModel::ExtendedUnified;
+    models::forEachModelType([&](auto tag) {
+      using M = typename decltype(tag)::type;
+      if (sameNames(type, M::kParamNames)) cam.model = M::kModel;
+    });
     cam.params = v;
     return cam;
   }
@@ -189,34 +199,39 @@ class BasaltReader {
 // ------------------------------------------------------------------------------------------
 // Writing.
 
+// The Basalt type that lists the camera's parameters as Camera does (the model's
+// kParamNames, in order: kb4, ds, eucm); null for none.
+const BasaltType* sameLayout(const Camera& cam) {
+  const BasaltType* found = nullptr;
+  models::visitModelType(cam.model, [&](auto tag) {
+    using M = typename decltype(tag)::type;
+    for (const BasaltType& t : basaltTypes())
+      if (sameNames(t, M::kParamNames)) found = &t;
+  });
+  return found;
+}
+
 // The Basalt type and its parameters (in basaltTypes() order) for a camera; cs::Error
 // for what Basalt cannot represent.
 std::pair<const char*, std::vector<double>> toBasalt(const Camera& cam, const std::string& path) {
   const std::vector<double>& p = cam.params;
-  switch (cam.model) {
-    case CameraModel::KannalaBrandt4:
-      return {"kb4", p};
-    case CameraModel::DoubleSphere:
-      return {"ds", p};
-    case CameraModel::ExtendedUnified:
-      return {"eucm", p};
-    case CameraModel::Unified: {
-      // The inverse of cameraFromUcm: alpha = xi / (1 + xi), f_ucm = f / (1 + xi).
-      const double s = 1.0 / (1.0 + p[4]);
-      return {"ucm", {p[0] * s, p[1] * s, p[2], p[3], p[4] * s}};
-    }
-    case CameraModel::PinholeRadtan: {
-      if (p[4] == 0 && p[5] == 0 && p[6] == 0 && p[7] == 0) return {"pinhole", {p[0], p[1], p[2], p[3]}};
-      // Basalt's radtan is pinhole-radtan8; with k3..k6 = 0 it is radtan. rpmax bounds
-      // the undistorted radius Basalt accepts: the widest image corner, with a margin.
-      const double rpmax = 1.05 * std::tan(std::min(BuiltCamera(cam).maxAngle(), 89.0 * M_PI / 180.0));
-      return {"pinhole-radtan8", {p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], 0, 0, 0, 0, rpmax}};
-    }
-    case CameraModel::Mei:
-      throw Error(path +
-                  ": Basalt calibrations cannot represent the mei (unified + radtan) camera model: write "
-                  "Kalibr or VINS-Fusion instead");
+  if (const BasaltType* type = sameLayout(cam)) return {type->name, p};
+  if (cam.model == CameraModel::Unified) {
+    // The inverse of cameraFromUcm: alpha = xi / (1 + xi), f_ucm = f / (1 + xi).
+    const double s = 1.0 / (1.0 + p[4]);
+    return {"ucm", {p[0] * s, p[1] * s, p[2], p[3], p[4] * s}};
   }
+  if (cam.model == CameraModel::PinholeRadtan) {
+    if (p[4] == 0 && p[5] == 0 && p[6] == 0 && p[7] == 0) return {"pinhole", {p[0], p[1], p[2], p[3]}};
+    // Basalt's radtan is pinhole-radtan8; with k3..k6 = 0 it is radtan. rpmax bounds
+    // the undistorted radius Basalt accepts: the widest image corner, with a margin.
+    const double rpmax = 1.05 * std::tan(std::min(BuiltCamera(cam).maxAngle(), 89.0 * M_PI / 180.0));
+    return {"pinhole-radtan8", {p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], 0, 0, 0, 0, rpmax}};
+  }
+  if (cam.model == CameraModel::Mei)
+    throw Error(path +
+                ": Basalt calibrations cannot represent the mei (unified + radtan) camera model: write "
+                "Kalibr or VINS-Fusion instead");
   throw Error(path + ": saveBasalt: unknown camera model");
 }
 

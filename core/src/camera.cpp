@@ -71,21 +71,9 @@ Camera Camera::scaled(double s) const {
 }
 
 std::string Camera::modelName() const {
-  switch (model) {
-    case CameraModel::KannalaBrandt4:
-      return "kannala-brandt4";
-    case CameraModel::Unified:
-      return "unified";
-    case CameraModel::ExtendedUnified:
-      return "extended-unified";
-    case CameraModel::DoubleSphere:
-      return "double-sphere";
-    case CameraModel::PinholeRadtan:
-      return "pinhole-radtan";
-    case CameraModel::Mei:
-      return "mei";
-  }
-  return "unknown";
+  std::string name = "unknown";
+  models::visitModelType(model, [&](auto tag) { name = decltype(tag)::type::kName; });
+  return name;
 }
 
 namespace {
@@ -106,48 +94,19 @@ std::string str(double v) {
 }
 
 const char* paramName(CameraModel model, size_t i) {
-  static const char* const common[] = {"fx", "fy", "cx", "cy"};
-  static const char* const kb4[] = {"k1", "k2", "k3", "k4"};
-  static const char* const radtan[] = {"k1", "k2", "p1", "p2"};
-  if (i < 4) return common[i];
-  switch (model) {
-    case CameraModel::KannalaBrandt4:
-      return kb4[i - 4];
-    case CameraModel::Unified:
-      return "xi";
-    case CameraModel::ExtendedUnified:
-      return i == 4 ? "alpha" : "beta";
-    case CameraModel::DoubleSphere:
-      return i == 4 ? "xi" : "alpha";
-    case CameraModel::PinholeRadtan:
-      return radtan[i - 4];
-    case CameraModel::Mei:
-      return i == 4 ? "xi" : radtan[i - 5];
-  }
-  return "?";
+  const char* name = "?";
+  models::visitModelType(model, [&](auto tag) { name = decltype(tag)::type::kParamNames[i]; });
+  return name;
 }
 
+// The model's own domain of its parameters (camera_models.hpp checkParams); cam has the
+// model's number of parameters.
 void checkModelParameters(const Camera& cam) {
-  const auto& p = cam.params;
-  switch (cam.model) {
-    case CameraModel::Unified:
-    case CameraModel::Mei:
-      if (p[4] < 0) fail(cam, "xi = " + str(p[4]) + " is negative");
-      break;
-    case CameraModel::ExtendedUnified:
-      if (p[4] < 0 || p[4] > 1) fail(cam, "alpha = " + str(p[4]) + " is outside [0, 1]");
-      if (p[5] <= 0) fail(cam, "beta = " + str(p[5]) + " is not positive");
-      break;
-    case CameraModel::DoubleSphere:
-      // Calibrations commonly have slightly negative xi; at xi <= -1 the second sphere
-      // degenerates (the valid-region bound divides by zero).
-      if (p[4] <= -1) fail(cam, "xi = " + str(p[4]) + " is not greater than -1");
-      if (p[5] < 0 || p[5] > 1) fail(cam, "alpha = " + str(p[5]) + " is outside [0, 1]");
-      break;
-    case CameraModel::KannalaBrandt4:
-    case CameraModel::PinholeRadtan:
-      break;
-  }
+  models::visitModelType(cam.model, [&](auto tag) {
+    decltype(tag)::type::checkParams(cam.params.data(), [&](int i, const char* problem) {
+      fail(cam, std::string(paramName(cam.model, size_t(i))) + " = " + str(cam.params[size_t(i)]) + " " + problem);
+    });
+  });
 }
 
 // cam, or cs::Error when its params have not the model's number of entries.

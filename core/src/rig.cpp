@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "calib_common.hpp"
+#include "curvestereo/camera_models.hpp"
 #include "curvestereo/image.hpp"
 
 namespace cs {
@@ -84,15 +85,17 @@ class KalibrReader {
   CameraModel modelFor(const std::string& name, const std::string& cameraModel, const std::string& distortion) const {
     static const char* supported =
         "supported: pinhole+equidistant, pinhole+radtan, pinhole+none, omni+none, omni+radtan, eucm+none, ds+none";
-    const bool none = distortion == "none";
-    if (cameraModel == "pinhole" && distortion == "equidistant") return CameraModel::KannalaBrandt4;
-    if (cameraModel == "pinhole" && (distortion == "radtan" || none)) return CameraModel::PinholeRadtan;
-    if (cameraModel == "omni" && none) return CameraModel::Unified;
-    if (cameraModel == "omni" && distortion == "radtan") return CameraModel::Mei;
-    if (cameraModel == "eucm" && none) return CameraModel::ExtendedUnified;
-    if (cameraModel == "ds" && none) return CameraModel::DoubleSphere;
-    const bool knownCamera =
-        cameraModel == "pinhole" || cameraModel == "omni" || cameraModel == "eucm" || cameraModel == "ds";
+    // pinhole+none is pinhole+radtan with zero coefficients (appendDistortion).
+    const std::string kalibrDistortion = cameraModel == "pinhole" && distortion == "none" ? "radtan" : distortion;
+    bool knownCamera = false, found = false;
+    CameraModel model{};
+    models::forEachModelType([&](auto tag) {
+      using M = typename decltype(tag)::type;
+      if (cameraModel != M::kKalibrModel) return;
+      knownCamera = true;
+      if (kalibrDistortion == M::kKalibrDistortion) model = M::kModel, found = true;
+    });
+    if (found) return model;
     if (!knownCamera) fail(name + ": unknown camera_model '" + cameraModel + "' (" + supported + ")");
     fail(name + ": unsupported camera model " + cameraModel + "+" + distortion + " (" + supported + ")");
   }
@@ -179,30 +182,21 @@ struct KalibrCamera {
   std::vector<double> coeffs;
 };
 
+// Kalibr lists the projection's own parameters before fx fy cx cy ([xi fu fv pu pv]) and
+// the distortion's (the model's last kDistortionParams) as distortion_coeffs.
 KalibrCamera toKalibr(const Camera& cam) {
-  const std::vector<double>& p = cam.params;
-  const std::vector<double> pinhole(p.begin(), p.begin() + 4);
-  std::vector<double> extra(p.begin() + 4, p.end());
-  auto modelFirst = [&]() {
-    std::vector<double> v = extra;
-    v.insert(v.end(), pinhole.begin(), pinhole.end());
-    return v;
-  };
-  switch (cam.model) {
-    case CameraModel::KannalaBrandt4:
-      return {"pinhole", "equidistant", pinhole, extra};
-    case CameraModel::PinholeRadtan:
-      return {"pinhole", "radtan", pinhole, extra};
-    case CameraModel::Unified:
-      return {"omni", "none", modelFirst(), {}};
-    case CameraModel::Mei:
-      return {"omni", "radtan", {p[4], p[0], p[1], p[2], p[3]}, {p[5], p[6], p[7], p[8]}};
-    case CameraModel::ExtendedUnified:
-      return {"eucm", "none", modelFirst(), {}};
-    case CameraModel::DoubleSphere:
-      return {"ds", "none", modelFirst(), {}};
-  }
-  throw Error("saveKalibr: unknown camera model");
+  KalibrCamera k{nullptr, nullptr, {}, {}};
+  models::visitModelType(cam.model, [&](auto tag) {
+    using M = typename decltype(tag)::type;
+    const auto pinhole = cam.params.begin() + 4, distortion = cam.params.end() - M::kDistortionParams;
+    k.cameraModel = M::kKalibrModel;
+    k.distortionModel = M::kKalibrDistortion;
+    k.intrinsics.assign(pinhole, distortion);
+    k.intrinsics.insert(k.intrinsics.end(), cam.params.begin(), pinhole);
+    k.coeffs.assign(distortion, cam.params.end());
+  });
+  if (!k.cameraModel) throw Error("saveKalibr: unknown camera model");
+  return k;
 }
 
 void writeCamera(std::ostream& os, const Camera& cam) {

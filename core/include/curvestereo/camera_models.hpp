@@ -6,6 +6,17 @@
 //   bool unproject(px, ray)   pixel -> unit ray
 //   bool validPoint(p)        p inside the region the model projects one-to-one
 //   double maxAngle()         largest angle to the optical axis of that region
+//   precomputed()             what the constructor derived that the GPU kernels' copies of
+//                             the model read instead of deriving it per pixel (2 values)
+// and states its facts once, as static members, for code that holds only a CameraModel
+// (visitModelType below is the one place that maps one to its model):
+//   kModel, kName             its CameraModel and its name in messages
+//   kNumParams, kParamNames   the length of Camera::params and each entry's name
+//   kDistortionParams         the trailing entries that are a distortion (Kalibr's
+//                             distortion_coeffs), the rest being the projection's
+//   kKalibrModel, kKalibrDistortion   Kalibr's camera_model and distortion_model
+//   checkParams(p, fail)      calls fail(index, problem) for the first entry outside the
+//                             model's domain ("is negative"), beyond Camera::validate's checks
 // The constructors precompute what every call needs (e.g. the Kannala-Brandt turning
 // angle, a scan of the distortion polynomial), so build a model once per camera, not per
 // pixel: cs::BuiltCamera (camera.hpp) holds one built from a Camera.
@@ -17,8 +28,12 @@
 #pragma once
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <type_traits>
+#include <utility>
 #include <variant>
 
 namespace cs {
@@ -82,7 +97,15 @@ inline double unifiedBoundaryAngle(double w, double beta) {
 //   px = f * theta_d * (x, y) / r + c.   Works beyond 180 deg while theta < thetaMax.
 template <class S>
 struct KannalaBrandt4 {
+  static constexpr CameraModel kModel = CameraModel::KannalaBrandt4;
+  static constexpr const char* kName = "kannala-brandt4";
   static constexpr int kNumParams = 8;
+  static constexpr const char* kParamNames[kNumParams] = {"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"};
+  static constexpr int kDistortionParams = 4;
+  static constexpr const char* kKalibrModel = "pinhole";
+  static constexpr const char* kKalibrDistortion = "equidistant";
+  template <class Fail>
+  static void checkParams(const double*, Fail&&) {}  // any polynomial: thetaMax bounds it
   Intrinsics<S> in;
   S k1, k2, k3, k4;
   S thetaMax;   // first angle where theta_d stops increasing (or pi)
@@ -130,6 +153,7 @@ struct KannalaBrandt4 {
   }
 
   double maxAngle() const { return double(thetaMax); }
+  std::array<double, 2> precomputed() const { return {double(thetaMax), double(radiusMax)}; }
 
   bool validPoint(const Vec3<S>& p) const {
     const S r = std::sqrt(p.x() * p.x() + p.y() * p.y());
@@ -199,7 +223,17 @@ struct KannalaBrandt4 {
 // Valid region z > -w |p| with w = xi (xi <= 1) or 1/xi (xi > 1).
 template <class S>
 struct Unified {
+  static constexpr CameraModel kModel = CameraModel::Unified;
+  static constexpr const char* kName = "unified";
   static constexpr int kNumParams = 5;
+  static constexpr const char* kParamNames[kNumParams] = {"fx", "fy", "cx", "cy", "xi"};
+  static constexpr int kDistortionParams = 0;
+  static constexpr const char* kKalibrModel = "omni";
+  static constexpr const char* kKalibrDistortion = "none";
+  template <class Fail>
+  static void checkParams(const double* p, Fail&& fail) {
+    if (p[4] < 0) fail(4, "is negative");
+  }
   Intrinsics<S> in;
   S xi;
   S w;
@@ -207,6 +241,7 @@ struct Unified {
   explicit Unified(const double* p) : in(p), xi(S(p[4])), w(S(p[4] <= 1 ? p[4] : 1.0 / p[4])) {}
 
   double maxAngle() const { return unifiedBoundaryAngle(double(w), 1.0); }
+  std::array<double, 2> precomputed() const { return {double(w), 0.0}; }
 
   bool validPoint(const Vec3<S>& p) const { return p.z() > -w * p.norm(); }
 
@@ -238,7 +273,18 @@ struct Unified {
 // px = f * (x, y) / (alpha d + (1 - alpha) z) + c. Valid region z > -w d.
 template <class S>
 struct ExtendedUnified {
+  static constexpr CameraModel kModel = CameraModel::ExtendedUnified;
+  static constexpr const char* kName = "extended-unified";
   static constexpr int kNumParams = 6;
+  static constexpr const char* kParamNames[kNumParams] = {"fx", "fy", "cx", "cy", "alpha", "beta"};
+  static constexpr int kDistortionParams = 0;
+  static constexpr const char* kKalibrModel = "eucm";
+  static constexpr const char* kKalibrDistortion = "none";
+  template <class Fail>
+  static void checkParams(const double* p, Fail&& fail) {
+    if (p[4] < 0 || p[4] > 1) fail(4, "is outside [0, 1]");
+    if (p[5] <= 0) fail(5, "is not positive");
+  }
   Intrinsics<S> in;
   S alpha, beta;
   S w;
@@ -246,6 +292,7 @@ struct ExtendedUnified {
   explicit ExtendedUnified(const double* p) : in(p), alpha(S(p[4])), beta(S(p[5])), w(S(unifiedW(p[4]))) {}
 
   double maxAngle() const { return unifiedBoundaryAngle(double(w), double(beta)); }
+  std::array<double, 2> precomputed() const { return {double(w), 0.0}; }
 
   S distance(const Vec3<S>& p) const { return std::sqrt(beta * (p.x() * p.x() + p.y() * p.y()) + p.z() * p.z()); }
 
@@ -280,7 +327,20 @@ struct ExtendedUnified {
 // px = f * (x, y) / (alpha d2 + (1 - alpha) k) + c. Valid region z > -w2 d1.
 template <class S>
 struct DoubleSphere {
+  static constexpr CameraModel kModel = CameraModel::DoubleSphere;
+  static constexpr const char* kName = "double-sphere";
   static constexpr int kNumParams = 6;
+  static constexpr const char* kParamNames[kNumParams] = {"fx", "fy", "cx", "cy", "xi", "alpha"};
+  static constexpr int kDistortionParams = 0;
+  static constexpr const char* kKalibrModel = "ds";
+  static constexpr const char* kKalibrDistortion = "none";
+  // Calibrations commonly have slightly negative xi; at xi <= -1 the second sphere
+  // degenerates (the valid-region bound divides by zero).
+  template <class Fail>
+  static void checkParams(const double* p, Fail&& fail) {
+    if (p[4] <= -1) fail(4, "is not greater than -1");
+    if (p[5] < 0 || p[5] > 1) fail(5, "is outside [0, 1]");
+  }
   Intrinsics<S> in;
   S xi, alpha;
   S w2;
@@ -294,6 +354,7 @@ struct DoubleSphere {
   }
 
   double maxAngle() const { return unifiedBoundaryAngle(double(w2), 1.0); }
+  std::array<double, 2> precomputed() const { return {double(w2), 0.0}; }
 
   bool validPoint(const Vec3<S>& p) const { return p.z() > -w2 * p.norm(); }
 
@@ -422,12 +483,22 @@ struct Radtan {
 // normalised point n = (x, y) / z. Valid for z > 1e-6 |p| (in front of the camera).
 template <class S>
 struct PinholeRadtan {
+  static constexpr CameraModel kModel = CameraModel::PinholeRadtan;
+  static constexpr const char* kName = "pinhole-radtan";
   static constexpr int kNumParams = 8;
+  static constexpr const char* kParamNames[kNumParams] = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"};
+  static constexpr int kDistortionParams = 4;
+  static constexpr const char* kKalibrModel = "pinhole";
+  static constexpr const char* kKalibrDistortion = "radtan";
+  template <class Fail>
+  static void checkParams(const double*, Fail&&) {}
   Intrinsics<S> in;
   Radtan<S> rt;
   int width, height;  // maxAngle() is the angle of the widest image corner
 
   PinholeRadtan(const double* p, int w, int h) : in(p), rt(p + 4), width(w), height(h) {}
+
+  std::array<double, 2> precomputed() const { return {0.0, 0.0}; }
 
   bool validPoint(const Vec3<S>& p) const { return p.z() > S(1e-6) * p.norm(); }
 
@@ -476,7 +547,17 @@ struct PinholeRadtan {
 // radial distortion stops increasing, so that every valid pixel has one ray.
 template <class S>
 struct Mei {
+  static constexpr CameraModel kModel = CameraModel::Mei;
+  static constexpr const char* kName = "mei";
   static constexpr int kNumParams = 9;
+  static constexpr const char* kParamNames[kNumParams] = {"fx", "fy", "cx", "cy", "xi", "k1", "k2", "p1", "p2"};
+  static constexpr int kDistortionParams = 4;
+  static constexpr const char* kKalibrModel = "omni";
+  static constexpr const char* kKalibrDistortion = "radtan";
+  template <class Fail>
+  static void checkParams(const double* p, Fail&& fail) {
+    if (p[4] < 0) fail(4, "is negative");
+  }
   Intrinsics<S> in;
   S xi;
   Radtan<S> rt;
@@ -489,6 +570,8 @@ struct Mei {
         rt(p + 5),
         w(S(p[4] <= 1 ? p[4] : 1.0 / p[4])),
         rMax(S(Radtan<double>::turningRadius(p[5], p[6]))) {}
+
+  std::array<double, 2> precomputed() const { return {double(w), double(rMax)}; }
 
   // The unified ray of undistorted radius r makes the angle atan2(f r, f - xi) with the
   // axis, f = (xi + sqrt(1 + (1 - xi^2) r^2)) / (1 + r^2); it grows with r up to the
@@ -554,49 +637,70 @@ struct Mei {
   }
 };
 
-// Number of entries of Camera::params for a model.
-inline int paramCount(CameraModel model) {
-  switch (model) {
-    case CameraModel::KannalaBrandt4:
-      return KannalaBrandt4<double>::kNumParams;
-    case CameraModel::Unified:
-      return Unified<double>::kNumParams;
-    case CameraModel::ExtendedUnified:
-      return ExtendedUnified<double>::kNumParams;
-    case CameraModel::DoubleSphere:
-      return DoubleSphere<double>::kNumParams;
-    case CameraModel::PinholeRadtan:
-      return PinholeRadtan<double>::kNumParams;
-    case CameraModel::Mei:
-      return Mei<double>::kNumParams;
-  }
-  return -1;
-}
-
 // One of the models, in CameraModel's order (AnyModel<S>::index() == int(model)).
 template <class S>
 using AnyModel =
     std::variant<KannalaBrandt4<S>, Unified<S>, ExtendedUnified<S>, DoubleSphere<S>, PinholeRadtan<S>, Mei<S>>;
 
+// The model type M as a value, for visitors of the model types: decltype(tag)::type.
+template <class M>
+struct ModelTag {
+  using type = M;
+};
+
+template <class... M, size_t... I>
+constexpr bool inCameraModelOrder(std::variant<M...>*, std::index_sequence<I...>) {
+  return ((int(M::kModel) == int(I)) && ...);
+}
+static_assert(inCameraModelOrder(static_cast<AnyModel<double>*>(nullptr),
+                                 std::make_index_sequence<std::variant_size_v<AnyModel<double>>>{}),
+              "AnyModel<S>::index() == int(model)");
+
+template <class F, class... M>
+bool visitModelTypeAmong(CameraModel model, F& f, std::variant<M...>*) {
+  return ((model == M::kModel ? (f(ModelTag<M>{}), true) : false) || ...);
+}
+
+// Calls f(ModelTag<M>{}) for the model type M (in scalar S) of `model`; false, without
+// calling f, for a value that is no CameraModel. The one place that maps a CameraModel to its
+// model: everything per model is read through here or through AnyModel.
+template <class S = double, class F>
+bool visitModelType(CameraModel model, F&& f) {
+  return visitModelTypeAmong(model, f, static_cast<AnyModel<S>*>(nullptr));
+}
+
+template <class F, class... M>
+void forEachModelTypeAmong(F& f, std::variant<M...>*) {
+  (f(ModelTag<M>{}), ...);
+}
+
+// Calls f(ModelTag<M>{}) for every model type M (in scalar S), in CameraModel's order.
+template <class S = double, class F>
+void forEachModelType(F&& f) {
+  forEachModelTypeAmong(f, static_cast<AnyModel<S>*>(nullptr));
+}
+
+// Number of entries of Camera::params for a model; -1 for no model.
+inline int paramCount(CameraModel model) {
+  int n = -1;
+  visitModelType(model, [&](auto tag) { n = decltype(tag)::type::kNumParams; });
+  return n;
+}
+
 // The model `model` in scalar S from params [fx fy cx cy extra...], which must have
 // paramCount(model) entries (BuiltCamera checks it); width and height are the image's.
 template <class S>
 AnyModel<S> makeModel(CameraModel model, const double* params, int width, int height) {
-  switch (model) {
-    case CameraModel::Unified:
-      return Unified<S>(params);
-    case CameraModel::ExtendedUnified:
-      return ExtendedUnified<S>(params);
-    case CameraModel::DoubleSphere:
-      return DoubleSphere<S>(params);
-    case CameraModel::PinholeRadtan:
-      return PinholeRadtan<S>(params, width, height);
-    case CameraModel::Mei:
-      return Mei<S>(params);
-    case CameraModel::KannalaBrandt4:
-      break;
-  }
-  return KannalaBrandt4<S>(params);
+  std::optional<AnyModel<S>> built;
+  visitModelType<S>(model, [&](auto tag) {
+    using M = typename decltype(tag)::type;
+    if constexpr (std::is_constructible_v<M, const double*, int, int>)
+      built.emplace(M(params, width, height));
+    else
+      built.emplace(M(params));
+  });
+  // No model: a Kannala-Brandt, as before the models were visited (BuiltCamera refuses it first).
+  return built ? std::move(*built) : AnyModel<S>(KannalaBrandt4<S>(params));
 }
 
 }  // namespace cs::models
