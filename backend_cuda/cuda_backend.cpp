@@ -358,18 +358,22 @@ void CudaBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer
         "roundTrip");
 }
 
+// The scratch role of resultConfidence's per-pixel terms (4 floats a pixel); 0-3 are the
+// other kernels'.
+constexpr int kConfidenceTermsKey = 4;
+
 void CudaBackend::doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
                                      const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
                                      const Buffer& trajectory, const Buffer& sweepConfidence,
                                      const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
   flush();
   auto optional = [&](const Buffer& b) { return b.id >= 0 ? img(slot(b).dev, b) : cudak::Img{nullptr, 0, 0, 0}; };
-  check(
-      cudak::launchResultConfidence(stream_, img(slot(confidence).dev, confidence), img(slot(radial).dev, radial),
-                                    img(slot(points).dev, points), img(slot(image).dev, image), img(slot(n0).dev, n0),
-                                    img(slot(n1).dev, n1), img(slot(w).dev, w), img(slot(trajectory).dev, trajectory),
-                                    optional(sweepConfidence), optional(roundTripError), img(slot(mask).dev, mask), p),
-      "resultConfidence");
+  check(cudak::launchResultConfidence(stream_, img(slot(confidence).dev, confidence), img(slot(radial).dev, radial),
+                                      img(slot(points).dev, points), img(slot(image).dev, image), img(slot(n0).dev, n0),
+                                      img(slot(n1).dev, n1), img(slot(w).dev, w), img(slot(trajectory).dev, trajectory),
+                                      optional(sweepConfidence), optional(roundTripError), img(slot(mask).dev, mask), p,
+                                      scratch(4 * mask.count(), kConfidenceTermsKey)),
+        "resultConfidence");
 }
 
 void CudaBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {

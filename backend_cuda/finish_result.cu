@@ -8,6 +8,7 @@ namespace {
 
 __global__ void finishResultKernel(float* valid, float* z, float* radial, float* points, float* disparity, float* warp,
                                    float* confidence, long long n) {
+  beginKernel();  // a programmatic dependent launch: wait for resultConfidence's writes
   const long long i = (long long)blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= n) return;
   const float r = radial[i];

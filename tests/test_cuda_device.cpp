@@ -5,6 +5,7 @@
 // skipped: gpu_suite.hpp).
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "curvestereo/stereo.hpp"
@@ -35,6 +36,11 @@ std::vector<float> fetch(const float* dev, size_t count, cudaStream_t stream) {
   ok(cudaMemcpyAsync(host.data(), dev, count * sizeof(float), cudaMemcpyDeviceToHost, stream));
   ok(cudaStreamSynchronize(stream));
   return host;
+}
+
+// Whether a device output equals the host API's bit for bit, NaN included.
+bool sameBits(const std::vector<float>& device, const void* host, size_t bytes) {
+  return device.size() * sizeof(float) == bytes && std::memcmp(device.data(), host, bytes) == 0;
 }
 
 // True (and the reason reported) when no CUDA device can run these tests.
@@ -204,6 +210,14 @@ TEST_CASE("CUDA device-pointer API: device inputs and outputs on a user stream")
       }
       MESSAGE("frame " << frame << ": " << validCount << " valid, " << mismatches << " differ from the host API, "
                        << 100.0 * close / double(std::max(1LL, validCount)) << " % within 0.05 px of the oracle");
+      // The same finishing kernel (Backend::finishResult): every output is the host API's,
+      // bit for bit, NaN and infinity included.
+      CHECK(sameBits(radial, ref.depth.radial.data.data(), n * 4));
+      CHECK(sameBits(u, ref.disparity.data.data(), n * 4));
+      CHECK(sameBits(warp, ref.warp.data.data(), n * 8));
+      CHECK(sameBits(fetch(d.points, 3 * n, stream), ref.depth.points.data.data(), n * 12));
+      CHECK(sameBits(fetch(d.z, n, stream), ref.depth.z.data.data(), n * 4));
+      CHECK(sameBits(fetch(d.confidence, n, stream), ref.confidence.data.data(), n * 4));
       CHECK(validCount > 0);
       CHECK(mismatches == 0);
       CHECK(double(close) >= 0.99 * double(validCount));
