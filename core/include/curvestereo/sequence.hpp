@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,7 @@ struct SequenceOptions {
 
 struct SequenceFrame {  // one stereo frame, not yet read
   int64_t timestampNs = 0;
+  // The image files; for a log, "LOG:TOPIC#N" (the topic's N-th message, counted from 0).
   std::string leftPath, rightPath;
   bool hasPose = false;
   Pose pose;  // T_world_cam0 when hasPose
@@ -47,6 +49,17 @@ class Sequence {
   // (b), a malformed poses file, or a source that is neither (a) nor (b).
   static Sequence open(const std::string& source, const SequenceOptions& options = {});
 
+  // The stereo frames of a recorded log (log.hpp: an MCAP file, a ROS 1 bag, a rosbag2 .db3
+  // or bag folder): the messages of two sensor_msgs/Image or CompressedImage topics, paired by
+  // header.stamp as ASL frames are (mutual nearest within options.pairToleranceMs); a frame's
+  // timestamp is its left message's stamp. Opening reads every message's header (not its
+  // pixels) and checks each one's encoding. A log cut short is read up to the cut, and a
+  // warning says where it was cut. Throws cs::Error, one line naming the log, topic and
+  // message: a missing topic (the log's image topics listed), a topic of another type, an
+  // unsupported encoding, a corrupt record or a bad CRC.
+  static Sequence openLog(const std::string& path, const std::string& leftTopic, const std::string& rightTopic,
+                          const SequenceOptions& options = {});
+
   const std::vector<SequenceFrame>& frames() const { return frames_; }
   // Notes the caller should show, one line each, so that nothing is dropped silently: every
   // frame that could not be paired ("cam0 1000033333333.png: no cam1 frame within 1 ms"),
@@ -58,12 +71,23 @@ class Sequence {
   // Reads frame i as float gray in [0, 1] (8/16-bit PNG; colour converted to Rec. 601 luma,
   // as the CLI does). Throws cs::Error naming the frame's index, timestamp and file when a
   // file is missing or unreadable, or when the two images differ in size.
+  // A log's frames are decoded from their messages the same way (mono8 / mono16 as 8 / 16-bit
+  // PNG samples, rgb8 / bgr8 to luma, png / jpeg CompressedImage decoded). Thread-safe.
   void load(size_t i, ImageF& left, ImageF& right) const;
 
+  struct LogFrames;  // a log's reader and message references (log_sequence.cpp)
+  struct Stamped;
+
  private:
+  void attachPoses(const std::string& path, double toleranceMs);
+  void loadLog(size_t i, ImageF& left, ImageF& right) const;
+  static void pairLogFrames(Sequence& seq, LogFrames& log, std::vector<Stamped>& left, std::vector<Stamped>& right,
+                            double toleranceMs);
+
+  std::shared_ptr<const LogFrames> log_;  // set for a log
   std::vector<SequenceFrame> frames_;
   std::vector<std::string> warnings_;
-  std::string kind_;  // "ASL" or "folder pairs"
+  std::string kind_;  // "ASL", "folder pairs" or the log's format
   bool posesGiven_ = false;
   size_t unpaired_ = 0;  // frames of either camera without a partner
 };
