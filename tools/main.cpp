@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
     if (command == "fields") return cs::cli::cmdFields(args);
     if (command == "bench") return cs::cli::cmdBench(args);
     if (command == "calib") return cs::cli::cmdCalib(args);
+    if (command == "log") return cs::cli::cmdLog(args);
     return 2;  // not reached: commandHelp() knows exactly these commands
   } catch (const UsageError& e) {
     std::fprintf(stderr, "curvestereo: error: %s (see 'curvestereo %s --help')\n", e.what(), command.c_str());
