@@ -4,8 +4,11 @@
 // up to the cut, a bad CRC, a missing topic, an unsupported encoding, each one clear line.
 #include <sqlite3.h>
 
+#include <array>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/log.hpp"
@@ -29,8 +32,8 @@ std::string writeSequence(const fs::path& dir, int frames, int w, int h, bool si
     cs::ImageF l(w, h), r(w, h);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
-        l.at(x, y) = float(((x * 7 + y * 13 + i * 5) % 256) / 255.0);
-        r.at(x, y) = float(((x * 11 + y * 3 + i * 17) % 256) / 255.0);
+        l.data[size_t(y * w + x)] = float(((x * 7 + y * 13 + i * 5) % 256) / 255.0);
+        r.data[size_t(y * w + x)] = float(((x * 11 + y * 3 + i * 17) % 256) / 255.0);
       }
     const std::string name = std::to_string(1'000'000'000'000 + int64_t(i) * 33'333'333) + ".png";
     (sixteen ? cs::writePngGray16 : cs::writePngGray)((dir / "l" / name).string(), l);
@@ -214,8 +217,7 @@ TEST_CASE("bad input: a bad CRC, a missing topic, an unsupported encoding each n
   const std::string crc = errorOf([&] { cs::Sequence::openLog((dir / "crc.mcap").string(), kLeft, kRight); });
   CHECK(crc.find("bad CRC in the chunk at byte") != std::string::npos);
   CHECK(crc.find(kLeft) != std::string::npos);  // the chunk's topics
-  const std::string missing =
-      errorOf([&] { cs::Sequence::openLog((dir / "good.mcap").string(), "/left", kRight); });
+  const std::string missing = errorOf([&] { cs::Sequence::openLog((dir / "good.mcap").string(), "/left", kRight); });
   CHECK(missing == "log '" + (dir / "good.mcap").string() + "' has no topic '/left' (its image topics: " + kLeft +
                        ", " + kRight + ")");
   // An encoding this does not read: yuv422 in the second message of the right topic.
@@ -320,7 +322,7 @@ TEST_CASE("pairing by header.stamp: unpaired messages are reported, never droppe
     w.write(c, uint64_t(stamp + 5'000'000), b.data());  // log time later than the stamp
   };
   image(l, 1'000'000'000), image(r, 1'000'400'000);  // 0.4 ms apart: paired
-  image(l, 1'033'000'000);                          // no right frame
+  image(l, 1'033'000'000);                           // no right frame
   image(l, 1'066'000'000), image(r, 1'066'000'000);
   image(r, 1'090'000'000);  // no left frame
   w.close();

@@ -104,14 +104,14 @@ TEST_CASE("DepthLogWriter: depth, camera info, points and confidence read back b
       for (int f = 0; f < 3; ++f) writer.write(1'700'000'000'123'456'789 + f * 33'333'333, fakeResult(w, h, f));
       writer.close();
     }
-    const Read back = readBack(path);
+    Read back = readBack(path);
     CHECK(back.format.find("summary and chunk indexes") != std::string::npos);
     CHECK(back.types["/curvestereo/depth"] == "sensor_msgs/msg/Image");
     CHECK(back.types["/curvestereo/camera_info"] == "sensor_msgs/msg/CameraInfo");
     CHECK(back.types["/curvestereo/points"] == "sensor_msgs/msg/PointCloud2");
-    for (const char* topic : {"/curvestereo/depth", "/curvestereo/camera_info", "/curvestereo/points",
-                              "/curvestereo/confidence", "/curvestereo/depth_pinhole",
-                              "/curvestereo/depth_pinhole/camera_info"})
+    for (const char* topic :
+         {"/curvestereo/depth", "/curvestereo/camera_info", "/curvestereo/points", "/curvestereo/confidence",
+          "/curvestereo/depth_pinhole", "/curvestereo/depth_pinhole/camera_info"})
       CHECK(back.messages[topic].size() == 3);
     for (int f = 0; f < 3; ++f) {
       const cs::DepthResult expect = fakeResult(w, h, f);
@@ -175,9 +175,9 @@ TEST_CASE("MCAP files written here read back in Foxglove's @mcap/core (node; ski
   const fs::path cache = fs::path(home ? home : "/tmp") / ".cache" / "curvestereo-npm";
   fs::create_directories(cache);
   if (!fs::exists(cache / "node_modules" / "@mcap" / "core") &&
-      std::system(("cd '" + cache.string() + "' && npm install --silent --no-audit --no-fund @mcap/core@2 " +
-                   ">/dev/null 2>&1")
-                      .c_str()) != 0) {
+      std::system(
+          ("cd '" + cache.string() + "' && npm install --silent --no-audit --no-fund @mcap/core@2 " + ">/dev/null 2>&1")
+              .c_str()) != 0) {
     MESSAGE("skipped: npm could not install @mcap/core (no network?)");
     return;
   }

@@ -29,14 +29,15 @@ int logInfoCommand(const Args& args) {
   else
     std::printf("no messages\n");
   for (const LogTopic& t : info.topics)
-    std::printf("  %-40s %-34s %-4s %6" PRIu64 " messages%s\n", t.name.c_str(), t.type.c_str(),
-                t.serialisation.c_str(), t.messages,
-                t.messages > 1 ? ("  " + std::to_string(int64_t(double(t.messages - 1) * 1e9 /
-                                                                std::max<double>(1, double(t.lastNs - t.firstNs)) +
-                                                                0.5)) +
-                                  " Hz")
-                                     .c_str()
-                               : "");
+    std::printf("  %-40s %-34s %-4s %6" PRIu64 " messages%s\n", t.name.c_str(), t.type.c_str(), t.serialisation.c_str(),
+                t.messages,
+                t.messages > 1
+                    ? ("  " +
+                       std::to_string(int64_t(
+                           double(t.messages - 1) * 1e9 / std::max<double>(1, double(t.lastNs - t.firstNs)) + 0.5)) +
+                       " Hz")
+                          .c_str()
+                    : "");
   if (!info.cut.empty()) std::fprintf(stderr, "curvestereo: warning: %s\n", info.cut.c_str());
   return 0;
 }

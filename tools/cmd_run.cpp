@@ -122,9 +122,7 @@ struct SequenceTally {
 };
 
 // "-o OUT.mcap": the depth goes into one MCAP log (DepthLogWriter) instead of folders.
-bool mcapOutput(const std::string& out) {
-  return out.size() > 5 && out.compare(out.size() - 5, 5, ".mcap") == 0;
-}
+bool mcapOutput(const std::string& out) { return out.size() > 5 && out.compare(out.size() - 5, 5, ".mcap") == 0; }
 
 // --log FILE --topics LEFT,RIGHT, or --sequence SRC: the frames and the calibration's path.
 Sequence openFrames(const Args& args, std::string& calibPath) {

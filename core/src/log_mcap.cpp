@@ -20,7 +20,7 @@ enum Op : uint8_t {
   kChunkIndex = 0x08,
   kDataEnd = 0x0F,
 };
-constexpr uint64_t kFooterBytes = 1 + 8 + 20;  // opcode, length, three fields
+constexpr uint64_t kFooterBytes = 1 + 8 + 20;      // opcode, length, three fields
 constexpr uint64_t kMaxChunk = uint64_t(1) << 32;  // larger claims are corrupt, not allocated
 
 struct ChunkHead {
@@ -28,7 +28,7 @@ struct ChunkHead {
   uint64_t uncompressedSize = 0;
   uint32_t crc = 0;
   std::string compression;
-  uint64_t size = 0;            // of the (compressed) records
+  uint64_t size = 0;  // of the (compressed) records
   const uint8_t* records = nullptr;
 };
 
@@ -142,7 +142,8 @@ class McapReader : public Reader {
     const std::string compression = r.str32();
     if (std::find(compressions_.begin(), compressions_.end(), compression) == compressions_.end())
       compressions_.push_back(compression);
-    if (offset < 8 || offset >= file_.size()) throw Error("corrupt MCAP " + at(offset) + ": a chunk index points outside the file");
+    if (offset < 8 || offset >= file_.size())
+      throw Error("corrupt MCAP " + at(offset) + ": a chunk index points outside the file");
     chunks_[offset] = std::move(ids);
   }
 
@@ -175,7 +176,8 @@ class McapReader : public Reader {
     std::string topics;
     if (const auto it = chunks_.find(offset); it != chunks_.end())
       for (uint16_t id : it->second)
-        if (const auto c = ids_.find(id); c != ids_.end()) topics += (topics.empty() ? "" : ", ") + channels_[c->second].topic;
+        if (const auto c = ids_.find(id); c != ids_.end())
+          topics += (topics.empty() ? "" : ", ") + channels_[c->second].topic;
     return "the chunk at byte " + std::to_string(offset) + " of MCAP '" + path_ + "' (messages logged " +
            std::to_string(h.startNs) + " to " + std::to_string(h.endNs) + " ns" +
            (topics.empty() ? "" : " on " + topics) + ")";
@@ -303,7 +305,7 @@ class McapReader : public Reader {
 
   MappedFile file_;
   std::map<uint16_t, std::string> schemas_;
-  std::map<uint16_t, uint32_t> ids_;  // channel id -> index in channels_
+  std::map<uint16_t, uint32_t> ids_;                  // channel id -> index in channels_
   std::map<uint64_t, std::vector<uint16_t>> chunks_;  // chunk offset -> its channels (from the index)
   std::vector<std::string> compressions_;
   std::vector<bool> wanted_;

@@ -77,7 +77,9 @@ void CdrBuffer::header(int64_t stampNs, const std::string& frameId) {
 }
 
 McapWriter::McapWriter(const std::string& path, const std::string& compression, uint64_t chunkBytes)
-    : path_(path), compression_(compression == "none" ? "" : compression), chunkBytes_(std::max<uint64_t>(chunkBytes, 1)) {
+    : path_(path),
+      compression_(compression == "none" ? "" : compression),
+      chunkBytes_(std::max<uint64_t>(chunkBytes, 1)) {
   if (compression != "none" && compression != "zstd" && compression != "lz4")
     throw Error("MCAP compression must be zstd, lz4 or none, got '" + logio::shown(compression) + "'");
   file_ = std::fopen(path.c_str(), "wb");

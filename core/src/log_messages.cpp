@@ -102,9 +102,9 @@ void decompress(const std::string& method, const uint8_t* in, uint64_t inSize, u
   } else if (method == "bz2") {
     if (inSize > UINT32_MAX || outSize > UINT32_MAX) throw Error(what + ": bz2 block over 4 GiB");
     unsigned got = unsigned(outSize);
-    const int rc = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out), &got,
-                                              const_cast<char*>(reinterpret_cast<const char*>(in)), unsigned(inSize),
-                                              0, 0);
+    const int rc =
+        BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out), &got,
+                                   const_cast<char*>(reinterpret_cast<const char*>(in)), unsigned(inSize), 0, 0);
     if (rc != BZ_OK) throw Error(what + ": corrupt bz2 data (error " + std::to_string(rc) + ")");
     if (got != outSize)
       throw Error(what + ": bz2 data gives " + std::to_string(got) + " bytes, not " + std::to_string(outSize));
@@ -241,7 +241,8 @@ void convertRaw(const RawImage& im, ImageF& out) {
     } else if (bpp == 2) {
       const auto& t16 = table16();
       for (uint32_t x = 0; x < im.width; ++x)
-        o[x] = t16[im.bigEndian ? unsigned(row[2 * x]) << 8 | row[2 * x + 1] : unsigned(row[2 * x + 1]) << 8 | row[2 * x]];
+        o[x] =
+            t16[im.bigEndian ? unsigned(row[2 * x]) << 8 | row[2 * x + 1] : unsigned(row[2 * x + 1]) << 8 | row[2 * x]];
     } else {
       const bool bgr = im.encoding == "bgr8";
       for (uint32_t x = 0; x < im.width; ++x) {

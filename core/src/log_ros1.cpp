@@ -12,7 +12,14 @@ namespace {
 
 constexpr char kMagic[] = "#ROSBAG V2.0\n";
 constexpr uint64_t kMagicBytes = 13;
-enum Op : uint8_t { kMessage = 0x02, kBagHeader = 0x03, kIndex = 0x04, kChunk = 0x05, kChunkInfo = 0x06, kConnection = 0x07 };
+enum Op : uint8_t {
+  kMessage = 0x02,
+  kBagHeader = 0x03,
+  kIndex = 0x04,
+  kChunk = 0x05,
+  kChunkInfo = 0x06,
+  kConnection = 0x07
+};
 constexpr uint64_t kMaxChunk = uint64_t(1) << 32;
 
 // One record: its header's "name=value" fields and its data.

@@ -79,8 +79,8 @@ class SqliteReader : public Reader {
       if (rc == SQLITE_DONE) continue;
       // A damaged file (a recorder's power loss): what was read stands, and the cut is said.
       if (rows == 0) s.fail("cannot read its messages");
-      cut_ = "rosbag2 database '" + dbs_[d].path + "' is damaged after " + std::to_string(rows) +
-             " messages (" + shown(sqlite3_errmsg(dbs_[d].db), 80) + "): read up to there";
+      cut_ = "rosbag2 database '" + dbs_[d].path + "' is damaged after " + std::to_string(rows) + " messages (" +
+             shown(sqlite3_errmsg(dbs_[d].db), 80) + "): read up to there";
       return;
     }
   }

@@ -48,7 +48,8 @@ Side findTopic(const logio::Reader& reader, const std::string& topic, const std:
   const auto& channels = reader.channels();
   const auto it = std::find_if(channels.begin(), channels.end(), [&](const auto& c) { return c.topic == topic; });
   if (it == channels.end())
-    throw Error("log '" + path + "' has no topic '" + shown(topic) + "' (its image topics: " + imageTopics(reader) + ")");
+    throw Error("log '" + path + "' has no topic '" + shown(topic) + "' (its image topics: " + imageTopics(reader) +
+                ")");
   Side side{topic, uint32_t(it - channels.begin()), logio::imageKind(it->type), it->cdr()};
   if (side.kind == logio::ImageKind::None)
     throw Error("topic '" + topic + "' of log '" + path + "' is of type '" + shown(it->type) +
@@ -58,7 +59,6 @@ Side findTopic(const logio::Reader& reader, const std::string& topic, const std:
                 "' (ROS 2 CDR or ROS 1 are read)");
   return side;
 }
-
 
 std::string messageName(const std::string& path, const std::string& topic, uint64_t index, int64_t logNs) {
   return "log '" + path + "', topic '" + topic + "', message " + std::to_string(index) + " (logged at " +

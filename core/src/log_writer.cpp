@@ -13,9 +13,9 @@ namespace cs {
 namespace {
 
 // ros2msg schemas: the message's definition, then each type it uses after a line of '='.
-constexpr const char* kSeparator = "\n================================================================================\n";
-constexpr const char* kHeaderDef =
-    "MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n";
+constexpr const char* kSeparator =
+    "\n================================================================================\n";
+constexpr const char* kHeaderDef = "MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n";
 constexpr const char* kTimeDef = "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n";
 
 std::string withHeader(const std::string& body, const std::string& more = "") {
@@ -47,7 +47,8 @@ const std::string& pointCloudSchema() {
       "uint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n",
       std::string(kSeparator) +
           "MSG: sensor_msgs/PointField\nuint8 INT8=1\nuint8 UINT8=2\nuint8 INT16=3\nuint8 UINT16=4\nuint8 INT32=5\n"
-          "uint8 UINT32=6\nuint8 FLOAT32=7\nuint8 FLOAT64=8\nstring name\nuint32 offset\nuint8 datatype\nuint32 count\n");
+          "uint8 UINT32=6\nuint8 FLOAT32=7\nuint8 FLOAT64=8\nstring name\nuint32 offset\nuint8 datatype\nuint32 "
+          "count\n");
   return s;
 }
 
@@ -75,7 +76,7 @@ void cameraInfo(CdrBuffer& b, int width, int height, const std::string& model, c
   for (double v : {fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0}) b.f64(v);
   for (double v : {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0}) b.f64(v);
   for (double v : {fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0}) b.f64(v);
-  b.u32(0), b.u32(0);                    // binning
+  b.u32(0), b.u32(0);                      // binning
   b.u32(0), b.u32(0), b.u32(0), b.u32(0);  // roi: the whole image
   b.u8(0);
 }

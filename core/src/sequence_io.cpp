@@ -303,7 +303,8 @@ Sequence Sequence::open(const std::string& source, const SequenceOptions& option
     for (size_t i : paired.leftAlone)
       seq.warnings_.push_back("cam0 " + left[i].filename + ": no cam1 frame within " + msText(options.pairToleranceMs));
     for (size_t j : paired.rightAlone)
-      seq.warnings_.push_back("cam1 " + right[j].filename + ": no cam0 frame within " + msText(options.pairToleranceMs));
+      seq.warnings_.push_back("cam1 " + right[j].filename + ": no cam0 frame within " +
+                              msText(options.pairToleranceMs));
     seq.unpaired_ += paired.leftAlone.size() + paired.rightAlone.size();
     if (seq.frames_.empty())
       throw Error(oneLine("ASL folder '" + mav0.string() + "': no stereo frames (cam0 has " +
@@ -364,11 +365,9 @@ void Sequence::attachPoses(const std::string& path, double toleranceMs) {
   for (SequenceFrame& f : frames_) {
     // The nearest pose: the first at or after the frame, or the one before it.
     auto it = poses.lower_bound(f.timestampNs);
-    if (it != poses.begin() &&
-        (it == poses.end() || f.timestampNs - std::prev(it)->first < it->first - f.timestampNs))
+    if (it != poses.begin() && (it == poses.end() || f.timestampNs - std::prev(it)->first < it->first - f.timestampNs))
       --it;
-    if (it != poses.end() &&
-        double(std::max(it->first, f.timestampNs) - std::min(it->first, f.timestampNs)) <= tolNs) {
+    if (it != poses.end() && double(std::max(it->first, f.timestampNs) - std::min(it->first, f.timestampNs)) <= tolNs) {
       f.hasPose = true;
       f.pose = it->second;
     } else {
@@ -379,8 +378,8 @@ void Sequence::attachPoses(const std::string& path, double toleranceMs) {
     std::string list;
     for (size_t k = 0; k < missing.size() && k < 5; ++k) list += (k ? ", " : "") + std::to_string(missing[k]);
     warnings_.push_back(std::to_string(missing.size()) + " of " + std::to_string(frames_.size()) +
-                            " frames have no pose within " + msText(toleranceMs) + " in '" + path +
-                            "' (t_ns " + list + (missing.size() > 5 ? ", ..." : "") + ")");
+                        " frames have no pose within " + msText(toleranceMs) + " in '" + path + "' (t_ns " + list +
+                        (missing.size() > 5 ? ", ..." : "") + ")");
   }
 }
 
