@@ -1,8 +1,12 @@
 // curvestereo log info FILE: a recorded log's topics, types, message counts and time range.
+// curvestereo log info FILE --time-read --topics LEFT,RIGHT: what opening the log as a
+//                       sequence costs, and reading (decoding) each frame in order.
 // curvestereo log write --sequence SRC -o FILE.mcap [--topics LEFT,RIGHT] [--format raw|png]
 //                       [--compression zstd|lz4|none]: a sequence's images as an MCAP log.
+#include <chrono>
 #include <cinttypes>
 #include <cstdio>
+#include <tuple>
 
 #include "commands.hpp"
 #include "common.hpp"
@@ -12,15 +16,46 @@ namespace cs::cli {
 
 namespace {
 
+std::pair<std::string, std::string> topicPair(const std::string& topics) {
+  const size_t comma = topics.find(',');
+  if (comma == std::string::npos || comma == 0 || comma + 1 == topics.size() ||
+      topics.find(',', comma + 1) != std::string::npos)
+    throw UsageError("--topics expects LEFT,RIGHT, got '" + topics + "'");
+  return {topics.substr(0, comma), topics.substr(comma + 1)};
+}
+
 std::string seconds(int64_t ns) {
   char buf[48];
   std::snprintf(buf, sizeof buf, "%.3f s", double(ns) * 1e-9);
   return buf;
 }
 
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// --time-read: the reading cost on this machine, the figure to hold against a frame's solve
+// (run's summary says how much of it the solving thread still waits for).
+int timeReadCommand(const Args& args, const std::string& path) {
+  const auto [left, right] = topicPair(args.require("topics"));
+  auto t0 = std::chrono::steady_clock::now();
+  const Sequence sequence = Sequence::openLog(path, left, right);
+  const double openMs = msSince(t0);
+  ImageF l, r;
+  t0 = std::chrono::steady_clock::now();
+  const size_t n = sequence.frames().size();
+  for (size_t i = 0; i < n; ++i) sequence.load(i, l, r);
+  const double readMs = msSince(t0);
+  std::printf("%s: %s; opened in %.1f ms; %zu frames (%dx%d) read in %.1f ms: %.2f ms a frame\n", path.c_str(),
+              sequence.summary().c_str(), openMs, n, l.width, l.height, readMs, readMs / double(n));
+  return 0;
+}
+
 int logInfoCommand(const Args& args) {
   if (args.positional().size() != 2) throw UsageError("log info needs exactly one log: log info FILE");
   const std::string path = args.positional()[1];
+  if (args.has("time-read")) return timeReadCommand(args, path);
+  if (args.has("topics")) throw UsageError("--topics is for log info --time-read or log write");
   const LogInfo info = logInfo(path);
   std::printf("%s: %s\n", path.c_str(), info.format.c_str());
   if (info.messages)
@@ -46,14 +81,7 @@ int logWriteCommand(const Args& args) {
   if (args.positional().size() != 1) throw UsageError("log write takes no positional arguments");
   const std::string out = args.has("o") ? args.get("o", "") : args.require("output");
   ImageLogOptions options;
-  if (args.has("topics")) {
-    const std::string topics = args.get("topics", "");
-    const size_t comma = topics.find(',');
-    if (comma == std::string::npos || comma == 0 || comma + 1 == topics.size())
-      throw UsageError("--topics expects LEFT,RIGHT, got '" + topics + "'");
-    options.leftTopic = topics.substr(0, comma);
-    options.rightTopic = topics.substr(comma + 1);
-  }
+  if (args.has("topics")) std::tie(options.leftTopic, options.rightTopic) = topicPair(args.get("topics", ""));
   options.format = args.get("format", options.format);
   options.compression = args.get("compression", options.compression);
   const Sequence sequence = Sequence::open(args.require("sequence"));
@@ -67,7 +95,9 @@ int logWriteCommand(const Args& args) {
 }  // namespace
 
 int cmdLog(const Args& args) {
-  args.allowOnly({"o", "output", "sequence", "topics", "format", "compression"});
+  args.allowOnly({"o", "output", "sequence", "topics", "format", "compression", "time-read"});
+  if (args.has("time-read") && (args.positional().empty() || args.positional()[0] != "info"))
+    throw UsageError("--time-read is for log info");
   const std::string what = args.positional().empty() ? "" : args.positional()[0];
   if (what == "info") return logInfoCommand(args);
   if (what == "write") return logWriteCommand(args);

@@ -124,6 +124,15 @@ struct SequenceTally {
 // "-o OUT.mcap": the depth goes into one MCAP log (DepthLogWriter) instead of folders.
 bool mcapOutput(const std::string& out) { return out.size() > 5 && out.compare(out.size() - 5, 5, ".mcap") == 0; }
 
+// --read-threads N: the threads reading frames ahead (0 or absent: chosen by the core count).
+int readThreads(const Args& args) {
+  int n = 0;
+  const std::string text = args.get("read-threads", "0");
+  if (!wholeNumber(text, n) || n < 0 || n > 64)
+    throw UsageError("--read-threads expects a whole number of 0 to 64 (0: by the core count), got '" + text + "'");
+  return n;
+}
+
 // --log FILE --topics LEFT,RIGHT, or --sequence SRC: the frames and the calibration's path.
 Sequence openFrames(const Args& args, std::string& calibPath) {
   SequenceOptions options;
@@ -177,22 +186,22 @@ int runSequence(const Args& args, const std::string& outDir) {
               cold ? "cold: every frame solved alone" : "warm start and temporal filter");
   const bool tty = isatty(fileno(stderr));
   SequenceTally tally;
-  double readMs = 0;
   ImageF left, right;
   DepthResult r;
   const std::vector<SequenceFrame>& frames = sequence.frames();
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const SequenceFrame& f = frames[i];
-    const std::string name = std::to_string(f.timestampNs);
+  // Frames are read ahead on background threads while this one solves (its wait is reported).
+  SequenceReader reader(sequence, readThreads(args));
+  while (true) {
+    size_t i = 0;
     const std::string written = " (" + std::to_string(tally.frames) + " frames before it are written)";
     try {
-      const auto t0 = std::chrono::steady_clock::now();
-      sequence.load(i, left, right);  // its errors name the frame
-      readMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      if (!reader.next(i, left, right)) break;  // a frame's error names the frame
     } catch (const Error& e) {
       if (tty) std::fputc('\n', stderr);
       throw Error(e.what() + written);
     }
+    const SequenceFrame& f = frames[i];
+    const std::string name = std::to_string(f.timestampNs);
     try {
       stereo.next(left, right, r, f.hasPose ? &f.pose : nullptr);
       if (log) {
@@ -218,10 +227,14 @@ int runSequence(const Args& args, const std::string& outDir) {
   auto mean = [](double ms, int n) { return n ? ms / n : 0.0; };
   std::printf(
       "%d frames in %.1f s: %.2f ms a frame solved (warm %d, %.2f ms; cold %d, %.2f ms; %d warm frames "
-      "redone cold), %.3f ms a frame read; outputs in %s%s\n",
+      "redone cold); outputs in %s%s\n",
       tally.frames, tally.wallSeconds(), mean(tally.solveMs, tally.frames), tally.warm, mean(tally.warmMs, tally.warm),
-      tally.cold, mean(tally.coldMs, tally.cold), tally.redone, mean(readMs, tally.frames), outDir.c_str(),
-      log ? "" : "/<t_ns>/");
+      tally.cold, mean(tally.coldMs, tally.cold), tally.redone, outDir.c_str(), log ? "" : "/<t_ns>/");
+  std::printf(
+      "read: %.3f ms a frame on %d reader thread%s ahead; the solving thread waited %.1f ms for the first frame, "
+      "%.3f ms a frame for the others\n",
+      mean(reader.readMs(), tally.frames), reader.threads(), reader.threads() == 1 ? "" : "s", reader.firstWaitMs(),
+      mean(reader.waitedMs(), tally.frames - 1));
   return 0;
 }
 
@@ -231,7 +244,7 @@ int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert(
       {"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling", "image-size"});
-  known.insert({"sequence", "poses", "cold", "pair-tolerance-ms", "log", "topics", "compression"});
+  known.insert({"sequence", "poses", "cold", "pair-tolerance-ms", "log", "topics", "compression", "read-threads"});
   args.allowOnly(known);
   if (args.has("sequence") && args.has("log")) throw UsageError("give --sequence or --log, not both");
   if (args.has("sequence") || args.has("log")) {
@@ -244,7 +257,7 @@ int cmdRun(const Args& args) {
     if (args.has("compression") && !mcapOutput(outDir)) throw UsageError("--compression is for -o OUT.mcap");
     return runSequence(args, outDir);
   }
-  for (const char* option : {"poses", "cold", "pair-tolerance-ms", "topics", "compression"})
+  for (const char* option : {"poses", "cold", "pair-tolerance-ms", "topics", "compression", "read-threads"})
     if (args.has(option)) throw UsageError(std::string("--") + option + " is for run --sequence or --log");
   if (args.positional().size() != 2) throw UsageError("run needs exactly two images: LEFT RIGHT");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");

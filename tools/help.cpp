@@ -61,6 +61,9 @@ sequences:
                          or TUM text
   --pair-tolerance-ms T  left and right timestamps further apart are not paired (default 1)
   --cold                 every frame solved alone (no warm start, no temporal filter)
+  --read-threads N       threads reading frames ahead while one is solved (default 0: one per
+                         four cores, 1 to 4); the summary's "read:" line says what reading
+                         cost and how long the solving thread waited for frames
 recorded logs (docs/guide.md "Recorded logs"):
   --log FILE             an MCAP file, a ROS 1 bag (2.0), a rosbag2 .db3 or bag folder
   --topics LEFT,RIGHT    its two sensor_msgs/Image or CompressedImage topics, paired by
@@ -73,12 +76,15 @@ recorded logs (docs/guide.md "Recorded logs"):
      true, false},
     {"log", "list a recorded log's topics, or write a sequence's images as a log",
      R"(usage: curvestereo log info FILE
+       curvestereo log info FILE --time-read --topics LEFT,RIGHT
        curvestereo log write --sequence SRC -o FILE.mcap [--topics LEFT,RIGHT] [--format raw|png]
                              [--compression zstd|lz4|none]
 
 info: the log's format, and each topic's type, serialisation, message count and rate, and
 the time range (log times). FILE: an MCAP file, a ROS 1 bag (2.0), a rosbag2 .db3 or bag
 folder. A log cut short is listed up to the cut, with a warning saying where.
+With --time-read: the time to open the log as two topics' frames (run --log's opening) and
+to read (decode) every frame in order on one thread, in ms a frame.
 
 write: a sequence's image pairs (an ASL folder or "LEFT,RIGHT" folders, as run --sequence)
 into an MCAP log, each message stamped with its frame's timestamp (ns).

@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
     // Options without a value; --sequence is one for synth only (run and bench take a source).
     std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold", "compare", "blind"};
     if (command == "synth") flags.insert("sequence");
+    if (command == "log") flags.insert("time-read");
     const cs::cli::Args args(int(rest.size()), rest.data(), flags);
     if (command == "run") return cs::cli::cmdRun(args);
     if (command == "demo") return cs::cli::cmdDemo(args);

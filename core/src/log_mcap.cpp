@@ -60,10 +60,14 @@ class McapReader : public Reader {
 
   void read(const MessageRef& ref, const Use& use) const override {
     if (ref.chunk == 0) return use(file_.data() + ref.offset, size_t(ref.size));
-    std::lock_guard<std::mutex> lock(mutex_);
-    const uint8_t* records = cachedRecords(ref.chunk);
-    use(records + ref.offset, size_t(ref.size));
+    // Its CRC passed in scan; a plain chunk is not cached (it is in the mapped file).
+    const ChunkData chunk = cache_.get(ref.chunk, [&] { return decompressChunk(ref.chunk, false); });
+    if (ref.offset > chunk.size || ref.size > chunk.size - ref.offset)
+      throw Error("corrupt MCAP " + at(ref.chunk) + ": a message lies outside its chunk");
+    use(chunk.data + ref.offset, size_t(ref.size));
   }
+
+  uint64_t chunkLoads() const override { return cache_.loads(); }
 
  private:
   bool anyWanted(const std::vector<uint16_t>& ids) const {
@@ -183,20 +187,18 @@ class McapReader : public Reader {
            (topics.empty() ? "" : " on " + topics) + ")";
   }
 
-  // A chunk's records, decompressed into `buffer` unless stored plainly; CRC checked.
-  const uint8_t* decompressChunk(uint64_t offset, std::unique_ptr<uint8_t[]>& buffer, uint64_t& size,
-                                 bool checkCrc) const {
+  // A chunk's records, decompressed unless stored plainly; CRC checked.
+  ChunkData decompressChunk(uint64_t offset, bool checkCrc) const {
     const ChunkHead h = chunkHead(offset);
-    const uint8_t* records = h.records;
+    ChunkData chunk{nullptr, h.records, h.uncompressedSize};
     if (!h.compression.empty()) {
-      buffer.reset(new uint8_t[std::max<uint64_t>(h.uncompressedSize, 1)]);
+      std::shared_ptr<uint8_t[]> buffer(new uint8_t[std::max<uint64_t>(h.uncompressedSize, 1)]);
       decompress(h.compression, h.records, h.size, buffer.get(), h.uncompressedSize, chunkName(offset, h));
-      records = buffer.get();
+      chunk = ChunkData{buffer, buffer.get(), h.uncompressedSize};
     }
-    if (checkCrc && h.crc && crc32(records, h.uncompressedSize) != h.crc)
+    if (checkCrc && h.crc && crc32(chunk.data, chunk.size) != h.crc)
       throw Error("bad CRC in " + chunkName(offset, h) + ": the log is corrupt");
-    size = h.uncompressedSize;
-    return records;
+    return chunk;
   }
 
   void chunkRecords(uint64_t offset, const Visit& visit) {
@@ -205,10 +207,9 @@ class McapReader : public Reader {
       if (std::find(compressions_.begin(), compressions_.end(), method) == compressions_.end())
         compressions_.push_back(method);
     }
-    std::unique_ptr<uint8_t[]> buffer;
-    uint64_t size = 0;
-    const uint8_t* records = decompressChunk(offset, buffer, size, true);
-    Bytes b(records, size);
+    const ChunkData chunk = decompressChunk(offset, true);
+    Bytes b(chunk.data, chunk.size);
+    visited_ = false;
     try {
       while (b.left()) {
         const uint64_t at = b.pos();
@@ -221,6 +222,7 @@ class McapReader : public Reader {
     } catch (const Truncated&) {
       throw Error("corrupt MCAP " + at(offset) + ": a record overruns its chunk");
     }
+    if (visited_) cache_.keep(offset, chunk);  // for read(): decompressed once
   }
 
   // One data-section record (in a chunk when chunk != 0; `where`: its content's offset).
@@ -243,6 +245,7 @@ class McapReader : public Reader {
     ++c.count;
     if (!wanted_.empty() && !wanted_[it->second]) return;
     const MessageRef ref{it->second, int64_t(logTime), chunk, where + r.pos(), r.left()};
+    visited_ = true;
     visit(ref, r.here(), size_t(r.left()));
   }
 
@@ -294,15 +297,6 @@ class McapReader : public Reader {
            std::to_string(recordStart) + "): read up to the cut";
   }
 
-  const uint8_t* cachedRecords(uint64_t chunk) const {
-    if (cachedChunk_ != chunk) {
-      cachedChunk_ = 0;
-      cachedRecords_ = decompressChunk(chunk, cache_, cachedSize_, false);  // its CRC passed in scan
-      cachedChunk_ = chunk;
-    }
-    return cachedRecords_;
-  }
-
   MappedFile file_;
   std::map<uint16_t, std::string> schemas_;
   std::map<uint16_t, uint32_t> ids_;                  // channel id -> index in channels_
@@ -310,10 +304,8 @@ class McapReader : public Reader {
   std::vector<std::string> compressions_;
   std::vector<bool> wanted_;
   bool indexed_ = false, hasFooter_ = false;
-  mutable std::mutex mutex_;
-  mutable uint64_t cachedChunk_ = 0, cachedSize_ = 0;
-  mutable const uint8_t* cachedRecords_ = nullptr;
-  mutable std::unique_ptr<uint8_t[]> cache_;
+  bool visited_ = false;  // the chunk being scanned holds wanted messages
+  mutable ChunkCache cache_;
 };
 
 }  // namespace

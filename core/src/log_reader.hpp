@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <future>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -45,6 +47,8 @@ class Reader {
   virtual void scan(const std::vector<bool>& wanted, const Visit& visit) = 0;
   // One message again; `use` sees its bytes (valid during the call). Thread-safe.
   virtual void read(const MessageRef& ref, const Use& use) const = 0;
+  // Chunks read() had to decompress, not finding them kept from scan (for tests).
+  virtual uint64_t chunkLoads() const { return 0; }
   const std::vector<Channel>& channels() const { return channels_; }
   const std::string& cut() const { return cut_; }
   const std::string& path() const { return path_; }
@@ -114,6 +118,43 @@ class Bytes {
  private:
   const uint8_t* p_;
   uint64_t n_, pos_ = 0;
+};
+
+// A chunk's records: decompressed into `owner`, or (stored plainly) in the mapped file.
+struct ChunkData {
+  std::shared_ptr<const uint8_t[]> owner;
+  const uint8_t* data = nullptr;
+  uint64_t size = 0;
+};
+
+// Decompressed chunks, so that each is decompressed once: scan (which must decompress every
+// chunk for the messages' header stamps) hands its chunks over while they fit the budget,
+// keeping the first ones, which the frames read first need; read() then finds them, and
+// decompresses later ones once each, evicting the least recently used. Chunks are read in
+// file order and a chunk holds neighbouring frames, so a small budget suffices. Distinct
+// chunks are decompressed concurrently (for the threads that read frames ahead); a thread
+// wanting a chunk another is decompressing waits for it instead of doing it again.
+class ChunkCache {
+ public:
+  using Load = std::function<ChunkData()>;
+  explicit ChunkCache(uint64_t budgetBytes = uint64_t(256) << 20) : budget_(budgetBytes) {}
+  ChunkData get(uint64_t key, const Load& load);
+  void keep(uint64_t key, const ChunkData& chunk);  // from scan: kept only while under budget
+  uint64_t loads() const {                          // chunks get() had to load, not finding them (for tests)
+    std::lock_guard<std::mutex> lock(mutex_);
+    return loads_;
+  }
+
+ private:
+  struct Entry {
+    std::shared_future<ChunkData> chunk;
+    uint64_t bytes = 0, used = 0;  // bytes: 0 until loaded
+  };
+  void evict(uint64_t keep);
+
+  mutable std::mutex mutex_;
+  std::map<uint64_t, Entry> entries_;
+  uint64_t budget_, bytes_ = 0, clock_ = 0, loads_ = 0;
 };
 
 uint32_t crc32(const uint8_t* p, uint64_t n, uint32_t crc = 0);

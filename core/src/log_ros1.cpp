@@ -124,14 +124,13 @@ class Ros1Reader : public Reader {
 
   void read(const MessageRef& ref, const Use& use) const override {
     if (ref.chunk == 0) return use(file_.data() + ref.offset, size_t(ref.size));
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (cachedChunk_ != ref.chunk) {
-      cachedChunk_ = 0;
-      cachedData_ = chunkData(ref.chunk, cache_, cachedSize_);
-      cachedChunk_ = ref.chunk;
-    }
-    use(cachedData_ + ref.offset, size_t(ref.size));
+    const ChunkData chunk = cache_.get(ref.chunk, [&] { return chunkData(ref.chunk); });
+    if (ref.offset > chunk.size || ref.size > chunk.size - ref.offset)
+      throw Error("corrupt ROS 1 bag " + at(ref.chunk) + ": the chunk changed since the bag was opened");
+    use(chunk.data + ref.offset, size_t(ref.size));
   }
+
+  uint64_t chunkLoads() const override { return cache_.loads(); }
 
  private:
   std::string at(uint64_t offset) const { return "'" + path_ + "' byte " + std::to_string(offset); }
@@ -206,8 +205,8 @@ class Ros1Reader : public Reader {
     }
   }
 
-  // The chunk's records, decompressed into `buffer` unless stored plainly.
-  const uint8_t* chunkData(uint64_t offset, std::unique_ptr<uint8_t[]>& buffer, uint64_t& size) const {
+  // The chunk's records, decompressed unless stored plainly.
+  ChunkData chunkData(uint64_t offset) const {
     const Record r = recordAt(offset);
     std::string compression;
     uint32_t uncompressed = 0;
@@ -218,16 +217,15 @@ class Ros1Reader : public Reader {
     } catch (const Error& e) {
       throw Error("corrupt ROS 1 bag " + at(offset) + ": " + e.what());
     }
-    size = uncompressed;
     if (compression == "none") {
       if (uncompressed != r.dataSize) throw Error("corrupt ROS 1 bag " + at(offset) + ": chunk size mismatch");
-      return r.data;
+      return ChunkData{nullptr, r.data, uncompressed};
     }
     if (uncompressed > kMaxChunk) throw Error("corrupt ROS 1 bag " + at(offset) + ": implausible chunk size");
-    buffer.reset(new uint8_t[std::max<uint32_t>(uncompressed, 1)]);
+    std::shared_ptr<uint8_t[]> buffer(new uint8_t[std::max<uint32_t>(uncompressed, 1)]);
     decompress(compression, r.data, r.dataSize, buffer.get(), uncompressed,
                "the chunk at byte " + std::to_string(offset) + " of ROS 1 bag '" + path_ + "'");
-    return buffer.get();
+    return ChunkData{buffer, buffer.get(), uncompressed};
   }
 
   void chunk(uint64_t offset, const Visit& visit) {
@@ -235,10 +233,10 @@ class Ros1Reader : public Reader {
     const std::string method = head.fields.count("compression") ? head.text("compression") : "?";
     if (std::find(compressions_.begin(), compressions_.end(), method) == compressions_.end())
       compressions_.push_back(method);
-    std::unique_ptr<uint8_t[]> buffer;
-    uint64_t size = 0;
-    const uint8_t* data = chunkData(offset, buffer, size);
-    Bytes b(data, size);
+    visited_ = false;
+    const ChunkData chunk = chunkData(offset);
+    const uint8_t* data = chunk.data;
+    Bytes b(data, chunk.size);
     while (b.left()) {
       const uint64_t start = b.pos();
       Record r;
@@ -251,6 +249,7 @@ class Ros1Reader : public Reader {
       if (op == kConnection) connection(r, offset);
       if (op == kMessage) message(r, offset, uint64_t(r.data - data), visit, offset + start);
     }
+    if (visited_) cache_.keep(offset, chunk);  // for read(): decompressed once
   }
 
   void message(const Record& r, uint64_t chunk, uint64_t offset, const Visit& visit, uint64_t where) {
@@ -275,6 +274,7 @@ class Ros1Reader : public Reader {
     if (!c.count || t > c.lastNs) c.lastNs = t;
     ++c.count;
     if (!wanted_.empty() && !wanted_[it->second]) return;
+    visited_ = true;
     visit(MessageRef{it->second, t, chunk, offset, r.dataSize}, r.data, r.dataSize);
   }
 
@@ -283,11 +283,8 @@ class Ros1Reader : public Reader {
   std::vector<uint64_t> chunks_;
   std::vector<std::string> compressions_;
   std::vector<bool> wanted_;
-  bool indexed_ = false;
-  mutable std::mutex mutex_;
-  mutable uint64_t cachedChunk_ = 0, cachedSize_ = 0;
-  mutable const uint8_t* cachedData_ = nullptr;
-  mutable std::unique_ptr<uint8_t[]> cache_;
+  bool indexed_ = false, visited_ = false;  // visited_: the current chunk holds wanted messages
+  mutable ChunkCache cache_;
 };
 
 }  // namespace

@@ -2,10 +2,13 @@
 // with optional per-frame poses. Opening only lists the frames (cheap even for thousands);
 // images are read one frame at a time by load(), so a long recording never sits in memory.
 #pragma once
+#include <condition_variable>
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "curvestereo/image.hpp"
@@ -90,6 +93,42 @@ class Sequence {
   std::string kind_;  // "ASL", "folder pairs" or the log's format
   bool posesGiven_ = false;
   size_t unpaired_ = 0;  // frames of either camera without a partner
+};
+
+// A sequence's frames in order, read ahead on background threads: while the caller solves
+// frame i, frames i+1 .. i+threads+1 are being read, so reading leaves the caller's critical
+// path when it is faster than solving (a log's chunks and PNG files decode in parallel).
+// Memory: about threads+2 frames' images.
+class SequenceReader {
+ public:
+  // threads: background readers; 0 picks one per four hardware threads, 1 to 4.
+  explicit SequenceReader(const Sequence& sequence, int threads = 0);
+  ~SequenceReader();  // stops the readers (frames being read are finished, not used)
+  SequenceReader(const SequenceReader&) = delete;
+  SequenceReader& operator=(const SequenceReader&) = delete;
+  // The next frame into left/right and its index; false after the last. A frame that cannot
+  // be read throws its load() error here, at its turn, after every frame before it.
+  bool next(size_t& index, ImageF& left, ImageF& right);
+  int threads() const { return int(workers_.size()); }
+  // Time next() waited for frames (the reading left on the caller's path): for the first
+  // (nothing to overlap with) and for all the others; and the time the frames handed out
+  // took to read (on the background threads); all in ms.
+  double firstWaitMs() const { return firstWaitMs_; }
+  double waitedMs() const { return waitedMs_; }
+  double readMs() const { return readMs_; }
+
+ private:
+  struct Slot;
+  void work();
+
+  const Sequence& sequence_;
+  std::vector<std::thread> workers_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::map<size_t, Slot> slots_;  // frames read or being read, not yet handed out
+  size_t nextToRead_ = 0, nextToHand_ = 0, ahead_ = 0;
+  bool stopping_ = false;
+  double firstWaitMs_ = 0, waitedMs_ = 0, readMs_ = 0;
 };
 
 // One row of an ASL camera's data.csv.
