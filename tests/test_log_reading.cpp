@@ -100,6 +100,29 @@ TEST_CASE("chunk cache: an error reaches the caller and is not kept; one load fo
   CHECK(sum == 24);
 }
 
+TEST_CASE("decompressAhead: chunks used in file order; the first corrupt one in file order is raised") {
+  const std::vector<uint64_t> chunks = {10, 20, 30, 40, 50, 60};
+  const auto decompress = [](uint64_t offset) {
+    // Later chunks finish first: the order of use must not follow the order of completion.
+    std::this_thread::sleep_for(std::chrono::milliseconds(int(70 - offset)));
+    if (offset == 40 || offset == 50) throw cs::Error("corrupt chunk " + std::to_string(offset));
+    return chunkOf(4, uint8_t(offset));
+  };
+  for (unsigned threads : {1u, 3u, 8u}) {
+    CAPTURE(threads);
+    std::vector<uint64_t> used;
+    const auto use = [&](uint64_t offset, const ChunkData& c) {
+      CHECK(c.data[0] == uint8_t(offset));
+      used.push_back(offset);
+    };
+    CHECK_THROWS_WITH_AS(cs::logio::decompressAhead(chunks, decompress, use, threads), "corrupt chunk 40", cs::Error);
+    CHECK(used == std::vector<uint64_t>{10, 20, 30});
+    used.clear();
+    cs::logio::decompressAhead({10, 20, 30}, decompress, use, threads);
+    CHECK(used == std::vector<uint64_t>{10, 20, 30});
+  }
+}
+
 // Scans a log for two topics' messages and reads each one back: the chunks read() had to
 // decompress again.
 uint64_t chunksDecompressedAgain(const std::string& path, std::vector<bool> wanted = {}) {

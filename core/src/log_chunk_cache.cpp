@@ -1,4 +1,9 @@
-// ChunkCache (log_reader.hpp): decompressed log chunks shared by a reader's scan and reads.
+// ChunkCache (log_reader.hpp): decompressed log chunks shared by a reader's scan and reads;
+// decompressAhead: the chunks of an indexed log decompressed in parallel at opening.
+#include <algorithm>
+#include <deque>
+#include <thread>
+
 #include "log_reader.hpp"
 
 namespace cs::logio {
@@ -54,6 +59,23 @@ void ChunkCache::evict(uint64_t keep) {
     if (oldest == entries_.end()) return;
     bytes_ -= oldest->second.bytes;
     entries_.erase(oldest);
+  }
+}
+
+void decompressAhead(const std::vector<uint64_t>& chunks, const std::function<ChunkData(uint64_t)>& decompress,
+                     const std::function<void(uint64_t, const ChunkData&)>& use, unsigned threads) {
+  if (threads == 0) threads = std::clamp(std::thread::hardware_concurrency(), 1u, 8u);
+  std::deque<std::future<ChunkData>> ahead;  // chunks next..next+ahead.size()-1, in flight
+  size_t next = 0, started = 0;
+  // The window: `threads` chunks decompressing while one is used.
+  while (next < chunks.size()) {
+    while (started < chunks.size() && ahead.size() < threads) {
+      const uint64_t offset = chunks[started++];
+      ahead.push_back(std::async(std::launch::async, [&decompress, offset] { return decompress(offset); }));
+    }
+    const ChunkData chunk = ahead.front().get();  // rethrows its error, at its turn
+    ahead.pop_front();
+    use(chunks[next++], chunk);
   }
 }
 

@@ -50,12 +50,13 @@ class McapReader : public Reader {
 
   void scan(const std::vector<bool>& wanted, const Visit& visit) override {
     wanted_ = wanted;
-    if (indexed_)
-      for (const auto& [offset, channels] : chunks_) {
-        if (anyWanted(channels)) chunkRecords(offset, visit);
-      }
-    else
-      plainScan(visit);
+    if (!indexed_) return plainScan(visit);
+    std::vector<uint64_t> wantedChunks;
+    for (const auto& [offset, channels] : chunks_)
+      if (anyWanted(channels)) wantedChunks.push_back(offset);
+    decompressAhead(
+        wantedChunks, [&](uint64_t offset) { return decompressChunk(offset, true); },
+        [&](uint64_t offset, const ChunkData& chunk) { chunkRecords(offset, chunk, visit); });
   }
 
   void read(const MessageRef& ref, const Use& use) const override {
@@ -113,6 +114,12 @@ class McapReader : public Reader {
       throw Error("corrupt MCAP " + at(summaryStart) + ": a summary record overruns the summary");
     }
     indexed_ = !chunks_.empty();
+    for (const auto& [offset, ids] : chunks_) {
+      std::string& topics = chunkTopics_[offset];
+      for (uint16_t id : ids)
+        if (const auto c = ids_.find(id); c != ids_.end())
+          topics += (topics.empty() ? "" : ", ") + channels_[c->second].topic;
+    }
   }
 
   void schema(Bytes& r) {
@@ -175,16 +182,14 @@ class McapReader : public Reader {
     return h;
   }
 
-  // The topics a chunk holds, for its error messages.
+  // A chunk, named in its error messages: where, when, and (from the index) its topics.
+  // Reads only what is fixed once the summary is read (chunkTopics_): it runs on the
+  // threads decompressing chunks while scan adds channels.
   std::string chunkName(uint64_t offset, const ChunkHead& h) const {
-    std::string topics;
-    if (const auto it = chunks_.find(offset); it != chunks_.end())
-      for (uint16_t id : it->second)
-        if (const auto c = ids_.find(id); c != ids_.end())
-          topics += (topics.empty() ? "" : ", ") + channels_[c->second].topic;
+    const auto it = chunkTopics_.find(offset);
     return "the chunk at byte " + std::to_string(offset) + " of MCAP '" + path_ + "' (messages logged " +
            std::to_string(h.startNs) + " to " + std::to_string(h.endNs) + " ns" +
-           (topics.empty() ? "" : " on " + topics) + ")";
+           (it == chunkTopics_.end() || it->second.empty() ? "" : " on " + it->second) + ")";
   }
 
   // A chunk's records, decompressed unless stored plainly; CRC checked.
@@ -201,13 +206,13 @@ class McapReader : public Reader {
     return chunk;
   }
 
-  void chunkRecords(uint64_t offset, const Visit& visit) {
+  // A chunk's records visited in order (the chunk decompressed and its CRC checked).
+  void chunkRecords(uint64_t offset, const ChunkData& chunk, const Visit& visit) {
     if (!indexed_) {  // the index listed them
       const std::string method = chunkHead(offset).compression;
       if (std::find(compressions_.begin(), compressions_.end(), method) == compressions_.end())
         compressions_.push_back(method);
     }
-    const ChunkData chunk = decompressChunk(offset, true);
     Bytes b(chunk.data, chunk.size);
     visited_ = false;
     try {
@@ -270,7 +275,7 @@ class McapReader : public Reader {
       if (op == kFooter) return;
       if (op == kChunk) {
         chunks_[start];
-        chunkRecords(start, visit);
+        chunkRecords(start, decompressChunk(start, true), visit);
       } else {
         try {
           record(op, b.here(), len, 0, b.pos(), visit);
@@ -301,6 +306,7 @@ class McapReader : public Reader {
   std::map<uint16_t, std::string> schemas_;
   std::map<uint16_t, uint32_t> ids_;                  // channel id -> index in channels_
   std::map<uint64_t, std::vector<uint16_t>> chunks_;  // chunk offset -> its channels (from the index)
+  std::map<uint64_t, std::string> chunkTopics_;       // chunk offset -> its topics, for messages
   std::vector<std::string> compressions_;
   std::vector<bool> wanted_;
   bool indexed_ = false, hasFooter_ = false;

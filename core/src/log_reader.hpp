@@ -157,6 +157,15 @@ class ChunkCache {
   uint64_t budget_, bytes_ = 0, clock_ = 0, loads_ = 0;
 };
 
+// Opening a log decompresses every chunk holding wanted messages (for their header stamps),
+// which is most of its cost (bz2 above all), so the chunks of an indexed log are
+// decompressed on up to `threads` threads (0: the hardware's, at most 8) a few chunks ahead,
+// and used in file order on the calling thread (their records parsed, the messages visited).
+// An error is raised at its chunk's turn, so the first corrupt chunk in file order is named.
+// `decompress` must be thread-safe.
+void decompressAhead(const std::vector<uint64_t>& chunks, const std::function<ChunkData(uint64_t)>& decompress,
+                     const std::function<void(uint64_t, const ChunkData&)>& use, unsigned threads = 0);
+
 uint32_t crc32(const uint8_t* p, uint64_t n, uint32_t crc = 0);
 // Decompresses a whole buffer of a known size ("zstd", "lz4" frame, "bz2"); throws cs::Error
 // naming `what` when the data is corrupt or decompresses to another size.

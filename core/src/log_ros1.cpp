@@ -99,7 +99,9 @@ class Ros1Reader : public Reader {
   void scan(const std::vector<bool>& wanted, const Visit& visit) override {
     wanted_ = wanted;
     if (indexed_) {
-      for (uint64_t offset : chunks_) chunk(offset, visit);
+      decompressAhead(
+          chunks_, [&](uint64_t offset) { return chunkData(offset); },
+          [&](uint64_t offset, const ChunkData& data) { chunk(offset, data, visit); });
       return;
     }
     Bytes b(file_.data(), file_.size());
@@ -116,7 +118,7 @@ class Ros1Reader : public Reader {
       }
       const uint8_t op = guardedOp(r, start);
       if (op == kChunkInfo) return;  // the index section: every chunk was before it
-      if (op == kChunk) chunk(start, visit);
+      if (op == kChunk) chunk(start, chunkData(start), visit);
       if (op == kConnection) connection(r, start);
       if (op == kMessage) message(r, 0, r.data - file_.data(), visit, start);
     }
@@ -228,13 +230,13 @@ class Ros1Reader : public Reader {
     return ChunkData{buffer, buffer.get(), uncompressed};
   }
 
-  void chunk(uint64_t offset, const Visit& visit) {
+  // A chunk's records (`chunk`: the chunk decompressed) in order.
+  void chunk(uint64_t offset, const ChunkData& chunk, const Visit& visit) {
     const Record head = recordAt(offset);
     const std::string method = head.fields.count("compression") ? head.text("compression") : "?";
     if (std::find(compressions_.begin(), compressions_.end(), method) == compressions_.end())
       compressions_.push_back(method);
     visited_ = false;
-    const ChunkData chunk = chunkData(offset);
     const uint8_t* data = chunk.data;
     Bytes b(data, chunk.size);
     while (b.left()) {
