@@ -17,5 +17,5 @@ $SUDO apt-get install -y --no-install-recommends \
   cmake g++ make libeigen3-dev libyaml-cpp-dev libopenexr-dev libpng-dev doctest-dev \
   libvulkan-dev glslang-tools mesa-vulkan-drivers vulkan-validationlayers \
   python3-dev pybind11-dev python3-numpy python3-pytest \
-  python3-pip python3-venv python3-setuptools python3-wheel \
+  python3-pip python3-venv python3-setuptools python3-wheel python3-distributed \
   libzstd-dev liblz4-dev libbz2-dev libsqlite3-dev zlib1g-dev libjpeg-dev
