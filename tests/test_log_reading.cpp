@@ -206,12 +206,17 @@ TEST_CASE("SequenceReader: an unreadable frame raises its load() error at its tu
 TEST_CASE("log info --time-read: what opening and reading a log cost, one line; misuse is refused") {
   const fs::path dir = cs::test::tempDir("log_reading_cli");
   cs::writeImageLog((dir / "seq.mcap").string(), cs::Sequence::open(writeFrames(dir, 3)));
-  CliOutcome r = runCli(dir, "log info seq.mcap --time-read --topics /cam0/image_raw,/cam1/image_raw");
+  CliOutcome r = runCli(dir, "log info seq.mcap --time-read --topics /cam0/image_raw,/cam1/image_raw --read-threads 1");
   INFO(r.err);
   CHECK(r.exitCode == 0);
   CHECK(r.out.find("seq.mcap: 3 stereo frames (MCAP, zstd chunks") != std::string::npos);
   CHECK(r.out.find("3 frames (8x6) read in") != std::string::npos);
   CHECK(r.out.find("ms a frame") != std::string::npos);
+  CHECK(r.out.find("read ahead on 1 thread against a 2.50 ms solve: the solving thread waited") != std::string::npos);
+  r = runCli(dir,
+             "log info seq.mcap --time-read --topics /cam0/image_raw,/cam1/image_raw --solve-ms 0 --read-threads 2");
+  CHECK(r.exitCode == 0);
+  CHECK(r.out.find("read ahead on 2 threads against a 0.00 ms solve") != std::string::npos);
   r = runCli(dir, "log info seq.mcap --time-read");
   CHECK(r.exitCode == 2);
   CHECK(r.err.find("--topics") != std::string::npos);
@@ -220,5 +225,8 @@ TEST_CASE("log info --time-read: what opening and reading a log cost, one line; 
   CHECK(r.err.find("has no topic '/nope'") != std::string::npos);
   r = runCli(dir, "log write --time-read --sequence x -o y.mcap");
   CHECK(r.exitCode == 2);
-  CHECK(r.err.find("--time-read is for log info") != std::string::npos);
+  CHECK(r.err.find("--time-read is for log info --time-read") != std::string::npos);
+  r = runCli(dir, "log info seq.mcap --solve-ms 3");
+  CHECK(r.exitCode == 2);
+  CHECK(r.err.find("--solve-ms is for log info --time-read") != std::string::npos);
 }

@@ -1,11 +1,13 @@
 // curvestereo log info FILE: a recorded log's topics, types, message counts and time range.
-// curvestereo log info FILE --time-read --topics LEFT,RIGHT: what opening the log as a
-//                       sequence costs, and reading (decoding) each frame in order.
+// curvestereo log info FILE --time-read --topics LEFT,RIGHT [--solve-ms S] [--read-threads N]:
+//                       what opening the log as a sequence costs, reading (decoding) each
+//                       frame in order, and the wait left with run's reading ahead.
 // curvestereo log write --sequence SRC -o FILE.mcap [--topics LEFT,RIGHT] [--format raw|png]
 //                       [--compression zstd|lz4|none]: a sequence's images as an MCAP log.
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
+#include <thread>
 #include <tuple>
 
 #include "commands.hpp"
@@ -48,6 +50,19 @@ int timeReadCommand(const Args& args, const std::string& path) {
   const double readMs = msSince(t0);
   std::printf("%s: %s; opened in %.1f ms; %zu frames (%dx%d) read in %.1f ms: %.2f ms a frame\n", path.c_str(),
               sequence.summary().c_str(), openMs, n, l.width, l.height, readMs, readMs / double(n));
+  // Then as run reads them, ahead on background threads, against a solve of --solve-ms
+  // (a GPU's, by default: the solving thread waits for the device meanwhile).
+  const double solveMs = args.getDouble("solve-ms", 2.5);
+  if (!(solveMs >= 0 && solveMs <= 60000)) throw UsageError("--solve-ms expects 0 to 60000 ms");
+  SequenceReader reader(sequence, readThreads(args));
+  size_t i = 0;
+  while (reader.next(i, l, r)) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(solveMs));
+  std::printf(
+      "read ahead on %d thread%s against a %.2f ms solve: the solving thread waited %.1f ms for the first "
+      "frame, %.3f ms a frame for the others (%.1f %% of the solve)\n",
+      reader.threads(), reader.threads() == 1 ? "" : "s", solveMs, reader.firstWaitMs(),
+      reader.waitedMs() / double(std::max<size_t>(n - 1, 1)),
+      solveMs > 0 ? 100.0 * reader.waitedMs() / double(std::max<size_t>(n - 1, 1)) / solveMs : 0.0);
   return 0;
 }
 
@@ -95,9 +110,11 @@ int logWriteCommand(const Args& args) {
 }  // namespace
 
 int cmdLog(const Args& args) {
-  args.allowOnly({"o", "output", "sequence", "topics", "format", "compression", "time-read"});
-  if (args.has("time-read") && (args.positional().empty() || args.positional()[0] != "info"))
-    throw UsageError("--time-read is for log info");
+  args.allowOnly(
+      {"o", "output", "sequence", "topics", "format", "compression", "time-read", "solve-ms", "read-threads"});
+  for (const char* option : {"time-read", "solve-ms", "read-threads"})
+    if (args.has(option) && (args.positional().empty() || args.positional()[0] != "info" || !args.has("time-read")))
+      throw UsageError(std::string("--") + option + " is for log info --time-read");
   const std::string what = args.positional().empty() ? "" : args.positional()[0];
   if (what == "info") return logInfoCommand(args);
   if (what == "write") return logWriteCommand(args);

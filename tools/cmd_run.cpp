@@ -124,15 +124,6 @@ struct SequenceTally {
 // "-o OUT.mcap": the depth goes into one MCAP log (DepthLogWriter) instead of folders.
 bool mcapOutput(const std::string& out) { return out.size() > 5 && out.compare(out.size() - 5, 5, ".mcap") == 0; }
 
-// --read-threads N: the threads reading frames ahead (0 or absent: chosen by the core count).
-int readThreads(const Args& args) {
-  int n = 0;
-  const std::string text = args.get("read-threads", "0");
-  if (!wholeNumber(text, n) || n < 0 || n > 64)
-    throw UsageError("--read-threads expects a whole number of 0 to 64 (0: by the core count), got '" + text + "'");
-  return n;
-}
-
 // --log FILE --topics LEFT,RIGHT, or --sequence SRC: the frames and the calibration's path.
 Sequence openFrames(const Args& args, std::string& calibPath) {
   SequenceOptions options;

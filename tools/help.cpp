@@ -76,15 +76,17 @@ recorded logs (docs/guide.md "Recorded logs"):
      true, false},
     {"log", "list a recorded log's topics, or write a sequence's images as a log",
      R"(usage: curvestereo log info FILE
-       curvestereo log info FILE --time-read --topics LEFT,RIGHT
+       curvestereo log info FILE --time-read --topics LEFT,RIGHT [--solve-ms S] [--read-threads N]
        curvestereo log write --sequence SRC -o FILE.mcap [--topics LEFT,RIGHT] [--format raw|png]
                              [--compression zstd|lz4|none]
 
 info: the log's format, and each topic's type, serialisation, message count and rate, and
 the time range (log times). FILE: an MCAP file, a ROS 1 bag (2.0), a rosbag2 .db3 or bag
 folder. A log cut short is listed up to the cut, with a warning saying where.
-With --time-read: the time to open the log as two topics' frames (run --log's opening) and
-to read (decode) every frame in order on one thread, in ms a frame.
+With --time-read: the time to open the log as two topics' frames (run --log's opening), to
+read (decode) every frame in order on one thread, in ms a frame, and then how long run's
+solving thread would wait for frames read ahead (--read-threads, as run) when a frame takes
+S ms to solve (--solve-ms, default 2.5, a GPU's warm frame; simulated by waiting).
 
 write: a sequence's image pairs (an ASL folder or "LEFT,RIGHT" folders, as run --sequence)
 into an MCAP log, each message stamped with its frame's timestamp (ns).

@@ -5,7 +5,8 @@
 # backend is tested without a GPU) and validation layers, and the Python module's
 # pybind11, NumPy and pytest, and what installing the module with pip needs (pip, venv,
 # setuptools, wheel; docs/guide.md "Python"), and the log readers' compression, SQLite and JPEG
-# libraries (zstd, lz4, bz2, sqlite3, zlib, libjpeg-turbo). The one list of packages: the README's set-up
+# libraries (zstd, lz4, bz2, sqlite3, zlib, libjpeg-turbo), and Dask's distributed (python3 -m
+# curvestereo.batch). The one list of packages: the README's set-up
 # and CI use it.
 # CUDA is not installed here: the CUDA backend builds when nvcc is on the PATH.
 set -euo pipefail

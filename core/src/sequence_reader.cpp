@@ -45,8 +45,13 @@ void SequenceReader::work() {
     changed_.wait(lock, [&] { return stopping_ || (nextToRead_ < n && nextToRead_ < nextToHand_ + ahead_); });
     if (stopping_) return;
     const size_t i = nextToRead_++;
-    lock.unlock();
     Slot slot;
+    if (!spare_.empty()) {  // the caller's last images: no fresh allocation (and page faults) a frame
+      std::swap(slot.left, spare_.back().first);
+      std::swap(slot.right, spare_.back().second);
+      spare_.pop_back();
+    }
+    lock.unlock();
     const auto t0 = std::chrono::steady_clock::now();
     try {
       sequence_.load(i, slot.left, slot.right);
@@ -73,13 +78,15 @@ bool SequenceReader::next(size_t& index, ImageF& left, ImageF& right) {
   if (slot.error) {  // the frames after an unreadable one are not handed out, nor read on
     nextToHand_ = sequence_.frames().size();
     stopping_ = true;
+  } else {
+    std::swap(left, slot.left);
+    std::swap(right, slot.right);
+    spare_.emplace_back(std::move(slot.left), std::move(slot.right));
   }
+  readMs_ += slot.ms;
   lock.unlock();
   changed_.notify_all();  // the window moved: a reader may take the next frame
-  readMs_ += slot.ms;
   if (slot.error) std::rethrow_exception(slot.error);
-  left = std::move(slot.left);
-  right = std::move(slot.right);
   return true;
 }
 

@@ -125,7 +125,8 @@ class SequenceReader {
   std::vector<std::thread> workers_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::map<size_t, Slot> slots_;  // frames read or being read, not yet handed out
+  std::map<size_t, Slot> slots_;                  // frames read, not yet handed out
+  std::vector<std::pair<ImageF, ImageF>> spare_;  // images handed back, for the readers to reuse
   size_t nextToRead_ = 0, nextToHand_ = 0, ahead_ = 0;
   bool stopping_ = false;
   double firstWaitMs_ = 0, waitedMs_ = 0, readMs_ = 0;
