@@ -73,3 +73,20 @@ def test_batch_refuses_bad_arguments_in_one_line(logs, cli):
     (logs / "twin" / "a.mcap").write_bytes((logs / "a.mcap").read_bytes())
     r = batch(logs, cli, logs / "a.mcap", logs / "twin" / "a.mcap")
     assert r.returncode == 2 and "would both write a.mcap" in r.stderr
+
+
+def test_batch_gives_each_gpu_worker_its_own_gpu(logs, cli, tmp_path):
+    # --gpus 2 on a machine without GPUs: the command (a wrapper noting what it was given)
+    # solves on the CPU; what is checked is that the two workers' tasks saw GPU 0 and GPU 1.
+    seen = tmp_path / "seen.txt"
+    wrapper = tmp_path / "curvestereo"
+    wrapper.write_text(f'#!/bin/sh\necho "$CUDA_VISIBLE_DEVICES" >> {seen}\nexec {cli} "$@"\n')
+    wrapper.chmod(0o755)
+    env = dict(os.environ, PYTHONPATH=str(Path(cs.__file__).parent.parent))
+    command = [sys.executable, "-m", "curvestereo.batch", logs / "a.mcap", logs / "b.mcap", "-o", tmp_path / "out",
+               "--calib", logs / "walk" / "camchain.yaml", "--topics", TOPICS, "--gpus", "2", "--cli", wrapper,
+               "--", "--preset", "fast", "--backend", "cpu"]
+    r = subprocess.run(list(map(str, command)), capture_output=True, text=True, env=env, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert "2 recordings done" in r.stdout
+    assert sorted(seen.read_text().split()) == ["0", "1"]
