@@ -87,7 +87,8 @@ def solve(job, cli, calib, topics, run_args, gpu_of_worker):
     if proc.returncode != 0:
         Path(partial).unlink(missing_ok=True)
         message = last_line(proc.stderr) or f"curvestereo exited with status {proc.returncode}"
-        return Outcome(job.log, "failed", seconds=seconds, message=message.removeprefix("curvestereo: ").removeprefix("error: "))
+        message = message.removeprefix("curvestereo: ").removeprefix("error: ")
+        return Outcome(job.log, "failed", seconds=seconds, message=message)
     os.replace(partial, job.output)  # complete: a rerun skips it
     match = SUMMARY.search(proc.stdout)
     return Outcome(job.log, "done", frames=int(match.group(1)) if match else 0, seconds=seconds)
@@ -124,7 +125,8 @@ class Progress:
     def __call__(self, outcome):
         self.done += 1
         filled = 30 * self.done // max(1, self.total)
-        line = f"[{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} {outcome.status} {Path(outcome.log).name}"
+        bar = "#" * filled + "." * (30 - filled)
+        line = f"[{bar}] {self.done}/{self.total} {outcome.status} {Path(outcome.log).name}"
         if self.tty:  # in place; the last one stays
             self.stream.write("\r" + line + "\033[K" + ("\n" if self.done == self.total else ""))
         else:

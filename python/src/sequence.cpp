@@ -254,6 +254,34 @@ struct FrameIterator {
   size_t next = 0;
 };
 
+// Sequence.read_ahead(): frames read on background threads (SequenceReader) while the caller
+// solves, each Frame handed out with its images. Unlike iteration, which reads a frame when
+// its images are used, this reads every frame, in order.
+class ReadAhead {
+ public:
+  ReadAhead(const PySequence& s, int threads)
+      : sequence_(s), reader_(std::make_unique<SequenceReader>(s.sequence(), threads)) {}
+  PyFrame next() {
+    size_t index = 0;
+    ImageF l, r;
+    bool more = false;
+    {
+      pb::gil_scoped_release nogil;  // waits for the readers, which need no Python
+      more = reader_->next(index, l, r);
+    }
+    if (!more) throw pb::stop_iteration();
+    PyFrame f = sequence_.at((long long)index);
+    f.left = floatArray(std::move(l));
+    f.right = floatArray(std::move(r));
+    return f;
+  }
+  const SequenceReader& reader() const { return *reader_; }
+
+ private:
+  PySequence sequence_;  // holds the frame list the readers use (destroyed after them)
+  std::unique_ptr<SequenceReader> reader_;
+};
+
 }  // namespace
 
 void bindSequence(pb::module_& m) {
@@ -301,6 +329,21 @@ void bindSequence(pb::module_& m) {
         return it.sequence.at((long long)it.next++);
       });
 
+  pb::class_<ReadAhead>(m, "_ReadAhead")
+      .def("__iter__", [](ReadAhead& it) -> ReadAhead& { return it; })
+      .def("__next__", &ReadAhead::next)
+      .def_property_readonly(
+          "threads", [](const ReadAhead& r) { return r.reader().threads(); }, "Background reader threads.")
+      .def_property_readonly(
+          "first_wait_ms", [](const ReadAhead& r) { return r.reader().firstWaitMs(); },
+          "How long the first frame was waited for (ms).")
+      .def_property_readonly(
+          "waited_ms", [](const ReadAhead& r) { return r.reader().waitedMs(); },
+          "How long the frames after the first were waited for, in all (ms): the reading left on the caller's path.")
+      .def_property_readonly(
+          "read_ms", [](const ReadAhead& r) { return r.reader().readMs(); },
+          "How long the frames handed out took to read on the background threads, in all (ms).");
+
   pb::class_<PySequence>(m, "Sequence",
                          R"doc(A recorded stereo sequence: its frame list, images read one frame at a time.
 
@@ -332,6 +375,13 @@ pose, are listed in .warnings. Raises curvestereo.Error naming the file and the 
       .def("__len__", &PySequence::size)
       .def("__getitem__", &PySequence::at, pb::arg("index"))
       .def("__iter__", [](const PySequence& s) { return FrameIterator{s}; })
+      .def(
+          "read_ahead", [](const PySequence& s, int threads) { return std::make_unique<ReadAhead>(s, threads); },
+          pb::arg("threads") = 0,
+          "Iterates every frame in order, read ahead on `threads` background threads (0: one per four cores, 1 to "
+          "4) while the caller solves the one before; each Frame comes with its images. A frame that cannot be read "
+          "raises curvestereo.Error at its turn, and iteration ends there. .waited_ms says how long the caller "
+          "waited for frames.")
       .def_property_readonly(
           "warnings", [](const PySequence& s) { return s.sequence().warnings(); },
           "Notes to show, one line each: frames that could not be paired, frames without a pose although poses "
