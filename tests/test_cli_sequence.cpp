@@ -47,6 +47,7 @@ TEST_CASE("run --sequence: every frame's outputs under its timestamp, warm after
   CHECK(r.out.find("(warm 3,") != std::string::npos);
   CHECK(r.out.find("cold 1,") != std::string::npos);
   CHECK(folders(dir / "out") == 4);
+  CHECK(r.out.find("the solving thread waited") != std::string::npos);  // the reading cost, said
   CHECK(fs::is_regular_file(dir / "out/1000033333333/depth.exr"));
   CHECK(fs::is_regular_file(dir / "out/1000033333333/depth.png"));
   // --cold: the baseline, every frame alone.
@@ -60,12 +61,20 @@ TEST_CASE("run --sequence: a missing or resized frame stops the run in one line,
   const fs::path dir = tempDir("cli_sequence_bad");
   const fs::path seq = renderSequence(dir);
   fs::remove(frameImage(seq, 1, 2));
-  CliOutcome r = runCli(dir, std::string("run --sequence seq -o out ") + kSolve);
-  CHECK(r.exitCode == 1);
-  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 2);  // the calibration note and the error
-  CHECK(r.err.find("frame 2 (t 1000066666667 ns), right image: cannot open image") != std::string::npos);
-  CHECK(r.err.find("(2 frames before it are written)") != std::string::npos);
-  CHECK(folders(dir / "out") == 2);
+  CliOutcome r;
+  // Read ahead by 1 and 3 threads: frame 2's error comes at its turn, the frames before it written.
+  for (const char* threads : {" --read-threads 1", " --read-threads 3"}) {
+    fs::remove_all(dir / "out");
+    r = runCli(dir, std::string("run --sequence seq -o out ") + kSolve + threads);
+    CHECK(r.exitCode == 1);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 2);  // the calibration note and the error
+    CHECK(r.err.find("frame 2 (t 1000066666667 ns), right image: cannot open image") != std::string::npos);
+    CHECK(r.err.find("(2 frames before it are written)") != std::string::npos);
+    CHECK(folders(dir / "out") == 2);
+  }
+  r = runCli(dir, std::string("run --sequence seq -o bad --read-threads x ") + kSolve);
+  CHECK(r.exitCode == 2);
+  CHECK(r.err.find("--read-threads expects a whole number") != std::string::npos);
 
   // Both images of frame 2 at another size than the calibration's.
   const CliOutcome big = runCli(dir, "synth -o big --size 128 --samples 1 --quiet");

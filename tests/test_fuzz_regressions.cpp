@@ -10,6 +10,7 @@
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/rig.hpp"
 #include "curvestereo/sequence.hpp"
+#include "fuzz/fuzz_log.hpp"
 #include "fuzz/fuzz_vins.hpp"
 #include "test_util.hpp"
 
@@ -57,6 +58,9 @@ std::string load(const std::string& target, const fs::path& file) {
         cs::readPoses(file.string());
       else
         cs::parseAslCsv(readAll(file), file.filename().string());
+    } else if (target.rfind("log_", 0) == 0) {  // log_mcap, log_ros1, log_rosbag2: fuzz_log.hpp
+      const std::string result = cs::fuzz::readLog(file.string());
+      if (result != "loaded") return result;
     } else {
       FAIL("unknown fuzz target directory " << target);
     }

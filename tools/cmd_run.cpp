@@ -2,6 +2,8 @@
 //                 [--pinhole FOV[,WxH]] [--equirect W] [--sampling nearest|bilinear]
 // curvestereo run --calib CALIB --sequence SRC -o OUTDIR [--poses FILE] [--cold] [...]:
 //                 each frame's outputs into OUTDIR/<t_ns>/
+// curvestereo run --calib CALIB --log FILE --topics LEFT,RIGHT -o OUT.mcap|OUTDIR [...]:
+//                 a recorded log's frames, the same way; depth into an MCAP log or folders
 #include <unistd.h>
 #include <charconv>
 #include <chrono>
@@ -14,6 +16,7 @@
 #include "common.hpp"
 #include "curvestereo/depth_views.hpp"
 #include "curvestereo/image_io.hpp"
+#include "curvestereo/log.hpp"
 #include "curvestereo/sequence.hpp"
 
 namespace cs::cli {
@@ -118,24 +121,55 @@ struct SequenceTally {
   double wallSeconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
 };
 
-// run --sequence: every frame through Stereo::next (warm start and temporal filter unless
-// --cold), each frame's outputs in OUT/<t_ns>/ under a pair run's names. A frame that cannot
-// be read or solved stops the run with one line naming it; the frames before stay written.
-int runSequence(const Args& args, const std::string& outDir) {
-  const std::string source = args.get("sequence", "");
+// "-o OUT.mcap": the depth goes into one MCAP log (DepthLogWriter) instead of folders.
+bool mcapOutput(const std::string& out) { return out.size() > 5 && out.compare(out.size() - 5, 5, ".mcap") == 0; }
+
+// --log FILE --topics LEFT,RIGHT, or --sequence SRC: the frames and the calibration's path.
+Sequence openFrames(const Args& args, std::string& calibPath) {
   SequenceOptions options;
   options.poses = args.get("poses", "");
   options.pairToleranceMs = args.getDouble("pair-tolerance-ms", options.pairToleranceMs);
-  const Sequence sequence = Sequence::open(source, options);
+  if (!args.has("log")) {
+    const std::string source = args.get("sequence", "");
+    calibPath = sequenceCalibration(args, source);
+    return Sequence::open(source, options);
+  }
+  calibPath = args.require("calib");  // a log holds no calibration we read
+  const std::string topics = args.require("topics");
+  const size_t comma = topics.find(',');
+  if (comma == std::string::npos || topics.find(',', comma + 1) != std::string::npos || comma == 0 ||
+      comma + 1 == topics.size())
+    throw UsageError("--topics expects LEFT,RIGHT (two topic names), got '" + topics + "'");
+  return Sequence::openLog(args.get("log", ""), topics.substr(0, comma), topics.substr(comma + 1), options);
+}
+
+// run --sequence / --log: every frame through Stereo::next (warm start and temporal filter
+// unless --cold), each frame's outputs in OUT/<t_ns>/ under a pair run's names, or into the
+// MCAP log OUT.mcap. A frame that cannot be read or solved stops the run with one line naming
+// it; the frames before stay written (the MCAP log is closed with them).
+int runSequence(const Args& args, const std::string& outDir) {
+  std::string calibPath;
+  const Sequence sequence = openFrames(args, calibPath);
   for (const std::string& w : sequence.warnings()) std::fprintf(stderr, "curvestereo: warning: %s\n", w.c_str());
   Params params = paramsFromArgs(args);
   const bool cold = args.has("cold");
   if (cold) params.warmStart = false, params.temporalStrength = 0.f;  // every frame alone: the baseline
   const float minConfidence = minConfidenceFromArgs(args);
-  const Rig rig = loadCalibration(sequenceCalibration(args, source), nullptr, calibHintsFromArgs(args));
+  const Rig rig = loadCalibration(calibPath, nullptr, calibHintsFromArgs(args));
   const ViewOptions views = viewOptions(args, rig.cam0);
   Stereo stereo(rig, params, backendFromArgs(args));
   if (args.has("mask")) stereo.setMask(loadMask(args.get("mask", "")));
+  std::unique_ptr<DepthLogWriter> log;
+  if (mcapOutput(outDir)) {
+    if (args.has("equirect")) throw UsageError("--equirect is for folder outputs, not an MCAP log");
+    DepthLogOptions o;
+    o.compression = args.get("compression", "zstd");
+    o.minConfidence = minConfidence;
+    o.pinhole = views.pinhole;
+    o.pinholeView = views.view;
+    o.sampling = views.sampling;
+    log = std::make_unique<DepthLogWriter>(outDir, rig, o);
+  }
   std::printf("sequence: %s\n", sequence.summary().c_str());
   std::printf("backend: %s (%s) - %s\n", stereo.backendName().c_str(), stereo.deviceName().c_str(),
               stereo.backendChoice().c_str());
@@ -146,21 +180,28 @@ int runSequence(const Args& args, const std::string& outDir) {
   ImageF left, right;
   DepthResult r;
   const std::vector<SequenceFrame>& frames = sequence.frames();
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const SequenceFrame& f = frames[i];
-    const std::string name = std::to_string(f.timestampNs);
+  // Frames are read ahead on background threads while this one solves (its wait is reported).
+  SequenceReader reader(sequence, readThreads(args));
+  while (true) {
+    size_t i = 0;
     const std::string written = " (" + std::to_string(tally.frames) + " frames before it are written)";
     try {
-      sequence.load(i, left, right);  // its errors name the frame
+      if (!reader.next(i, left, right)) break;  // a frame's error names the frame
     } catch (const Error& e) {
       if (tty) std::fputc('\n', stderr);
       throw Error(e.what() + written);
     }
+    const SequenceFrame& f = frames[i];
+    const std::string name = std::to_string(f.timestampNs);
     try {
       stereo.next(left, right, r, f.hasPose ? &f.pose : nullptr);
-      const std::string dir = (std::filesystem::path(outDir) / name).string();
-      writeOutputs(dir, r, left, minConfidence);
-      writeViews(dir, views, rig.cam0, r, minConfidence);
+      if (log) {
+        log->write(f.timestampNs, r);
+      } else {
+        const std::string dir = (std::filesystem::path(outDir) / name).string();
+        writeOutputs(dir, r, left, minConfidence);
+        writeViews(dir, views, rig.cam0, r, minConfidence);
+      }
     } catch (const Error& e) {
       if (tty) std::fputc('\n', stderr);
       throw Error("frame " + std::to_string(i) + " (t " + name + " ns): " + e.what() + written);
@@ -173,12 +214,18 @@ int runSequence(const Args& args, const std::string& outDir) {
                    tty ? "   " : "\n");
   }
   if (tty) std::fputc('\n', stderr);
+  if (log) log->close();
   auto mean = [](double ms, int n) { return n ? ms / n : 0.0; };
   std::printf(
       "%d frames in %.1f s: %.2f ms a frame solved (warm %d, %.2f ms; cold %d, %.2f ms; %d warm frames "
-      "redone cold); outputs in %s/<t_ns>/\n",
+      "redone cold); outputs in %s%s\n",
       tally.frames, tally.wallSeconds(), mean(tally.solveMs, tally.frames), tally.warm, mean(tally.warmMs, tally.warm),
-      tally.cold, mean(tally.coldMs, tally.cold), tally.redone, outDir.c_str());
+      tally.cold, mean(tally.coldMs, tally.cold), tally.redone, outDir.c_str(), log ? "" : "/<t_ns>/");
+  std::printf(
+      "read: %.3f ms a frame on %d reader thread%s ahead; the solving thread waited %.1f ms for the first frame, "
+      "%.3f ms a frame for the others\n",
+      mean(reader.readMs(), tally.frames), reader.threads(), reader.threads() == 1 ? "" : "s", reader.firstWaitMs(),
+      mean(reader.waitedMs(), tally.frames - 1));
   return 0;
 }
 
@@ -188,16 +235,21 @@ int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert(
       {"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling", "image-size"});
-  known.insert({"sequence", "poses", "cold", "pair-tolerance-ms"});
+  known.insert({"sequence", "poses", "cold", "pair-tolerance-ms", "log", "topics", "compression", "read-threads"});
   args.allowOnly(known);
-  if (args.has("sequence")) {
-    if (!args.positional().empty()) throw UsageError("run --sequence takes no images: the sequence names them");
+  if (args.has("sequence") && args.has("log")) throw UsageError("give --sequence or --log, not both");
+  if (args.has("sequence") || args.has("log")) {
+    const char* which = args.has("log") ? "run --log" : "run --sequence";
+    if (!args.positional().empty()) throw UsageError(std::string(which) + " takes no images: the source names them");
+    for (const char* option : {"topics", "compression"})
+      if (args.has(option) && !args.has("log")) throw UsageError(std::string("--") + option + " is for run --log");
     const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
-    requireOutputFolder(outDir);
+    if (!mcapOutput(outDir)) requireOutputFolder(outDir);
+    if (args.has("compression") && !mcapOutput(outDir)) throw UsageError("--compression is for -o OUT.mcap");
     return runSequence(args, outDir);
   }
-  for (const char* option : {"poses", "cold", "pair-tolerance-ms"})
-    if (args.has(option)) throw UsageError(std::string("--") + option + " is for run --sequence");
+  for (const char* option : {"poses", "cold", "pair-tolerance-ms", "topics", "compression", "read-threads"})
+    if (args.has(option)) throw UsageError(std::string("--") + option + " is for run --sequence or --log");
   if (args.positional().size() != 2) throw UsageError("run needs exactly two images: LEFT RIGHT");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   requireOutputFolder(outDir);

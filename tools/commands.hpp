@@ -12,5 +12,6 @@ int cmdEval(const Args& args);
 int cmdFields(const Args& args);
 int cmdBench(const Args& args);
 int cmdCalib(const Args& args);
+int cmdLog(const Args& args);
 
 }  // namespace cs::cli

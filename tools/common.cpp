@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -268,6 +269,15 @@ std::string sequenceCalibration(const Args& args, const std::string& source) {
       return own.string();
     }
   throw Error("sequence '" + source + "' has no camchain.yaml (beside mav0/): give one with --calib CALIB");
+}
+
+int readThreads(const Args& args) {
+  const std::string text = args.get("read-threads", "0");
+  int n = 0;
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), n);
+  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || n < 0 || n > 64)
+    throw UsageError("--read-threads expects a whole number of 0 to 64 (0: by the core count), got '" + text + "'");
+  return n;
 }
 
 }  // namespace cs::cli

@@ -78,4 +78,8 @@ ImageU8 loadMask(const std::string& path);
 // layout keeps it there; a note says so); else a one-line error.
 std::string sequenceCalibration(const Args& args, const std::string& source);
 
+// --read-threads N: the threads reading frames ahead of the solve (SequenceReader; 0 or
+// absent: chosen by the core count). Throws UsageError on anything but 0 to 64.
+int readThreads(const Args& args);
+
 }  // namespace cs::cli

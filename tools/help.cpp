@@ -36,6 +36,7 @@ it and prints tau>1, tau>3, the end-point error, depth abs-rel and the time per 
     {"run", "solve a calibrated pair (or a sequence) and write depth, points and flow",
      R"(usage: curvestereo run --calib CALIB LEFT RIGHT -o OUTDIR [options] [solver options]
        curvestereo run --sequence SRC -o OUTDIR [--calib CALIB] [--poses FILE] [--cold] [solver options]
+       curvestereo run --log FILE --topics LEFT,RIGHT --calib CALIB -o OUT.mcap|OUTDIR [--cold] [solver options]
 
 Writes depth.exr (radial metres), depth.png, disparity.exr, flow.flo, points.ply,
 points.pcd and confidence.exr/.png (docs/confidence.md) into OUTDIR.
@@ -60,8 +61,41 @@ sequences:
                          or TUM text
   --pair-tolerance-ms T  left and right timestamps further apart are not paired (default 1)
   --cold                 every frame solved alone (no warm start, no temporal filter)
+  --read-threads N       threads reading frames ahead while one is solved (default 0: one per
+                         four cores, 1 to 4); the summary's "read:" line says what reading
+                         cost and how long the solving thread waited for frames
+recorded logs (docs/guide.md "Recorded logs"):
+  --log FILE             an MCAP file, a ROS 1 bag (2.0), a rosbag2 .db3 or bag folder
+  --topics LEFT,RIGHT    its two sensor_msgs/Image or CompressedImage topics, paired by
+                         header.stamp within --pair-tolerance-ms
+  -o OUT.mcap            depth into an MCAP log (ROS 2 CDR, ros2msg schemas): /curvestereo/depth,
+                         camera_info, points, confidence (and depth_pinhole with --pinhole);
+                         any other -o is a folder of OUTDIR/<t_ns>/ as for --sequence
+  --compression C        the MCAP log's chunks: zstd (default), lz4 or none
 )",
      true, false},
+    {"log", "list a recorded log's topics, or write a sequence's images as a log",
+     R"(usage: curvestereo log info FILE
+       curvestereo log info FILE --time-read --topics LEFT,RIGHT [--solve-ms S] [--read-threads N]
+       curvestereo log write --sequence SRC -o FILE.mcap [--topics LEFT,RIGHT] [--format raw|png]
+                             [--compression zstd|lz4|none]
+
+info: the log's format, and each topic's type, serialisation, message count and rate, and
+the time range (log times). FILE: an MCAP file, a ROS 1 bag (2.0), a rosbag2 .db3 or bag
+folder. A log cut short is listed up to the cut, with a warning saying where.
+With --time-read: the time to open the log as two topics' frames (run --log's opening), to
+read (decode) every frame in order on one thread, in ms a frame, and then how long run's
+solving thread would wait for frames read ahead (--read-threads, as run) when a frame takes
+S ms to solve (--solve-ms, default 2.5, a GPU's warm frame; simulated by waiting).
+
+write: a sequence's image pairs (an ASL folder or "LEFT,RIGHT" folders, as run --sequence)
+into an MCAP log, each message stamped with its frame's timestamp (ns).
+  --topics LEFT,RIGHT    the topic names (default /cam0/image_raw,/cam1/image_raw)
+  --format raw|png       sensor_msgs/Image mono8 (mono16 for 16-bit PNGs; default) or
+                         sensor_msgs/CompressedImage holding each PNG file
+  --compression C        zstd (default), lz4 or none
+)",
+     false, false},
     {"eval", "accuracy against ground truth: pairs, baselines, parameter studies, sequences",
      R"(usage: curvestereo eval PAIRDIR... --csv FILE [--md FILE] [--maps DIR] [--methods LIST] [--sparsification FILE]
                          [solver options]

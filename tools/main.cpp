@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
     // Options without a value; --sequence is one for synth only (run and bench take a source).
     std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold", "compare", "blind"};
     if (command == "synth") flags.insert("sequence");
+    if (command == "log") flags.insert("time-read");
     const cs::cli::Args args(int(rest.size()), rest.data(), flags);
     if (command == "run") return cs::cli::cmdRun(args);
     if (command == "demo") return cs::cli::cmdDemo(args);
@@ -61,6 +62,7 @@ int main(int argc, char** argv) {
     if (command == "fields") return cs::cli::cmdFields(args);
     if (command == "bench") return cs::cli::cmdBench(args);
     if (command == "calib") return cs::cli::cmdCalib(args);
+    if (command == "log") return cs::cli::cmdLog(args);
     return 2;  // not reached: commandHelp() knows exactly these commands
   } catch (const UsageError& e) {
     std::fprintf(stderr, "curvestereo: error: %s (see 'curvestereo %s --help')\n", e.what(), command.c_str());

@@ -454,17 +454,18 @@ uint32_t flowColour(const Vec2f& f, float maxMagnitude) {
 
 // ==================================================================== PNG
 
-ImageF readPngGray(const std::string& path, PngFormat* format) {
-  FilePtr file = openForRead(path, "image");
-  requirePngSignature(file.get(), path);
+namespace {
+
+// The PNG in `file` (signature already checked); `name` names it in errors.
+ImageF readPngStream(std::FILE* file, const std::string& name, PngFormat* format) {
   PngErrorState errors{};
   PngHandle handle(PngHandle::kRead, &errors);
-  if (!handle.valid()) throw Error("cannot read PNG " + quoted(path) + ": libpng initialisation failed");
+  if (!handle.valid()) throw Error("cannot read PNG " + quoted(name) + ": libpng initialisation failed");
 
   png_uint_32 width = 0, height = 0;
-  if (!readPngInfo(handle.png(), handle.info(), file.get(), &width, &height)) throwCorruptPng(path, file.get(), errors);
+  if (!readPngInfo(handle.png(), handle.info(), file, &width, &height)) throwCorruptPng(name, file, errors);
   if (width == 0 || height == 0 || !plausibleSize(width, height))
-    throw Error("PNG " + quoted(path) + " has an implausible size " + std::to_string(width) + "x" +
+    throw Error("PNG " + quoted(name) + " has an implausible size " + std::to_string(width) + "x" +
                 std::to_string(height));
 
   if (format) {
@@ -475,12 +476,28 @@ ImageF readPngGray(const std::string& path, PngFormat* format) {
         (colorType & PNG_COLOR_MASK_ALPHA) != 0 || png_get_valid(handle.png(), handle.info(), PNG_INFO_tRNS);
   }
   PngLayout layout;
-  if (!applyGrayTransforms(handle.png(), handle.info(), &layout)) throwCorruptPng(path, file.get(), errors);
+  if (!applyGrayTransforms(handle.png(), handle.info(), &layout)) throwCorruptPng(name, file, errors);
   ImageF image(static_cast<int>(layout.width), static_cast<int>(layout.height));
   std::vector<png_byte> buffer(layout.passes > 1 ? layout.rowBytes * layout.height : layout.rowBytes);
-  if (!decodePngRows(handle.png(), &layout, buffer.data(), image.data.data()))
-    throwCorruptPng(path, file.get(), errors);
+  if (!decodePngRows(handle.png(), &layout, buffer.data(), image.data.data())) throwCorruptPng(name, file, errors);
   return image;
+}
+
+}  // namespace
+
+ImageF readPngGray(const std::string& path, PngFormat* format) {
+  FilePtr file = openForRead(path, "image");
+  requirePngSignature(file.get(), path);
+  return readPngStream(file.get(), path, format);
+}
+
+ImageF decodePngGray(const uint8_t* data, size_t size, const std::string& name, PngFormat* format) {
+  if (size < 8 || png_sig_cmp(data, 0, 8) != 0) throw Error(quoted(name) + " is not a PNG image");
+  // A FILE over the bytes, so that the file reader's libpng glue serves both.
+  FilePtr file(fmemopen(const_cast<uint8_t*>(data), size, "rb"));
+  if (!file) throw Error("cannot read PNG " + quoted(name) + ": " + std::strerror(errno));
+  std::fseek(file.get(), 8, SEEK_SET);
+  return readPngStream(file.get(), name, format);
 }
 
 void writePngGray(const std::string& path, const ImageF& img) {

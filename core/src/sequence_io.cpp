@@ -13,6 +13,7 @@
 
 #include "calib_common.hpp"
 #include "curvestereo/image_io.hpp"
+#include "sequence_pairing.hpp"
 
 namespace cs {
 namespace {
@@ -107,11 +108,7 @@ bool parseDouble(const std::string& s, double& out) {
   throw Error(oneLine(name + " line " + std::to_string(line) + ": " + problem));
 }
 
-std::string msText(double ms) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g ms", ms);
-  return buf;
-}
+using detail::msText;
 
 // Natural order ("img9" < "img10"), so that frame numbers without leading zeros pair right.
 bool naturalLess(const std::string& a, const std::string& b) {
@@ -169,6 +166,40 @@ std::vector<AslRow> readAslCamera(const fs::path& mav0, const char* cam) {
 }
 
 }  // namespace
+
+namespace detail {
+
+std::string msText(double ms) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g ms", ms);
+  return buf;
+}
+
+TimePairs pairByTime(const std::vector<int64_t>& left, const std::vector<int64_t>& right, double toleranceMs) {
+  const auto nearest = [](const std::vector<int64_t>& ts, int64_t t) -> size_t {
+    auto it = std::lower_bound(ts.begin(), ts.end(), t);
+    if (it == ts.end()) return ts.size() - 1;
+    if (it != ts.begin() && t - *std::prev(it) <= *it - t) --it;
+    return size_t(it - ts.begin());
+  };
+  const double tolNs = toleranceMs * 1e6;
+  TimePairs out;
+  std::vector<bool> rightUsed(right.size(), false);
+  for (size_t i = 0; i < left.size(); ++i) {
+    const size_t j = right.empty() ? 0 : nearest(right, left[i]);
+    if (right.empty() || nearest(left, right[j]) != i || std::fabs(double(right[j]) - double(left[i])) > tolNs) {
+      out.leftAlone.push_back(i);
+      continue;
+    }
+    rightUsed[j] = true;
+    out.pairs.emplace_back(i, j);
+  }
+  for (size_t j = 0; j < right.size(); ++j)
+    if (!rightUsed[j]) out.rightAlone.push_back(j);
+  return out;
+}
+
+}  // namespace detail
 
 std::vector<AslRow> parseAslCsv(const std::string& text, const std::string& name) {
   std::vector<AslRow> rows;
@@ -258,39 +289,23 @@ Sequence Sequence::open(const std::string& source, const SequenceOptions& option
         }
     seq.kind_ = "ASL";
     const std::vector<AslRow> left = readAslCamera(mav0, "cam0"), right = readAslCamera(mav0, "cam1");
-    // Mutual nearest neighbours within the tolerance: one-to-one, and a frame missing from
-    // one camera cannot pull its neighbour's partner away.
-    const auto nearest = [](const std::vector<AslRow>& rows, int64_t t) -> size_t {
-      auto it =
-          std::lower_bound(rows.begin(), rows.end(), t, [](const AslRow& r, int64_t v) { return r.timestampNs < v; });
-      if (it == rows.end()) return rows.size() - 1;
-      if (it != rows.begin() && t - std::prev(it)->timestampNs <= it->timestampNs - t) --it;
-      return size_t(it - rows.begin());
-    };
-    const double tolNs = options.pairToleranceMs * 1e6;
-    std::vector<bool> rightUsed(right.size(), false);
-    for (size_t i = 0; i < left.size(); ++i) {
-      const size_t j = right.empty() ? 0 : nearest(right, left[i].timestampNs);
-      if (right.empty() || nearest(left, right[j].timestampNs) != i ||
-          std::fabs(double(right[j].timestampNs) - double(left[i].timestampNs)) > tolNs) {
-        seq.warnings_.push_back("cam0 " + left[i].filename + ": no cam1 frame within " +
-                                msText(options.pairToleranceMs));
-        ++seq.unpaired_;
-        continue;
-      }
-      rightUsed[j] = true;
+    std::vector<int64_t> leftNs, rightNs;
+    for (const AslRow& r : left) leftNs.push_back(r.timestampNs);
+    for (const AslRow& r : right) rightNs.push_back(r.timestampNs);
+    const detail::TimePairs paired = detail::pairByTime(leftNs, rightNs, options.pairToleranceMs);
+    for (const auto& [i, j] : paired.pairs) {
       SequenceFrame f;
       f.timestampNs = left[i].timestampNs;
       f.leftPath = (mav0 / "cam0" / "data" / left[i].filename).string();
       f.rightPath = (mav0 / "cam1" / "data" / right[j].filename).string();
       seq.frames_.push_back(std::move(f));
     }
-    for (size_t j = 0; j < right.size(); ++j)
-      if (!rightUsed[j]) {
-        seq.warnings_.push_back("cam1 " + right[j].filename + ": no cam0 frame within " +
-                                msText(options.pairToleranceMs));
-        ++seq.unpaired_;
-      }
+    for (size_t i : paired.leftAlone)
+      seq.warnings_.push_back("cam0 " + left[i].filename + ": no cam1 frame within " + msText(options.pairToleranceMs));
+    for (size_t j : paired.rightAlone)
+      seq.warnings_.push_back("cam1 " + right[j].filename + ": no cam0 frame within " +
+                              msText(options.pairToleranceMs));
+    seq.unpaired_ += paired.leftAlone.size() + paired.rightAlone.size();
     if (seq.frames_.empty())
       throw Error(oneLine("ASL folder '" + mav0.string() + "': no stereo frames (cam0 has " +
                           std::to_string(left.size()) + ", cam1 " + std::to_string(right.size()) +
@@ -338,34 +353,34 @@ Sequence Sequence::open(const std::string& source, const SequenceOptions& option
                         "\"LEFT,RIGHT\" image folders or glob patterns)"));
   }
 
-  if (!posesPath.empty()) {
-    seq.posesGiven_ = true;
-    const std::map<int64_t, Pose> poses = readPoses(posesPath);
-    const double tolNs = options.poseToleranceMs * 1e6;
-    std::vector<int64_t> missing;
-    for (SequenceFrame& f : seq.frames_) {
-      // The nearest pose: the first at or after the frame, or the one before it.
-      auto it = poses.lower_bound(f.timestampNs);
-      if (it != poses.begin() &&
-          (it == poses.end() || f.timestampNs - std::prev(it)->first < it->first - f.timestampNs))
-        --it;
-      if (it != poses.end() &&
-          double(std::max(it->first, f.timestampNs) - std::min(it->first, f.timestampNs)) <= tolNs) {
-        f.hasPose = true;
-        f.pose = it->second;
-      } else {
-        missing.push_back(f.timestampNs);
-      }
-    }
-    if (!missing.empty()) {
-      std::string list;
-      for (size_t k = 0; k < missing.size() && k < 5; ++k) list += (k ? ", " : "") + std::to_string(missing[k]);
-      seq.warnings_.push_back(std::to_string(missing.size()) + " of " + std::to_string(seq.frames_.size()) +
-                              " frames have no pose within " + msText(options.poseToleranceMs) + " in '" + posesPath +
-                              "' (t_ns " + list + (missing.size() > 5 ? ", ..." : "") + ")");
+  if (!posesPath.empty()) seq.attachPoses(posesPath, options.poseToleranceMs);
+  return seq;
+}
+
+void Sequence::attachPoses(const std::string& path, double toleranceMs) {
+  posesGiven_ = true;
+  const std::map<int64_t, Pose> poses = readPoses(path);
+  const double tolNs = toleranceMs * 1e6;
+  std::vector<int64_t> missing;
+  for (SequenceFrame& f : frames_) {
+    // The nearest pose: the first at or after the frame, or the one before it.
+    auto it = poses.lower_bound(f.timestampNs);
+    if (it != poses.begin() && (it == poses.end() || f.timestampNs - std::prev(it)->first < it->first - f.timestampNs))
+      --it;
+    if (it != poses.end() && double(std::max(it->first, f.timestampNs) - std::min(it->first, f.timestampNs)) <= tolNs) {
+      f.hasPose = true;
+      f.pose = it->second;
+    } else {
+      missing.push_back(f.timestampNs);
     }
   }
-  return seq;
+  if (!missing.empty()) {
+    std::string list;
+    for (size_t k = 0; k < missing.size() && k < 5; ++k) list += (k ? ", " : "") + std::to_string(missing[k]);
+    warnings_.push_back(std::to_string(missing.size()) + " of " + std::to_string(frames_.size()) +
+                        " frames have no pose within " + msText(toleranceMs) + " in '" + path + "' (t_ns " + list +
+                        (missing.size() > 5 ? ", ..." : "") + ")");
+  }
 }
 
 std::string Sequence::summary() const {
@@ -379,6 +394,7 @@ void Sequence::load(size_t i, ImageF& left, ImageF& right) const {
   if (i >= frames_.size())
     throw Error("sequence frame " + std::to_string(i) + " does not exist (" + std::to_string(frames_.size()) +
                 " frames)");
+  if (log_) return loadLog(i, left, right);
   const SequenceFrame& f = frames_[i];
   const std::string frame = "frame " + std::to_string(i) + " (t " + std::to_string(f.timestampNs) + " ns)";
   const auto read = [&](const std::string& path, const char* side) {

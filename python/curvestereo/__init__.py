@@ -31,6 +31,7 @@ except ImportError as e:  # e.g. python/curvestereo itself on sys.path, not the 
     ) from e
 
 from ._curvestereo import (  # noqa: F401
+    DepthLogWriter,
     Error,
     Frame,
     Result,
@@ -43,6 +44,7 @@ from ._curvestereo import (  # noqa: F401
     colorize,
     depth_picture,
     load_calibration,
+    log_info,
     preset_params,
     presets,
     read_image,
@@ -52,6 +54,7 @@ from ._curvestereo import (  # noqa: F401
 )
 
 __all__ = [
+    "DepthLogWriter",
     "Error",
     "Frame",
     "Result",
@@ -63,6 +66,7 @@ __all__ = [
     "colorize",
     "depth_picture",
     "load_calibration",
+    "log_info",
     "preset_params",
     "presets",
     "read_image",

@@ -256,6 +256,20 @@ class Frame:
     @property
     def right_path(self) -> str: ...
 
+class _ReadAhead:
+    """Sequence.read_ahead()'s iterator: frames read on background threads, in order."""
+
+    def __iter__(self) -> _ReadAhead: ...
+    def __next__(self) -> Frame: ...
+    @property
+    def threads(self) -> int: ...
+    @property
+    def first_wait_ms(self) -> float: ...
+    @property
+    def waited_ms(self) -> float: ...
+    @property
+    def read_ms(self) -> float: ...
+
 class Sequence:
     """A recorded stereo sequence, images read one frame at a time.
 
@@ -278,6 +292,7 @@ class Sequence:
     def __len__(self) -> int: ...
     def __getitem__(self, index: int) -> Frame: ...
     def __iter__(self) -> Iterator[Frame]: ...
+    def read_ahead(self, threads: int = 0) -> _ReadAhead: ...
     @property
     def warnings(self) -> list[str]:
         """Unpaired frames, frames without a pose, mismatched names: one line each."""
@@ -287,6 +302,47 @@ class Sequence:
     def timestamps_ns(self) -> npt.NDArray[np.int64]: ...
     @property
     def source(self) -> str: ...
+    @staticmethod
+    def from_log(
+        path: _Path,
+        topics: tuple[str, str],
+        poses: _Path | None = None,
+        pair_tolerance_ms: float = 1.0,
+        pose_tolerance_ms: float = 5.0,
+    ) -> Sequence:
+        """A recorded log's stereo frames (MCAP, ROS 1 bag 2.0, rosbag2 .db3 or bag folder):
+        two sensor_msgs/Image or CompressedImage topics paired by header.stamp. A log cut
+        short is read up to the cut; .warnings says where."""
+
+class DepthLogWriter:
+    """Depth into an MCAP log (profile ros2, CDR, ros2msg schemas): PREFIX/depth (32FC1
+    radial), PREFIX/camera_info, PREFIX/points (organised PointCloud2), PREFIX/confidence,
+    and with pinhole PREFIX/depth_pinhole (REP-118 z-depth) and its camera_info.
+
+        with curvestereo.DepthLogWriter("depth.mcap", rig) as out:
+            out.write(frame.timestamp_ns, stereo.next(frame.left, frame.right))
+    """
+
+    def __init__(
+        self,
+        path: _Path,
+        rig: Rig,
+        compression: Literal["zstd", "lz4", "none"] = "zstd",
+        min_confidence: float = 0.0,
+        pinhole: float | tuple[float, int, int] | None = None,
+        topic_prefix: str = "/curvestereo",
+        frame_id: str = "cam0",
+    ) -> None: ...
+    def write(self, timestamp_ns: int, result: Result) -> None: ...
+    def close(self) -> None: ...
+    @property
+    def frames(self) -> int: ...
+    def __enter__(self) -> DepthLogWriter: ...
+    def __exit__(self, *exc: object) -> None: ...
+
+def log_info(path: _Path) -> dict[str, Any]:
+    """A log's format, topics (name, type, serialisation, messages, first_ns, last_ns),
+    messages, start_ns, end_ns and cut ('' unless the log was cut short)."""
 
 def load_calibration(path: _Path) -> Rig:
     """Read a stereo calibration: Kalibr / OpenVINS camchain, Basalt calibration.json, OpenCV

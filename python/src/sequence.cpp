@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "binding.hpp"
+#include "curvestereo/log.hpp"
 #include "curvestereo/sequence.hpp"
 
 namespace cs::py {
@@ -137,6 +138,21 @@ class PySequence {
     sequence_ = std::make_shared<const Sequence>(Sequence::open(source_, options));
   }
 
+  // A recorded log's frames (Sequence::openLog); source is "LOG:LEFT,RIGHT" for the repr.
+  static PySequence fromLog(const Path& path, const std::pair<std::string, std::string>& topics, pb::object poses,
+                            double pairToleranceMs, double poseToleranceMs) {
+    SequenceOptions options;
+    options.pairToleranceMs = pairToleranceMs;
+    options.poseToleranceMs = poseToleranceMs;
+    if (!poses.is_none()) options.poses = poses.cast<Path>().string();
+    PySequence s;
+    s.source_ = path.string() + ":" + topics.first + "," + topics.second;
+    pb::gil_scoped_release nogil;  // reads every message's header
+    s.sequence_ =
+        std::make_shared<const Sequence>(Sequence::openLog(path.string(), topics.first, topics.second, options));
+    return s;
+  }
+
   size_t size() const { return sequence_->frames().size(); }
   PyFrame at(long long i) const {
     const long long n = (long long)size();
@@ -148,13 +164,122 @@ class PySequence {
   const std::string& source() const { return source_; }
 
  private:
+  PySequence() = default;
   std::string source_;
   std::shared_ptr<const Sequence> sequence_;
 };
 
+// A DepthResult view of a Python Result's arrays, for DepthLogWriter (copies: the writer
+// serialises them anyway).
+DepthResult depthFromResult(const Result& r) {
+  using F32 = pb::array_t<float, pb::array::c_style | pb::array::forcecast>;
+  const F32 depth = F32::ensure(r.depth), points = F32::ensure(r.points);
+  if (!depth || depth.ndim() != 2) throw Error("DepthLogWriter.write: result.depth must be an H x W array");
+  const int h = int(depth.shape(0)), w = int(depth.shape(1));
+  if (!points || points.ndim() != 3 || points.shape(0) != h || points.shape(1) != w || points.shape(2) != 3)
+    throw Error("DepthLogWriter.write: result.points must be H x W x 3, as depth");
+  DepthResult out;
+  out.depth.radial = ImageF(w, h);
+  std::copy(depth.data(), depth.data() + depth.size(), out.depth.radial.data.begin());
+  out.depth.points = Image<Point3f>(w, h);
+  for (size_t i = 0; i < out.depth.points.size(); ++i)
+    out.depth.points.data[i] = {points.data()[3 * i], points.data()[3 * i + 1], points.data()[3 * i + 2]};
+  if (!r.confidence.is_none()) {
+    const F32 c = F32::ensure(r.confidence);
+    if (!c || c.ndim() != 2 || c.shape(0) != h || c.shape(1) != w)
+      throw Error("DepthLogWriter.write: result.confidence must be H x W, as depth");
+    out.confidence = ImageF(w, h);
+    std::copy(c.data(), c.data() + c.size(), out.confidence.data.begin());
+  }
+  return out;
+}
+
+class PyDepthLogWriter {
+ public:
+  PyDepthLogWriter(const Path& path, const Rig& rig, const std::string& compression, float minConfidence,
+                   pb::object pinhole, const std::string& topicPrefix, const std::string& frameId) {
+    DepthLogOptions o;
+    o.compression = compression;
+    o.minConfidence = minConfidence;
+    o.topicPrefix = topicPrefix;
+    o.frameId = frameId;
+    if (!pinhole.is_none()) {  // horizontal FOV in degrees, or (fov, width, height)
+      o.pinhole = true;
+      if (pb::isinstance<pb::tuple>(pinhole)) {
+        const auto t = pinhole.cast<std::tuple<double, int, int>>();
+        o.pinholeView = PinholeView::fromFov(std::get<0>(t), std::get<1>(t), std::get<2>(t));
+      } else {
+        o.pinholeView = PinholeView::fromFov(pinhole.cast<double>(), rig.cam0.width, rig.cam0.height);
+      }
+    }
+    writer_ = std::make_unique<DepthLogWriter>(path.string(), rig, o);
+  }
+  void write(int64_t stampNs, const Result& r) {
+    if (!writer_) throw Error("DepthLogWriter is closed");
+    const DepthResult d = depthFromResult(r);
+    pb::gil_scoped_release nogil;
+    writer_->write(stampNs, d);
+  }
+  void close() {
+    if (!writer_) return;
+    writer_->close();
+    frames_ = writer_->frames();
+    writer_.reset();
+  }
+  uint64_t frames() const { return writer_ ? writer_->frames() : frames_; }
+
+ private:
+  std::unique_ptr<DepthLogWriter> writer_;
+  uint64_t frames_ = 0;
+};
+
+pb::dict logInfoDict(const Path& path) {
+  LogInfo info;
+  {
+    pb::gil_scoped_release nogil;
+    info = logInfo(path.string());
+  }
+  pb::list topics;
+  for (const LogTopic& t : info.topics)
+    topics.append(pb::dict(pb::arg("name") = t.name, pb::arg("type") = t.type,
+                           pb::arg("serialisation") = t.serialisation, pb::arg("messages") = t.messages,
+                           pb::arg("first_ns") = t.firstNs, pb::arg("last_ns") = t.lastNs));
+  return pb::dict(pb::arg("format") = info.format, pb::arg("messages") = info.messages,
+                  pb::arg("start_ns") = info.startNs, pb::arg("end_ns") = info.endNs, pb::arg("cut") = info.cut,
+                  pb::arg("topics") = topics);
+}
+
 struct FrameIterator {
   PySequence sequence;
   size_t next = 0;
+};
+
+// Sequence.read_ahead(): frames read on background threads (SequenceReader) while the caller
+// solves, each Frame handed out with its images. Unlike iteration, which reads a frame when
+// its images are used, this reads every frame, in order.
+class ReadAhead {
+ public:
+  ReadAhead(const PySequence& s, int threads)
+      : sequence_(s), reader_(std::make_unique<SequenceReader>(s.sequence(), threads)) {}
+  PyFrame next() {
+    size_t index = 0;
+    ImageF l, r;
+    bool more = false;
+    {
+      pb::gil_scoped_release nogil;  // waits for the readers, which need no Python
+      more = reader_->next(index, l, r);
+    }
+    if (!more) throw pb::stop_iteration();
+    PyFrame f = sequence_.at((long long)index);
+    f.left = floatArray(std::move(l));
+    f.right = floatArray(std::move(r));
+    return f;
+  }
+  const SequenceReader& reader() const { return *reader_; }
+
+ private:
+  PySequence sequence_;  // holds the frame list the readers use (destroyed after them)
+  std::unique_ptr<SequenceReader> reader_;
 };
 
 }  // namespace
@@ -204,6 +329,21 @@ void bindSequence(pb::module_& m) {
         return it.sequence.at((long long)it.next++);
       });
 
+  pb::class_<ReadAhead>(m, "_ReadAhead")
+      .def("__iter__", [](ReadAhead& it) -> ReadAhead& { return it; })
+      .def("__next__", &ReadAhead::next)
+      .def_property_readonly(
+          "threads", [](const ReadAhead& r) { return r.reader().threads(); }, "Background reader threads.")
+      .def_property_readonly(
+          "first_wait_ms", [](const ReadAhead& r) { return r.reader().firstWaitMs(); },
+          "How long the first frame was waited for (ms).")
+      .def_property_readonly(
+          "waited_ms", [](const ReadAhead& r) { return r.reader().waitedMs(); },
+          "How long the frames after the first were waited for, in all (ms): the reading left on the caller's path.")
+      .def_property_readonly(
+          "read_ms", [](const ReadAhead& r) { return r.reader().readMs(); },
+          "How long the frames handed out took to read on the background threads, in all (ms).");
+
   pb::class_<PySequence>(m, "Sequence",
                          R"doc(A recorded stereo sequence: its frame list, images read one frame at a time.
 
@@ -227,9 +367,21 @@ pose, are listed in .warnings. Raises curvestereo.Error naming the file and the 
         r = stereo.next(f.left, f.right, pose=f.pose))doc")
       .def(pb::init<pb::handle, pb::object, double, double>(), pb::arg("source"), pb::arg("poses") = pb::none(),
            pb::arg("pair_tolerance_ms") = 1.0, pb::arg("pose_tolerance_ms") = 5.0)
+      .def_static("from_log", &PySequence::fromLog, pb::arg("path"), pb::arg("topics"), pb::arg("poses") = pb::none(),
+                  pb::arg("pair_tolerance_ms") = 1.0, pb::arg("pose_tolerance_ms") = 5.0,
+                  "A recorded log's stereo frames: an MCAP file, a ROS 1 bag (2.0), a rosbag2 .db3 or bag folder; "
+                  "topics = (left, right), two sensor_msgs/Image or CompressedImage topics paired by header.stamp "
+                  "within pair_tolerance_ms. A log cut short is read up to the cut (.warnings says where).")
       .def("__len__", &PySequence::size)
       .def("__getitem__", &PySequence::at, pb::arg("index"))
       .def("__iter__", [](const PySequence& s) { return FrameIterator{s}; })
+      .def(
+          "read_ahead", [](const PySequence& s, int threads) { return std::make_unique<ReadAhead>(s, threads); },
+          pb::arg("threads") = 0,
+          "Iterates every frame in order, read ahead on `threads` background threads (0: one per four cores, 1 to "
+          "4) while the caller solves the one before; each Frame comes with its images. A frame that cannot be read "
+          "raises curvestereo.Error at its turn, and iteration ends there. .waited_ms says how long the caller "
+          "waited for frames.")
       .def_property_readonly(
           "warnings", [](const PySequence& s) { return s.sequence().warnings(); },
           "Notes to show, one line each: frames that could not be paired, frames without a pose although poses "
@@ -249,6 +401,34 @@ pose, are listed in .warnings. Raises curvestereo.Error naming the file and the 
       .def_property_readonly(
           "source", [](const PySequence& s) { return s.source(); }, "The source as opened.")
       .def("__repr__", [](const PySequence& s) { return "<curvestereo.Sequence " + s.sequence().summary() + ">"; });
+
+  m.def("log_info", &logInfoDict, pb::arg("path"),
+        "A recorded log's format, topics (name, type, serialisation, messages, first_ns, last_ns), message "
+        "count, time range (log times, ns) and where it was cut short ('' when whole).");
+
+  pb::class_<PyDepthLogWriter>(m, "DepthLogWriter",
+                               R"doc(Depth into an MCAP log (profile ros2, CDR, ros2msg schemas embedded).
+
+DepthLogWriter(path, rig, compression="zstd", min_confidence=0.0, pinhole=None,
+               topic_prefix="/curvestereo", frame_id="cam0")
+
+write(timestamp_ns, result) adds a frame: PREFIX/depth (sensor_msgs/Image 32FC1, radial
+metres), PREFIX/camera_info, PREFIX/points (organised PointCloud2), PREFIX/confidence (32FC1)
+and, with pinhole = FOV or (FOV, W, H), PREFIX/depth_pinhole (REP-118 z-depth) with its
+camera_info. close() (or leaving a with block) writes the summary.
+
+    with curvestereo.DepthLogWriter("depth.mcap", rig) as out:
+        for f in curvestereo.Sequence.from_log("run.mcap", ("/cam0/image_raw", "/cam1/image_raw")):
+            out.write(f.timestamp_ns, stereo.next(f.left, f.right)))doc")
+      .def(pb::init<const Path&, const Rig&, const std::string&, float, pb::object, const std::string&,
+                    const std::string&>(),
+           pb::arg("path"), pb::arg("rig"), pb::arg("compression") = "zstd", pb::arg("min_confidence") = 0.f,
+           pb::arg("pinhole") = pb::none(), pb::arg("topic_prefix") = "/curvestereo", pb::arg("frame_id") = "cam0")
+      .def("write", &PyDepthLogWriter::write, pb::arg("timestamp_ns"), pb::arg("result"))
+      .def("close", &PyDepthLogWriter::close)
+      .def_property_readonly("frames", &PyDepthLogWriter::frames, "Frames written so far.")
+      .def("__enter__", [](PyDepthLogWriter& w) -> PyDepthLogWriter& { return w; })
+      .def("__exit__", [](PyDepthLogWriter& w, pb::object, pb::object, pb::object) { w.close(); });
 }
 
 }  // namespace cs::py

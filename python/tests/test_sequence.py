@@ -100,6 +100,27 @@ def test_frames_are_read_when_used(asl, tmp_path):
     assert frames[3].right.shape == (N, N)
 
 
+def test_read_ahead_gives_every_frame_read_and_an_error_at_its_turn(asl, tmp_path):
+    import shutil
+
+    seq = cs.Sequence(asl[0])
+    ahead = seq.read_ahead(threads=2)
+    frames = list(ahead)
+    assert [f.index for f in frames] == list(range(len(seq))) and ahead.threads == 2
+    for f in frames:
+        assert same_bits(f.left, seq[f.index].left) and same_bits(f.right, seq[f.index].right)
+    assert ahead.read_ms > 0 and ahead.waited_ms >= 0 and ahead.first_wait_ms >= 0
+
+    root = tmp_path / "copy"
+    shutil.copytree(asl[0], root)
+    (root / "mav0" / "cam1" / "data" / f"{T0 + 2 * STEP + 200_000}.png").unlink()  # cam1 is 0.2 ms late
+    ahead = cs.Sequence(root).read_ahead(threads=3)
+    assert [next(ahead).index for _ in range(2)] == [0, 1]
+    with pytest.raises(cs.Error, match=f"frame 2 \\(t {T0 + 2 * STEP} ns\\), right image"):
+        next(ahead)
+    assert list(ahead) == []  # iteration ends at the unreadable frame
+
+
 def test_folder_pairs_and_explicit_poses(tmp_path):
     left, right = texture_pair(32)
     for side, img in (("L", left), ("R", right)):

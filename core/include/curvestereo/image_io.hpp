@@ -1,6 +1,8 @@
 // File formats without OpenCV: PNG, OpenEXR, Middlebury .flo, PLY, and colour maps.
 // Every reader throws cs::Error with a one-line message naming the file on failure.
 #pragma once
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,8 @@ struct PngFormat {
 // luma (Rec. 601 weights), alpha dropped. Values scaled to [0, 1]. `format` (optional)
 // receives what the file held.
 ImageF readPngGray(const std::string& path, PngFormat* format = nullptr);
+// The same from a PNG held in memory (a log's CompressedImage); `name` names it in errors.
+ImageF decodePngGray(const uint8_t* data, size_t size, const std::string& name, PngFormat* format = nullptr);
 void writePngGray(const std::string& path, const ImageF& img);          // clamps to [0,1], 8-bit
 void writePngGray16(const std::string& path, const ImageF& img);        // clamps to [0,1], 16-bit
 void writePngRgb(const std::string& path, const Image<uint32_t>& rgb);  // 0x00RRGGBB per pixel
