@@ -107,7 +107,7 @@ def start_client(args):
     from distributed import Client, LocalCluster
 
     if args.scheduler:
-        return Client(args.scheduler), None
+        return Client(args.scheduler, timeout="20s"), None
     n = args.gpus or args.workers
     resources = {"GPU": 1} if args.gpus else None
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, resources=resources,
@@ -209,7 +209,12 @@ def main(argv=None):
     except (BatchError, OSError) as e:
         print(f"curvestereo.batch: {e}", file=sys.stderr)
         return 2
-    client, cluster = start_client(args)
+    try:
+        client, cluster = start_client(args)
+    except (OSError, TimeoutError) as e:  # an unreachable scheduler, no port to listen on
+        where = args.scheduler or "a local cluster"
+        print(f"curvestereo.batch: cannot start or reach {where}: {str(e).splitlines()[0]}", file=sys.stderr)
+        return 2
     start = time.monotonic()  # the throughput is the solving's, not the cluster's start-up
     try:
         outcomes = run_jobs(client, jobs, args, run_args, cli)
