@@ -184,7 +184,17 @@ TEST_CASE("SequenceReader: frames in order, equal to load(), with any number of 
     CHECK_FALSE(reader.next(index, l, r));
     CHECK(reader.readMs() > 0);
   }
-  { cs::SequenceReader early(seq, 2); }  // destroyed before reading everything: stops cleanly
+  { cs::SequenceReader early(seq, 2); }   // destroyed before reading everything: stops cleanly
+  cs::SequenceReader part(seq, 2, 2, 5);  // frames 2, 3, 4 alone
+  cs::ImageF l, r;
+  std::vector<size_t> got;
+  for (size_t index = 0; part.next(index, l, r);) got.push_back(index);
+  CHECK(got == std::vector<size_t>{2, 3, 4});
+  cs::SequenceReader tail(seq, 1, 6, 100);  // an end past the last frame: to the last
+  size_t index = 0;
+  CHECK(tail.next(index, l, r));
+  CHECK(index == 6);
+  CHECK_FALSE(tail.next(index, l, r));
   fs::remove_all(dir);
 }
 
