@@ -50,6 +50,20 @@ TEST_CASE("run --sequence: every frame's outputs under its timestamp, warm after
   CHECK(r.out.find("the solving thread waited") != std::string::npos);  // the reading cost, said
   CHECK(fs::is_regular_file(dir / "out/1000033333333/depth.exr"));
   CHECK(fs::is_regular_file(dir / "out/1000033333333/depth.png"));
+  // --frames: a part of the recording alone (frames 1 and 2 of 0..3).
+  const CliOutcome part = runCli(dir, std::string("run --sequence seq -o part --frames 1:3 ") + kSolve);
+  INFO(part.err);
+  CHECK(part.exitCode == 0);
+  CHECK(folders(dir / "part") == 2);
+  CHECK(fs::is_directory(dir / "part/1000033333333"));
+  CHECK(fs::is_directory(dir / "part/1000066666667"));
+  CHECK(runCli(dir, std::string("run --sequence seq -o part2 --frames 3: ") + kSolve).exitCode == 0);
+  CHECK(folders(dir / "part2") == 1);
+  const CliOutcome past = runCli(dir, std::string("run --sequence seq -o past --frames 4: ") + kSolve);
+  CHECK(past.exitCode == 1);
+  CHECK(past.err.find("--frames 4:: the sequence has 4 frames (0 to 3)") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "past/1000000000000"));
+  CHECK(runCli(dir, std::string("run --sequence seq -o bad --frames 2:2 ") + kSolve).exitCode == 2);
   // --cold: the baseline, every frame alone.
   const CliOutcome cold = runCli(dir, std::string("run --sequence seq -o cold --cold ") + kSolve);
   CHECK(cold.exitCode == 0);

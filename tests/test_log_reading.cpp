@@ -125,10 +125,11 @@ TEST_CASE("decompressAhead: chunks used in file order; the first corrupt one in 
 
 // Scans a log for two topics' messages and reads each one back: the chunks read() had to
 // decompress again.
-uint64_t chunksDecompressedAgain(const std::string& path, std::vector<bool> wanted = {}) {
+uint64_t chunksDecompressedAgain(const std::string& path, bool keep = true) {
   const auto reader = cs::logio::openReader(path);
+  reader->keepChunks(keep);
   std::vector<cs::logio::MessageRef> refs;
-  reader->scan(wanted, [&](const cs::logio::MessageRef& ref, const uint8_t*, size_t) { refs.push_back(ref); });
+  reader->scan({}, [&](const cs::logio::MessageRef& ref, const uint8_t*, size_t) { refs.push_back(ref); });
   REQUIRE(refs.size() >= 12);
   REQUIRE(refs.front().chunk != refs.back().chunk);  // several chunks
   for (const auto& ref : refs) reader->read(ref, [](const uint8_t*, size_t n) { CHECK(n > 0); });
@@ -146,6 +147,7 @@ TEST_CASE("a log's chunks are decompressed once: at opening, then found by every
     const std::string path = (dir / (std::string(compression) + ".mcap")).string();
     cs::writeImageLog(path, images, o);
     CHECK(chunksDecompressedAgain(path) == 0);
+    CHECK(chunksDecompressedAgain(path, false) >= 2);  // a listing keeps none: each read decompresses
     const cs::Sequence log = cs::Sequence::openLog(path, "/cam0/image_raw", "/cam1/image_raw");
     cs::ImageF l, r;
     for (size_t i = 0; i < log.frames().size(); ++i) {
@@ -182,7 +184,17 @@ TEST_CASE("SequenceReader: frames in order, equal to load(), with any number of 
     CHECK_FALSE(reader.next(index, l, r));
     CHECK(reader.readMs() > 0);
   }
-  { cs::SequenceReader early(seq, 2); }  // destroyed before reading everything: stops cleanly
+  { cs::SequenceReader early(seq, 2); }   // destroyed before reading everything: stops cleanly
+  cs::SequenceReader part(seq, 2, 2, 5);  // frames 2, 3, 4 alone
+  cs::ImageF l, r;
+  std::vector<size_t> got;
+  for (size_t index = 0; part.next(index, l, r);) got.push_back(index);
+  CHECK(got == std::vector<size_t>{2, 3, 4});
+  cs::SequenceReader tail(seq, 1, 6, 100);  // an end past the last frame: to the last
+  size_t index = 0;
+  CHECK(tail.next(index, l, r));
+  CHECK(index == 6);
+  CHECK_FALSE(tail.next(index, l, r));
   fs::remove_all(dir);
 }
 

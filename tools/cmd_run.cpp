@@ -8,6 +8,7 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -124,6 +125,24 @@ struct SequenceTally {
 // "-o OUT.mcap": the depth goes into one MCAP log (DepthLogWriter) instead of folders.
 bool mcapOutput(const std::string& out) { return out.size() > 5 && out.compare(out.size() - 5, 5, ".mcap") == 0; }
 
+// --frames FIRST:END: frames FIRST .. END-1 alone (either may be left out), e.g. one part of
+// a long recording as a batch task; the warm start begins at FIRST.
+std::pair<size_t, size_t> frameRange(const Args& args, size_t n) {
+  if (!args.has("frames")) return {0, n};
+  const std::string text = args.get("frames", "");
+  const size_t colon = text.find(':');
+  int first = 0, end = int(std::min<size_t>(n, size_t(INT32_MAX)));
+  const bool endGiven = colon != std::string::npos && colon + 1 < text.size();
+  if (colon == std::string::npos || (colon > 0 && !wholeNumber(text.substr(0, colon), first)) ||
+      (endGiven && !wholeNumber(text.substr(colon + 1), end)) || first < 0 || (endGiven && end <= first))
+    throw UsageError("--frames expects FIRST:END, frame indexes with FIRST < END (either may be left out), got '" +
+                     text + "'");
+  if (size_t(first) >= n)
+    throw Error("--frames " + text + ": the sequence has " + std::to_string(n) + " frames (0 to " +
+                std::to_string(n - 1) + ")");
+  return {size_t(first), std::min(size_t(end), n)};
+}
+
 // --log FILE --topics LEFT,RIGHT, or --sequence SRC: the frames and the calibration's path.
 Sequence openFrames(const Args& args, std::string& calibPath) {
   SequenceOptions options;
@@ -150,6 +169,8 @@ Sequence openFrames(const Args& args, std::string& calibPath) {
 int runSequence(const Args& args, const std::string& outDir) {
   std::string calibPath;
   const Sequence sequence = openFrames(args, calibPath);
+  const auto [first, end] = frameRange(args, sequence.frames().size());  // checked before any output
+  const size_t total = end - first;
   for (const std::string& w : sequence.warnings()) std::fprintf(stderr, "curvestereo: warning: %s\n", w.c_str());
   Params params = paramsFromArgs(args);
   const bool cold = args.has("cold");
@@ -181,7 +202,7 @@ int runSequence(const Args& args, const std::string& outDir) {
   DepthResult r;
   const std::vector<SequenceFrame>& frames = sequence.frames();
   // Frames are read ahead on background threads while this one solves (its wait is reported).
-  SequenceReader reader(sequence, readThreads(args));
+  SequenceReader reader(sequence, readThreads(args), first, end);
   while (true) {
     size_t i = 0;
     const std::string written = " (" + std::to_string(tally.frames) + " frames before it are written)";
@@ -208,9 +229,9 @@ int runSequence(const Args& args, const std::string& outDir) {
     }
     tally.add(r);
     const double fps = tally.frames / std::max(1e-9, tally.wallSeconds());
-    if (tty || tally.frames == int(frames.size()) || tally.frames % 30 == 0)
-      std::fprintf(stderr, "%sframe %d/%zu  %s%s  %.1f ms  %.1f frames/s%s", tty ? "\r" : "", tally.frames,
-                   frames.size(), r.warm ? "warm" : "cold", r.redone ? " (warm failed, redone)" : "", r.totalMs, fps,
+    if (tty || tally.frames == int(total) || tally.frames % 30 == 0)
+      std::fprintf(stderr, "%sframe %d/%zu  %s%s  %.1f ms  %.1f frames/s%s", tty ? "\r" : "", tally.frames, total,
+                   r.warm ? "warm" : "cold", r.redone ? " (warm failed, redone)" : "", r.totalMs, fps,
                    tty ? "   " : "\n");
   }
   if (tty) std::fputc('\n', stderr);
@@ -235,7 +256,8 @@ int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert(
       {"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling", "image-size"});
-  known.insert({"sequence", "poses", "cold", "pair-tolerance-ms", "log", "topics", "compression", "read-threads"});
+  known.insert(
+      {"sequence", "poses", "cold", "pair-tolerance-ms", "log", "topics", "compression", "read-threads", "frames"});
   args.allowOnly(known);
   if (args.has("sequence") && args.has("log")) throw UsageError("give --sequence or --log, not both");
   if (args.has("sequence") || args.has("log")) {
@@ -248,7 +270,7 @@ int cmdRun(const Args& args) {
     if (args.has("compression") && !mcapOutput(outDir)) throw UsageError("--compression is for -o OUT.mcap");
     return runSequence(args, outDir);
   }
-  for (const char* option : {"poses", "cold", "pair-tolerance-ms", "topics", "compression", "read-threads"})
+  for (const char* option : {"poses", "cold", "pair-tolerance-ms", "topics", "compression", "read-threads", "frames"})
     if (args.has(option)) throw UsageError(std::string("--") + option + " is for run --sequence or --log");
   if (args.positional().size() != 2) throw UsageError("run needs exactly two images: LEFT RIGHT");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");

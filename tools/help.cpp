@@ -61,6 +61,7 @@ sequences:
                          or TUM text
   --pair-tolerance-ms T  left and right timestamps further apart are not paired (default 1)
   --cold                 every frame solved alone (no warm start, no temporal filter)
+  --frames FIRST:END     frames FIRST to END-1 alone (either may be left out; counted from 0)
   --read-threads N       threads reading frames ahead while one is solved (default 0: one per
                          four cores, 1 to 4); the summary's "read:" line says what reading
                          cost and how long the solving thread waited for frames

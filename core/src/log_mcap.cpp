@@ -227,7 +227,7 @@ class McapReader : public Reader {
     } catch (const Truncated&) {
       throw Error("corrupt MCAP " + at(offset) + ": a record overruns its chunk");
     }
-    if (visited_) cache_.keep(offset, chunk);  // for read(): decompressed once
+    if (visited_ && keepChunks_) cache_.keep(offset, chunk);  // for read(): decompressed once
   }
 
   // One data-section record (in a chunk when chunk != 0; `where`: its content's offset).

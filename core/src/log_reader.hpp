@@ -49,6 +49,9 @@ class Reader {
   virtual void read(const MessageRef& ref, const Use& use) const = 0;
   // Chunks read() had to decompress, not finding them kept from scan (for tests).
   virtual uint64_t chunkLoads() const { return 0; }
+  // Whether scan keeps its decompressed chunks for read() (ChunkCache); off for a listing
+  // (logInfo), which reads no message again.
+  void keepChunks(bool keep) { keepChunks_ = keep; }
   const std::vector<Channel>& channels() const { return channels_; }
   const std::string& cut() const { return cut_; }
   const std::string& path() const { return path_; }
@@ -56,6 +59,7 @@ class Reader {
  protected:
   std::vector<Channel> channels_;
   std::string cut_, path_;
+  bool keepChunks_ = true;
 };
 
 // Opens by content: MCAP magic, "#ROSBAG V2.0", SQLite, or a rosbag2 folder (metadata.yaml).

@@ -251,7 +251,7 @@ class Ros1Reader : public Reader {
       if (op == kConnection) connection(r, offset);
       if (op == kMessage) message(r, offset, uint64_t(r.data - data), visit, offset + start);
     }
-    if (visited_) cache_.keep(offset, chunk);  // for read(): decompressed once
+    if (visited_ && keepChunks_) cache_.keep(offset, chunk);  // for read(): decompressed once
   }
 
   void message(const Record& r, uint64_t chunk, uint64_t offset, const Visit& visit, uint64_t where) {

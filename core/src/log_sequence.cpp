@@ -180,6 +180,7 @@ void Sequence::loadLog(size_t i, ImageF& left, ImageF& right) const {
 
 LogInfo logInfo(const std::string& path) {
   const std::unique_ptr<logio::Reader> reader = logio::openReader(path);
+  reader->keepChunks(false);
   reader->scan({}, [](const logio::MessageRef&, const uint8_t*, size_t) {});
   LogInfo info;
   info.format = reader->format();

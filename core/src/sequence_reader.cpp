@@ -19,11 +19,13 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
-SequenceReader::SequenceReader(const Sequence& sequence, int threads) : sequence_(sequence) {
+SequenceReader::SequenceReader(const Sequence& sequence, int threads, size_t first, size_t end)
+    : sequence_(sequence), end_(std::min(end, sequence.frames().size())) {
+  nextToRead_ = nextToHand_ = std::min(first, end_);
   if (threads <= 0) threads = int(std::clamp(std::thread::hardware_concurrency() / 4, 1u, 4u));
   // One frame more than readers: each reader has one in hand while the caller takes the next.
   ahead_ = size_t(threads) + 1;
-  const size_t n = std::min<size_t>(size_t(threads), sequence.frames().size());
+  const size_t n = std::min<size_t>(size_t(threads), end_ - nextToRead_);
   for (size_t t = 0; t < n; ++t) workers_.emplace_back([this] { work(); });
 }
 
@@ -39,10 +41,9 @@ SequenceReader::~SequenceReader() {
 // Each reader takes the next frame within the window ahead of the caller, reads it without
 // the lock, and files it (or its error) in its slot.
 void SequenceReader::work() {
-  const size_t n = sequence_.frames().size();
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
-    changed_.wait(lock, [&] { return stopping_ || (nextToRead_ < n && nextToRead_ < nextToHand_ + ahead_); });
+    changed_.wait(lock, [&] { return stopping_ || (nextToRead_ < end_ && nextToRead_ < nextToHand_ + ahead_); });
     if (stopping_) return;
     const size_t i = nextToRead_++;
     Slot slot;
@@ -66,17 +67,17 @@ void SequenceReader::work() {
 }
 
 bool SequenceReader::next(size_t& index, ImageF& left, ImageF& right) {
-  if (nextToHand_ >= sequence_.frames().size()) return false;
+  if (nextToHand_ >= end_) return false;
   const auto t0 = std::chrono::steady_clock::now();
   std::unique_lock<std::mutex> lock(mutex_);
   changed_.wait(lock, [&] { return slots_.count(nextToHand_) > 0; });
-  (nextToHand_ ? waitedMs_ : firstWaitMs_) += msSince(t0);
+  (handed_++ ? waitedMs_ : firstWaitMs_) += msSince(t0);
   const auto it = slots_.find(nextToHand_);
   Slot slot = std::move(it->second);
   slots_.erase(it);
   index = nextToHand_++;
   if (slot.error) {  // the frames after an unreadable one are not handed out, nor read on
-    nextToHand_ = sequence_.frames().size();
+    nextToHand_ = end_;
     stopping_ = true;
   } else {
     std::swap(left, slot.left);

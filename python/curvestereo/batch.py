@@ -2,7 +2,7 @@
 
     python3 -m curvestereo.batch LOG... -o OUTDIR --calib CALIB --topics LEFT,RIGHT
                                  [--gpus N | --workers N | --scheduler ADDRESS]
-                                 [--cli PATH] [-- RUN OPTIONS...]
+                                 [--frames-per-task N] [--cli PATH] [-- RUN OPTIONS...]
 
 Each log becomes OUTDIR/<log name>.mcap (the depth log of `curvestereo run --log`), written
 under a temporary name and renamed when complete, so a rerun skips the recordings already
@@ -12,8 +12,9 @@ worker resources: --gpus N starts a local cluster of N workers, one per GPU (eac
 its worker's GPU alone, through CUDA_VISIBLE_DEVICES); --scheduler joins a running cluster,
 whose GPU workers declare `--resources GPU=1` (tasks then ask for one GPU each unless
 --no-gpu). Each task runs the `curvestereo` command (which reads frames ahead of the solve)
-in its own process, so a crash costs that recording alone. Options after `--` go to
-`curvestereo run` (e.g. -- --preset fast --cold).
+in its own process, so a crash costs that recording alone. --frames-per-task N cuts each
+recording into parts of N frames, a task each, OUTDIR/<log name>.A-B.mcap (frames A to B-1;
+each part starts cold). Options after `--` go to `curvestereo run` (e.g. -- --preset fast).
 """
 import argparse
 import os
@@ -36,6 +37,10 @@ class BatchError(Exception):
 class Job:
     log: str
     output: str  # the final .mcap; the temporary one is beside it
+    frames: str = ""  # "FIRST:END" for a part of the recording, "" for all of it
+
+    def name(self):
+        return self.log + (f" [{self.frames}]" if self.frames else "")
 
 
 @dataclass
@@ -81,6 +86,8 @@ def solve(job, cli, calib, topics, run_args, gpu_of_worker):
         env["CUDA_VISIBLE_DEVICES"] = str(get_worker().name)
     partial = partial_path(job.output)
     command = [cli, "run", "--log", job.log, "--topics", topics, "--calib", calib, "-o", partial, *run_args]
+    if job.frames:
+        command += ["--frames", job.frames]
     start = time.monotonic()
     proc = subprocess.run(command, capture_output=True, text=True, env=env)
     seconds = time.monotonic() - start
@@ -88,10 +95,30 @@ def solve(job, cli, calib, topics, run_args, gpu_of_worker):
         Path(partial).unlink(missing_ok=True)
         message = last_line(proc.stderr) or f"curvestereo exited with status {proc.returncode}"
         message = message.removeprefix("curvestereo: ").removeprefix("error: ")
-        return Outcome(job.log, "failed", seconds=seconds, message=message)
+        return Outcome(job.name(), "failed", seconds=seconds, message=message)
     os.replace(partial, job.output)  # complete: a rerun skips it
     match = SUMMARY.search(proc.stdout)
-    return Outcome(job.log, "done", frames=int(match.group(1)) if match else 0, seconds=seconds)
+    return Outcome(job.name(), "done", frames=int(match.group(1)) if match else 0, seconds=seconds)
+
+
+def count_frames(log, topics):
+    """A recording's stereo frames, or the one-line error opening it gave (runs on a worker:
+    opening a log reads all its headers)."""
+    import curvestereo as cs
+
+    left, right = topics.split(",", 1)
+    try:
+        return len(cs.Sequence.from_log(log, (left, right)))
+    except cs.Error as e:
+        return Outcome(log, "failed", message=str(e))
+
+
+def parts(job, frames, per_task):
+    """The jobs of a recording cut into runs of per_task frames, each into OUT/<name>.A-B.mcap
+    (each part starts cold: the warm start does not cross a cut)."""
+    stem = job.output[: -len(".mcap")]
+    return [Job(job.log, f"{stem}.{a}-{min(a + per_task, frames)}.mcap", f"{a}:{min(a + per_task, frames)}")
+            for a in range(0, frames, per_task)]
 
 
 def find_cli(given):
@@ -107,7 +134,7 @@ def start_client(args):
     from distributed import Client, LocalCluster
 
     if args.scheduler:
-        return Client(args.scheduler), None
+        return Client(args.scheduler, timeout="20s"), None
     n = args.gpus or args.workers
     resources = {"GPU": 1} if args.gpus else None
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, resources=resources,
@@ -135,39 +162,58 @@ class Progress:
 
 
 def run_jobs(client, jobs, args, run_args, cli):
-    """Submits the unfinished jobs and gathers their outcomes as they complete."""
+    """Submits the unfinished jobs and gathers their outcomes as they complete. With
+    --frames-per-task, each recording's frames are counted first (a task each), and its
+    parts are submitted as its count arrives."""
     from distributed import as_completed
 
-    outcomes = [Outcome(j.log, "skipped") for j in jobs if Path(j.output).exists()]
-    todo = [j for j in jobs if not Path(j.output).exists()]
-    progress = Progress(len(jobs))
-    for outcome in outcomes:
-        progress(outcome)
+    outcomes, progress = [], Progress(len(jobs))  # a recording counts one until cut into parts
     use_gpu = bool(args.gpus) or (bool(args.scheduler) and not args.no_gpu)
-    futures = [
-        client.submit(solve, job, cli, args.calib, args.topics, run_args, bool(args.gpus), key=f"curvestereo-{i}",
-                      resources={"GPU": 1} if use_gpu else None, pure=False)
-        for i, job in enumerate(todo)
-    ]
-    by_key = {f.key: job for f, job in zip(futures, todo)}
-    for future in as_completed(futures):
+    pending = {}  # future key -> ("solve" | "count", job)
+    queue = as_completed()
+
+    def submit(todo):
+        for job in todo:
+            if Path(job.output).exists():
+                outcomes.append(Outcome(job.name(), "skipped"))
+                progress(outcomes[-1])
+                continue
+            future = client.submit(solve, job, cli, args.calib, args.topics, run_args, bool(args.gpus), pure=False,
+                                   resources={"GPU": 1} if use_gpu else None)
+            pending[future.key] = ("solve", job)
+            queue.add(future)
+
+    if args.frames_per_task:
+        for job in jobs:
+            future = client.submit(count_frames, job.log, args.topics, pure=False)
+            pending[future.key] = ("count", job)
+            queue.add(future)
+    else:
+        submit(jobs)
+    for future in queue:
+        kind, job = pending.pop(future.key)
         try:
-            outcome = future.result()
-        except Exception as e:  # the worker itself failed (lost, killed): this job alone
-            outcome = Outcome(by_key[future.key].log, "failed", message=f"{type(e).__name__}: {e}".splitlines()[0])
-        outcomes.append(outcome)
-        progress(outcome)
+            result = future.result()
+        except Exception as e:  # a log that cannot be opened, or a worker lost: this job alone
+            result = Outcome(job.name(), "failed", message=f"{e}".splitlines()[0] if str(e) else type(e).__name__)
+        if kind == "count" and not isinstance(result, Outcome):
+            todo = parts(job, result, args.frames_per_task)
+            progress.total += len(todo) - 1
+            submit(todo)
+            continue
+        outcomes.append(result)
+        progress(result)
     return outcomes
 
 
-def summary(outcomes, wall_seconds):
+def summary(outcomes, wall_seconds, unit="recordings"):
     """The report: a line per failure, then the counts and the overall frames per second."""
     failed = [f"failed: {o.log}: {o.message}" for o in outcomes if o.status == "failed"]
     done = [o for o in outcomes if o.status == "done"]
     frames = sum(o.frames for o in done)
     skipped = sum(o.status == "skipped" for o in outcomes)
     return "\n".join(failed + [
-        f"{len(done)} recordings done, {skipped} skipped (already written), {len(failed)} failed; "
+        f"{len(done)} {unit} done, {skipped} skipped (already written), {len(failed)} failed; "
         f"{frames} frames in {wall_seconds:.1f} s: {frames / max(wall_seconds, 1e-9):.1f} frames/s overall"])
 
 
@@ -189,9 +235,11 @@ def parse(argv):
     where.add_argument("--scheduler", help="a running Dask cluster's address (tcp://host:8786)")
     p.add_argument("--no-gpu", action="store_true", help="with --scheduler: tasks ask for no GPU resource")
     p.add_argument("--cli", help="the curvestereo command (default: $CURVESTEREO_CLI, then PATH)")
+    p.add_argument("--frames-per-task", type=int, default=0, metavar="N",
+                   help="cut each recording into parts of N frames, a task each, into OUTPUT/<log name>.A-B.mcap")
     args = p.parse_args(argv)
-    if args.gpus < 0 or args.workers < 0:
-        p.error("--gpus and --workers take a positive count")
+    if args.gpus < 0 or args.workers < 0 or args.frames_per_task < 0:
+        p.error("--gpus, --workers and --frames-per-task take a positive count")
     if not args.gpus and not args.scheduler and not args.workers:
         args.workers = 1
     return args, run_args
@@ -209,7 +257,12 @@ def main(argv=None):
     except (BatchError, OSError) as e:
         print(f"curvestereo.batch: {e}", file=sys.stderr)
         return 2
-    client, cluster = start_client(args)
+    try:
+        client, cluster = start_client(args)
+    except (OSError, TimeoutError) as e:  # an unreachable scheduler, no port to listen on
+        where = args.scheduler or "a local cluster"
+        print(f"curvestereo.batch: cannot start or reach {where}: {str(e).splitlines()[0]}", file=sys.stderr)
+        return 2
     start = time.monotonic()  # the throughput is the solving's, not the cluster's start-up
     try:
         outcomes = run_jobs(client, jobs, args, run_args, cli)
@@ -217,7 +270,7 @@ def main(argv=None):
         client.close()
         if cluster is not None:
             cluster.close()
-    print(summary(outcomes, time.monotonic() - start))
+    print(summary(outcomes, time.monotonic() - start, "parts" if args.frames_per_task else "recordings"))
     return 1 if any(o.status == "failed" for o in outcomes) else 0
 
 

@@ -90,3 +90,27 @@ def test_batch_gives_each_gpu_worker_its_own_gpu(logs, cli, tmp_path):
     assert r.returncode == 0, r.stderr
     assert "2 recordings done" in r.stdout
     assert sorted(seen.read_text().split()) == ["0", "1"]
+
+
+def test_batch_cuts_recordings_into_parts_and_a_rerun_skips_the_parts_done(logs, cli, tmp_path):
+    out = tmp_path / "parts"
+    extra = ["--frames-per-task", "2"]
+
+    def run():
+        env = dict(os.environ, PYTHONPATH=str(Path(cs.__file__).parent.parent), CURVESTEREO_CLI=cli)
+        command = [sys.executable, "-m", "curvestereo.batch", logs / "a.mcap", logs / "bad.mcap", "-o", out,
+                   "--calib", logs / "walk" / "camchain.yaml", "--topics", TOPICS, "--workers", "2", *extra,
+                   "--", "--preset", "fast"]
+        return subprocess.run(list(map(str, command)), capture_output=True, text=True, env=env, timeout=600)
+
+    r = run()
+    assert r.returncode == 1, r.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["a.0-2.mcap", "a.2-3.mcap"]
+    for name, frames in (("a.0-2.mcap", 2), ("a.2-3.mcap", 1)):
+        depth = [t for t in cs.log_info(out / name)["topics"] if t["name"] == "/curvestereo/depth"]
+        assert depth[0]["messages"] == frames
+    assert "2 parts done, 0 skipped (already written), 1 failed; 3 frames in" in r.stdout
+    assert "bad CRC" in r.stdout and "3/3" in r.stderr
+    (out / "a.2-3.mcap").unlink()
+    r = run()
+    assert "1 parts done, 1 skipped (already written), 1 failed; 1 frames in" in r.stdout, r.stdout

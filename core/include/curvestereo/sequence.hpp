@@ -101,8 +101,9 @@ class Sequence {
 // Memory: about threads+2 frames' images.
 class SequenceReader {
  public:
-  // threads: background readers; 0 picks one per four hardware threads, 1 to 4.
-  explicit SequenceReader(const Sequence& sequence, int threads = 0);
+  // threads: background readers; 0 picks one per four hardware threads, 1 to 4. Frames
+  // first .. end-1 are read (end past the last frame: to the last).
+  explicit SequenceReader(const Sequence& sequence, int threads = 0, size_t first = 0, size_t end = SIZE_MAX);
   ~SequenceReader();  // stops the readers (frames being read are finished, not used)
   SequenceReader(const SequenceReader&) = delete;
   SequenceReader& operator=(const SequenceReader&) = delete;
@@ -127,7 +128,7 @@ class SequenceReader {
   std::condition_variable changed_;
   std::map<size_t, Slot> slots_;                  // frames read, not yet handed out
   std::vector<std::pair<ImageF, ImageF>> spare_;  // images handed back, for the readers to reuse
-  size_t nextToRead_ = 0, nextToHand_ = 0, ahead_ = 0;
+  size_t nextToRead_ = 0, nextToHand_ = 0, end_ = 0, ahead_ = 0, handed_ = 0;
   bool stopping_ = false;
   double firstWaitMs_ = 0, waitedMs_ = 0, readMs_ = 0;
 };
