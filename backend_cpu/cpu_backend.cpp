@@ -135,7 +135,9 @@ Buffer CpuBackend::doCreate(int width, int height, int channels) {
   return b;
 }
 
-void CpuBackend::doUpload(const Buffer& dst, const float* host) { std::copy(host, host + dst.count(), view(dst).data); }
+void CpuBackend::doUpload(const Buffer& dst, const float* host, bool* finite) {
+  copyFloats(view(dst).data, host, dst.count(), finite);
+}
 
 void CpuBackend::doDownload(const Buffer& src, float* host) {
   const float* d = view(src).data;
@@ -171,6 +173,11 @@ void CpuBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Bu
   const View confidenceView = confidence.id >= 0 ? view(confidence) : View{};
   cpu::temporalFilter(view(state), view(u), view(w), view(prior), view(radial), view(points),
                       confidence.id >= 0 ? &confidenceView : nullptr, view(mask), p);
+}
+
+void CpuBackend::doFinishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
+                                const Buffer& disparity, const Buffer& warp, const Buffer& confidence) {
+  cpu::finishResult(view(valid), view(z), view(radial), view(points), view(disparity), view(warp), view(confidence));
 }
 
 void CpuBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,

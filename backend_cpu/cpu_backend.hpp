@@ -2,7 +2,7 @@
 // every other backend is tested against. One file per stage (fields.cpp, warp.cpp, resample.cpp,
 // upsample_estimate.cpp, normalise.cpp, structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp,
 // accumulate.cpp, plane_sweep.cpp, triangulate.cpp, carry_estimate.cpp, temporal_filter.cpp,
-// round_trip.cpp, result_confidence.cpp).
+// round_trip.cpp, result_confidence.cpp, finish_result.cpp).
 #pragma once
 #include <vector>
 
@@ -49,6 +49,8 @@ void carryEstimate(const View& dst, const View& src, const View* guess, const fl
                    const View& mask, const CarryParams& p);
 void temporalFilter(const View& state, const View& u, const View& w, const View& prior, const View& radial,
                     const View& points, const View* confidence, const View& mask, const TemporalParams& p);
+void finishResult(const View& valid, const View& z, const View& radial, const View& points, const View& disparity,
+                  const View& warp, const View& confidence);
 void roundTrip(const View& error, const View& w, const View& calibration, const View& reverseW,
                const View& reverseCalibration, const View& reverseMask, const View& mask);
 void resultConfidence(const View& confidence, const View& radial, const View& points, const View& image,
@@ -68,7 +70,7 @@ class CpuBackend final : public Backend {
 
  protected:
   Buffer doCreate(int width, int height, int channels) override;
-  void doUpload(const Buffer& dst, const float* host) override;
+  void doUpload(const Buffer& dst, const float* host, bool* finite) override;
   void doDownload(const Buffer& src, float* host) override;
   void doFill(const Buffer& dst, float value) override;
   void doCopy(const Buffer& dst, const Buffer& src) override;
@@ -118,6 +120,8 @@ class CpuBackend final : public Backend {
   void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
                         const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
                         const TemporalParams& p) override;
+  void doFinishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
+                      const Buffer& disparity, const Buffer& warp, const Buffer& confidence) override;
   void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                    const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) override;
   void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,

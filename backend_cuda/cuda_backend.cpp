@@ -250,7 +250,7 @@ Buffer CudaBackend::doCreate(int width, int height, int channels) {
   return s.buffer;
 }
 
-void CudaBackend::doUpload(const Buffer& dst, const float* host) {
+void CudaBackend::doUpload(const Buffer& dst, const float* host, bool* finite) {
   flush();
   Slot& s = slots_[size_t(slot(dst).buffer.id)];
   if (dst.count() <= size_t(cudak::kMaxInlineFloats)) {
@@ -258,14 +258,14 @@ void CudaBackend::doUpload(const Buffer& dst, const float* host) {
     // waits for a staging area the stream has not yet read.
     cudak::InlineFloats values{};
     values.count = int(dst.count());
-    std::copy(host, host + dst.count(), values.value);
+    copyFloats(values.value, host, dst.count(), finite);
     check(cudak::launchSetFloats(stream_, s.dev, values), "upload");
     return;
   }
   float* staging = pinnedFor(s);
   ok(cudaEventSynchronize(s.staged), "cudaEventSynchronize");  // the previous upload left the staging area
   const size_t bytes = dst.count() * sizeof(float);
-  std::memcpy(staging, host, bytes);
+  copyFloats(staging, host, dst.count(), finite);
   ok(cudaMemcpyAsync(s.dev, staging, bytes, cudaMemcpyHostToDevice, stream_), "upload");
   ok(cudaEventRecord(s.staged, stream_), "cudaEventRecord");
 }
@@ -337,6 +337,15 @@ void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const B
                                     img(slot(prior).dev, prior), img(slot(radial).dev, radial),
                                     img(slot(points).dev, points), weight, img(slot(mask).dev, mask), p),
         "temporalFilter");
+}
+
+void CudaBackend::doFinishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
+                                 const Buffer& disparity, const Buffer& warp, const Buffer& confidence) {
+  flush();
+  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
+  check(cudak::launchFinishResult(stream_, on(valid), on(z), on(radial), on(points), on(disparity), on(warp),
+                                  on(confidence)),
+        "finishResult");
 }
 
 void CudaBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,

@@ -33,7 +33,8 @@ struct DeviceStereo::Impl {
     d.warp = b.devicePointer(io.warp);
     d.radial = b.devicePointer(io.radial);
     d.points = b.devicePointer(io.points);
-    d.confidence = io.confidence.id >= 0 ? b.devicePointer(io.confidence) : nullptr;
+    d.z = b.devicePointer(io.z);
+    d.confidence = b.devicePointer(io.confidence);
     return d;
   }
 };

@@ -106,6 +106,9 @@ cudaError_t launchRoundTrip(cudaStream_t s, Img error, Img w, Img calibration, I
 cudaError_t launchResultConfidence(cudaStream_t s, Img confidence, Img radial, Img points, Img image, Img n0, Img n1,
                                    Img w, Img trajectory, Img sweepConfidence, Img roundTripError, Img mask,
                                    const ConfidenceParams& p);
+// The result as the user sees it (finish_result.cu; backend.hpp finishResult).
+cudaError_t launchFinishResult(cudaStream_t s, Img valid, Img z, Img radial, Img points, Img disparity, Img warp,
+                               Img confidence);
 cudaError_t launchWarp(cudaStream_t s, Img dst, Img src, Img flow);
 cudaError_t launchDownsample(cudaStream_t s, Img dst, Img src, float scale);
 cudaError_t launchUpsample(cudaStream_t s, Img dst, Img src, float scale, float valueScale);

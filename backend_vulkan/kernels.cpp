@@ -229,6 +229,10 @@ struct PcRoundTrip {
   Addr error, w, calibration, reverseW, reverseCalibration, reverseMask, mask;
   int32_t width, height, reverseWidth, reverseHeight;
 };
+struct PcFinishResult {
+  Addr valid, z, radial, points, disparity, warp, confidence;
+  int32_t width, height;
+};
 struct PcResultConfidence {
   Addr confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError, mask, params;
   int32_t width, height, hasSweep, hasRoundTrip;  // absent buffers: mask
@@ -715,6 +719,13 @@ void VulkanBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const
 }
 
 // ---- the result's confidence ----
+
+void VulkanBackend::doFinishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
+                                   const Buffer& disparity, const Buffer& warp, const Buffer& confidence) {
+  PcFinishResult pc{addr(valid), addr(z),          addr(radial), addr(points), addr(disparity),
+                    addr(warp),  addr(confidence), radial.width, radial.height};
+  dispatch(kFinishResult, pc, radial.width, radial.height);
+}
 
 void VulkanBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                                 const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {

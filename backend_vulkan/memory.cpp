@@ -153,11 +153,11 @@ VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
 // next flush: beginFrame, replayFrame, a download), not one round trip each. Queue order
 // and the barrier before every command keep them after the work submitted before, and the
 // frame (replayFrame submits it behind them without waiting) after them.
-void VulkanBackend::doUpload(const Buffer& dst, const float* host) {
+void VulkanBackend::doUpload(const Buffer& dst, const float* host, bool* finite) {
   const Alloc& a = alloc(dst);
   const VkDeviceSize bytes = dst.count() * sizeof(float);
   const VkDeviceSize offset = claimStaging(bytes);
-  std::memcpy(static_cast<char*>(staging_.mapped) + offset, host, bytes);
+  copyFloats(reinterpret_cast<float*>(static_cast<char*>(staging_.mapped) + offset), host, dst.count(), finite);
   VkCommandBuffer cb = recorder();
   barrier(cb, Cmd::Transfer);
   VkBufferCopy region{offset, a.offset, bytes};

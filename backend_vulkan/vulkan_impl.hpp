@@ -51,7 +51,7 @@ class VulkanBackend final : public Backend {
 
  protected:
   Buffer doCreate(int width, int height, int channels) override;
-  void doUpload(const Buffer& dst, const float* host) override;
+  void doUpload(const Buffer& dst, const float* host, bool* finite) override;
   void doDownload(const Buffer& src, float* host) override;
   void doFill(const Buffer& dst, float value) override;
   void doCopy(const Buffer& dst, const Buffer& src) override;
@@ -104,6 +104,8 @@ class VulkanBackend final : public Backend {
   void doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
                         const Buffer& radial, const Buffer& points, const Buffer& confidence, const Buffer& mask,
                         const TemporalParams& p) override;
+  void doFinishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
+                      const Buffer& disparity, const Buffer& warp, const Buffer& confidence) override;
   void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                    const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) override;
   void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,

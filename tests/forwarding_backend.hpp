@@ -17,7 +17,7 @@ class ForwardingBackend : public Backend {
 
  protected:
   Buffer doCreate(int w, int h, int c) override { return b_.create(w, h, c); }
-  void doUpload(const Buffer& d, const float* h) override { b_.upload(d, h); }
+  void doUpload(const Buffer& d, const float* h, bool* f) override { b_.upload(d, h, f); }
   void doDownload(const Buffer& s, float* h) override { b_.download(s, h); }
   void doFill(const Buffer& d, float v) override { b_.fill(d, v); }
   void doCopy(const Buffer& d, const Buffer& s) override { b_.copy(d, s); }
@@ -97,6 +97,10 @@ class ForwardingBackend : public Backend {
   void doTemporalFilter(const Buffer& st, const Buffer& u, const Buffer& w, const Buffer& pr, const Buffer& r,
                         const Buffer& pt, const Buffer& c, const Buffer& m, const TemporalParams& p) override {
     b_.temporalFilter(st, u, w, pr, r, pt, c, m, p);
+  }
+  void doFinishResult(const Buffer& v, const Buffer& z, const Buffer& r, const Buffer& pt, const Buffer& u,
+                      const Buffer& w, const Buffer& c) override {
+    b_.finishResult(v, z, r, pt, u, w, c);
   }
   void doRoundTrip(const Buffer& e, const Buffer& w, const Buffer& c, const Buffer& rw, const Buffer& rc,
                    const Buffer& rm, const Buffer& m) override {

@@ -712,7 +712,8 @@ const std::vector<KernelCase>& kernelCases() {
       {"temporalFilter", temporalFilterCase},
       {"roundTrip", roundTripCase},
       {"resultConfidence", resultConfidenceCase},
-      {"resultConfidence, no sweep or round trip, radius 1", resultConfidenceAloneCase}};
+      {"resultConfidence, no sweep or round trip, radius 1", resultConfidenceAloneCase},
+      {"finishResult", finishResultCase}};
   return cases;
 }
 

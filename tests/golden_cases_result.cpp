@@ -168,4 +168,49 @@ std::vector<Output> resultConfidenceAloneCase(Backend& b) {
   return resultConfidenceRun(b, false, p, "alone");
 }
 
+// --- the result as the user sees it ---
+
+// Every reason a pixel is unsolved, alone: radial NaN, disparity NaN or infinite, either
+// warp component NaN or infinite; and solved pixels at infinity and at a finite depth.
+std::vector<Output> finishResultCase(Backend& b) {
+  Session s{b};
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  Host radial = noise(kW, kH, 1, 101, 1.f), points = noise(kW, kH, 3, 102, 4.f), u = noise(kW, kH, 1, 103, 3.f);
+  Host w = noise(kW, kH, 2, 104, 3.f), confidence = noise(kW, kH, 1, 105, 0.5f);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      radial.at(x, y) += 2.f;
+      switch ((x + 7 * y) % 9) {
+        case 0:
+          radial.at(x, y) = nan;
+          break;
+        case 1:
+          u.at(x, y) = nan;
+          break;
+        case 2:
+          u.at(x, y) = -inf;
+          break;
+        case 3:
+          w.at(x, y, 0) = inf;
+          break;
+        case 4:
+          w.at(x, y, 1) = nan;
+          break;
+        case 5:
+          radial.at(x, y) = inf, points.at(x, y, 0) = points.at(x, y, 1) = points.at(x, y, 2) = nan;
+          break;
+        default:
+          break;
+      }
+    }
+  Buffer valid = s.make(kW, kH, 1), z = s.make(kW, kH, 1), rb = s.put(radial), pb = s.put(points), ub = s.put(u);
+  Buffer wb = s.put(w), cb = s.put(confidence);
+  b.finishResult(valid, z, rb, pb, ub, wb, cb);
+  // Selects and copies, no arithmetic: every backend gives the oracle's bits.
+  return within(
+      {s.get("finish_valid", valid), s.get("finish_z", z), s.get("finish_radial", rb), s.get("finish_points", pb),
+       s.get("finish_disparity", ub), s.get("finish_warp", wb), s.get("finish_confidence", cb)},
+      {0.0, 0.0});
+}
+
 }  // namespace cs::golden

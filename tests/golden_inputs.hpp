@@ -119,5 +119,6 @@ std::vector<Output> temporalFilterCase(Backend& b);
 std::vector<Output> roundTripCase(Backend& b);
 std::vector<Output> resultConfidenceCase(Backend& b);
 std::vector<Output> resultConfidenceAloneCase(Backend& b);
+std::vector<Output> finishResultCase(Backend& b);
 
 }  // namespace cs::golden

@@ -10,6 +10,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 namespace cs {
 
@@ -29,6 +30,27 @@ CameraConstants cameraConstants(const CameraParams& c) {
 }
 
 }  // namespace
+
+void copyFloats(float* dst, const float* src, size_t n, bool* finite) {
+  if (!finite) {
+    std::memcpy(dst, src, n * sizeof(float));
+    return;
+  }
+  // Branch-free within a block, so the compiler vectorises it: v - v is 0 for a finite v
+  // and NaN for NaN or +-inf, which compares unequal to 0. (A float sum of v - v would not
+  // vectorise: without -ffast-math the additions must stay in order.)
+  constexpr size_t kBlock = 4096;
+  int bad = 0;
+  for (size_t start = 0; start < n; start += kBlock) {
+    const size_t end = std::min(n, start + kBlock);
+    for (size_t i = start; i < end; ++i) {
+      const float v = src[i];
+      dst[i] = v;
+      bad |= !(v - v == 0.f);
+    }
+  }
+  *finite = !bad;
+}
 
 std::vector<float> gaussianTaps(float sigma) {
   const int radius = int(std::ceil(3.f * sigma));

@@ -141,9 +141,9 @@ Buffer Backend::create(int width, int height, int channels) {
   return b;
 }
 
-void Backend::upload(const Buffer& dst, const float* host) {
+void Backend::upload(const Buffer& dst, const float* host, bool* finite) {
   BackendContract(*this, "upload").buffer(dst, "dst");
-  doUpload(dst, host);
+  doUpload(dst, host, finite);
 }
 
 void Backend::download(const Buffer& src, float* host) {
@@ -460,6 +460,18 @@ void Backend::resultConfidence(const Buffer& confidence, const Buffer& radial, c
             "invalidBelow must be in [0, 1], got " + std::to_string(p.invalidBelow));
   doResultConfidence(confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError, mask,
                      p);
+}
+
+void Backend::finishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
+                           const Buffer& disparity, const Buffer& warp, const Buffer& confidence) {
+  const BackendContract c(*this, "finishResult");
+  c.buffer(radial, "radial", 1).sameGrid(valid, "valid", 1, radial, "radial").sameGrid(z, "z", 1, radial, "radial");
+  c.sameGrid(points, "points", 3, radial, "radial").sameGrid(disparity, "disparity", 1, radial, "radial");
+  c.sameGrid(warp, "warp", 2, radial, "radial").sameGrid(confidence, "confidence", 1, radial, "radial");
+  const int ids[] = {valid.id, z.id, radial.id, points.id, disparity.id, warp.id, confidence.id};
+  for (int i = 0; i < 7; ++i)
+    for (int j = i + 1; j < 7; ++j) c.require(ids[i] != ids[j], "two of its buffers are the same buffer");
+  doFinishResult(valid, z, radial, points, disparity, warp, confidence);
 }
 
 }  // namespace cs

@@ -1,7 +1,10 @@
 #include "pipeline.hpp"
 
+#include "stereo_core.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <type_traits>
 
@@ -51,9 +54,9 @@ static Params reverseParams(Params p) {
 
 // Keep in step with the constructor below: 34 floats per pixel per level (userMask, i0, i1,
 // mask, scratch 1; trajectory, w, tangent 2; tensor, steps 4; pd 12; data 3), 5 more with
-// the normalised data term (n0, n1 1; moments 3), plus 8 at
-// level 0 (rawRight 1, calibration 2, radial 1, points 3, confidence 1; with lrCheck the
-// round trip's error 1 and the other direction's pipeline); with the initialiser, a
+// the normalised data term (n0, n1 1; moments 3), plus 10 at
+// level 0 (rawRight 1, calibration 2, radial 1, points 3, confidence 1, valid 1, z 1; with lrCheck the
+// round trip's error 1 and the other direction's pipeline, which has no valid or z); with the initialiser, a
 // confidence (1) at the sweep level and every finer one (and the coarser one with a band), and the volume and the costs
 // (planes each) and two sweep results (2 + 2) at the sweep level; with a band, those at the coarser level and, at the
 // sweep's, a volume and costs of band channels each, two results and `first` (1), and a warm frame's volume and
@@ -61,7 +64,7 @@ static Params reverseParams(Params p) {
 unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
   const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
   auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
-  unsigned long long floats = (params.lrCheck ? 9ull : 8ull) * pixels(plan[0]);
+  unsigned long long floats = (params.lrCheck ? 11ull : 10ull) * pixels(plan[0]);
   const unsigned long long perPixel = params.dataTerm == Params::DataTerm::Normalised ? 39 : 34;
   for (const LevelSize& size : plan) floats += perPixel * pixels(size);
   if (params.init == Params::Init::PlaneSweep) {
@@ -81,7 +84,8 @@ unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
     }
   }
   unsigned long long bytes = floats * sizeof(float);
-  if (params.lrCheck) bytes += bufferBytes(reversedRig(rig), reverseParams(params));
+  if (params.lrCheck)
+    bytes += bufferBytes(reversedRig(rig), reverseParams(params)) - 2ull * pixels(plan[0]) * sizeof(float);
   return bytes;
 }
 
@@ -111,7 +115,7 @@ int Pipeline::sweepPlanes(const Camera& camera, const Eigen::Vector3d& tPrime, c
   return int(std::min(double(kMaxSweepPlanes), std::max(2.0, planes)));
 }
 
-Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask)
+Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask, bool finishes)
     : backend_(backend), params_(params) {
   for (const LevelSize& size : pyramidPlan(rig.cam0.width, rig.cam0.height, params)) {
     Level L;
@@ -181,9 +185,14 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
   radial_ = backend_.create(w, h, 1);
   points_ = backend_.create(w, h, 3);
   confidence_ = backend_.create(w, h, 1);
+  finishes_ = finishes;
+  if (finishes_) {
+    valid_ = backend_.create(w, h, 1);
+    z_ = backend_.create(w, h, 1);
+  }
   if (params_.lrCheck) {
     roundTripError_ = backend_.create(w, h, 1);
-    reverse_ = std::make_unique<Pipeline>(backend_, reversedRig(rig), reverseParams(params_), ImageU8());
+    reverse_ = std::make_unique<Pipeline>(backend_, reversedRig(rig), reverseParams(params_), ImageU8(), false);
     reverse_->slotBase_ = kFrameSlots / 2;
   }
 }
@@ -250,10 +259,22 @@ void Pipeline::stage(const char* name) {
   if (profiling_) backend_.beginStage(name);
 }
 
+// The images are checked for NaN and infinities as they are copied (Backend::upload), not
+// in a pass of their own: at 30 fps a frame's images are new to the cache, and reading
+// them twice costs a tenth of a warm frame.
 void Pipeline::upload(const ImageF& left, const ImageF& right) {
   stage("upload");
-  backend_.upload(levels_[0].i0, left.data.data());
-  backend_.upload(rawRight_, right.data.data());
+  bool finite = true;
+  backend_.upload(levels_[0].i0, left.data.data(), &finite);
+  if (!finite) throw Error("left image contains NaN or infinite pixels");
+  backend_.upload(rawRight_, right.data.data(), &finite);
+  if (!finite) throw Error("right image contains NaN or infinite pixels");
+}
+
+// lrCheck: the other direction's inputs are this one's, swapped, copied on the device.
+void Pipeline::swapIntoReverse() {
+  backend_.copy(reverse_->levels_[0].i0, rawRight_);
+  backend_.copy(reverse_->rawRight_, levels_[0].i0);
 }
 
 // The images of levels 0 .. count - 1 (a warm frame never visits the coarser ones).
@@ -529,6 +550,15 @@ void Pipeline::finishResult() {
                             p);
 }
 
+// In place on the solver's disparity and warp at level 0: nothing reads them after the
+// frame (a sequence carries its own state, filterResult's, and the next frame starts them
+// afresh), and a NaN there is what the user must see.
+void Pipeline::finishOutputs() {
+  Level& L0 = levels_[0];
+  stage("finish");
+  backend_.finishResult(valid_, z_, radial_, points_, L0.pd.u, L0.w, confidence_);
+}
+
 void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind kind) {
   // Progress in pixel-warps: a warp costs about the same per pixel at every level, and the
   // plane sweep about kSweepWarpsPerPlane warps per pixel and hypothesis (measured at full
@@ -568,6 +598,7 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
   triangulate();
   if (kind.filter) filterResult();
   finishResult();
+  if (finishes_) finishOutputs();
 }
 
 // Straight into the result's images: a warp pixel is two floats and a point three, laid
@@ -575,12 +606,21 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
 static_assert(sizeof(Vec2f) == 2 * sizeof(float) && std::is_standard_layout_v<Vec2f>, "Vec2f must be 2 floats");
 static_assert(sizeof(Point3f) == 3 * sizeof(float) && std::is_standard_layout_v<Point3f>, "Point3f must be 3 floats");
 
+// The valid mask from the finished radial depth (NaN exactly where unsolved), so that it
+// need not be downloaded: one branch-free pass the compiler vectorises.
+static void validFromRadial(DepthResult& out) {
+  const size_t n = out.depth.radial.size();
+  const float* radial = out.depth.radial.data.data();
+  uint8_t* valid = fitImage(out.valid, out.depth.radial.width, out.depth.radial.height);
+  for (size_t i = 0; i < n; ++i) valid[i] = uint8_t(radial[i] == radial[i]);
+}
+
 void Pipeline::download(DepthResult& out) {
   stage("download");
   const Level& L0 = levels_[0];
   const int w = L0.size.width, h = L0.size.height;
-  // No mask: the caller derives the valid mask from radial, NaN wherever the mask is 0.
   backend_.download(radial_, fitImage(out.depth.radial, w, h));
+  validFromRadial(out);
   if (selection_.confidence)
     backend_.download(confidence_, fitImage(out.confidence, w, h));
   else
@@ -593,10 +633,13 @@ void Pipeline::download(DepthResult& out) {
     backend_.download(L0.w, reinterpret_cast<float*>(fitImage(out.warp, w, h)));
   else
     out.warp = FlowImage();
-  if (selection_.points)
+  if (selection_.points) {
     backend_.download(points_, reinterpret_cast<float*>(fitImage(out.depth.points, w, h)));
-  else
+    backend_.download(z_, fitImage(out.depth.z, w, h));
+  } else {
     out.depth.points = Image<Point3f>();
+    out.depth.z = ImageF();
+  }
 }
 
 void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
@@ -638,13 +681,13 @@ void Pipeline::commitSequenceFrame() { backend_.copy(state_, next_); }
 void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
                    DepthResult& out, FrameKind kind) {
   profiling_ = profile;
+  upload(left, right);
   if (reverse_) {
     // The other direction first: the round trip at the end of this frame reads its result.
     reverse_->profiling_ = profile;
-    reverse_->upload(right, left);
+    swapIntoReverse();
     reverse_->issueOrReplay(nullptr, {});
   }
-  upload(left, right);
   const bool replay = !profiling_ && backend_.canReplayFrame(slotBase_ + kind.slot());
   issueOrReplay(progress, kind);
   download(out);
@@ -655,17 +698,16 @@ void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const 
     out.stages.clear();
 }
 
-Pipeline::DeviceIO Pipeline::deviceIO() const {
+detail::DeviceIO Pipeline::deviceIO() const {
   const Level& L0 = levels_[0];
-  return {L0.i0, rawRight_, L0.mask, L0.pd.u, L0.w, radial_, points_, confidence_};
+  return {L0.i0, rawRight_, valid_, L0.pd.u, L0.w, radial_, points_, z_, confidence_};
 }
 
 void Pipeline::runOnDevice(FrameKind kind) {
   profiling_ = false;
   if (reverse_) {
     reverse_->profiling_ = false;
-    backend_.copy(reverse_->levels_[0].i0, rawRight_);
-    backend_.copy(reverse_->rawRight_, levels_[0].i0);
+    swapIntoReverse();
     reverse_->issueOrReplay(nullptr, {});
   }
   issueOrReplay(nullptr, kind);

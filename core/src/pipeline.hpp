@@ -11,6 +11,10 @@
 
 namespace cs {
 
+namespace detail {
+struct DeviceIO;
+}
+
 // Makes img a w x h image for the next frame to overwrite: its storage stays when the size
 // already matches (no allocation, no zero fill). Returns its first element.
 template <class T>
@@ -34,7 +38,10 @@ class Pipeline {
  public:
   // Allocates every buffer of every level once. userMask (optional, full resolution)
   // restricts the solve; setPose() must be called before run().
-  Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask);
+  // finishes: the frame ends with Backend::finishResult (unsolved pixels NaN in every
+  // output, the valid mask, z). Only lrCheck's other direction does not: the round trip reads
+  // its warp as solved, and it has no user.
+  Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask, bool finishes = true);
   // What the constructor allocates on the backend for the rig's frame.
   static unsigned long long bufferBytes(const Rig& rig, const Params& params);
 
@@ -51,13 +58,13 @@ class Pipeline {
   };
   void select(const Selection& selection) { selection_ = selection; }
 
-  // One frame: uploads the images, solves, and downloads into `out`: depth.radial, the
-  // selected disparity, warp and depth.points, and the confidence with the initialiser
-  // (the others become empty images), and out.stages (empty unless `profile`: time each
-  // stage, synchronising at each boundary, instead of replaying). Images of the right
-  // size keep their storage, so a caller reusing `out` allocates nothing. out.valid and
-  // out.depth.z are left to the caller: the mask is not downloaded, since triangulate
-  // leaves radial NaN wherever it is 0 (backend.hpp).
+  // One frame: uploads the images, solves, finishes (Backend::finishResult) and downloads
+  // into `out`: depth.radial and out.valid, the selected disparity, warp, confidence and
+  // depth.points with depth.z (the others become empty images), and out.stages (empty
+  // unless `profile`: time each stage, synchronising at each boundary, instead of
+  // replaying). Images of the right size keep their storage, so a caller reusing `out`
+  // allocates nothing. The valid mask is not downloaded: finishResult leaves radial NaN
+  // exactly where it is 0.
   void run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
            DepthResult& out, FrameKind kind = {});
 
@@ -87,12 +94,7 @@ class Pipeline {
   // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
   // the frame with no host transfer and no synchronisation, and read the results from
   // the other buffers on the device.
-  struct DeviceIO {
-    Buffer left, right;                             // 1 ch, full resolution
-    Buffer valid, disparity, warp, radial, points;  // 1, 1, 2, 1, 3 ch
-    Buffer confidence;                              // 1 ch; id -1 without the initialiser
-  };
-  DeviceIO deviceIO() const;
+  detail::DeviceIO deviceIO() const;  // stereo_core.hpp
   void runOnDevice(FrameKind kind = {});
 
  private:
@@ -150,6 +152,8 @@ class Pipeline {
   void filterResult();
   void triangulate();
   void finishResult();
+  void finishOutputs();
+  void swapIntoReverse();
   void stage(const char* name);
   void initialiseLevel(size_t l);
   void solveLevel(Level& level, int warps, const std::function<void(int)>& warpDone);
@@ -163,6 +167,8 @@ class Pipeline {
   Sweep sweep_;
   Buffer rawRight_, calibration_, radial_, points_;
   Buffer confidence_;  // the result's (resultConfidence), level 0
+  bool finishes_ = true;
+  Buffer valid_, z_;  // finishResult's (finishes_)
   // Params::lrCheck: the other direction's solve (camera 1 as the reference) on the same
   // backend, its frames recorded in slots of their own, and the round trip's error.
   std::unique_ptr<Pipeline> reverse_;

@@ -68,10 +68,7 @@ void StereoCore::setMask(const ImageU8& mask) {
   pipeline_->setPose(rig_.R, rig_.t);
 }
 
-DeviceIO StereoCore::deviceIO() const {
-  const Pipeline::DeviceIO io = pipeline_->deviceIO();
-  return {io.left, io.right, io.valid, io.disparity, io.warp, io.radial, io.points, io.confidence};
-}
+DeviceIO StereoCore::deviceIO() const { return pipeline_->deviceIO(); }
 
 void StereoCore::runOnDevice() { pipeline_->runOnDevice(); }
 

@@ -28,11 +28,11 @@ constexpr int kMinSide = 16;
 std::string sizeText(int w, int h);
 
 // The pipeline's buffers for callers whose images are on the backend's device
-// (Pipeline::DeviceIO, without the pipeline's header).
+// (Pipeline::deviceIO).
 struct DeviceIO {
-  Buffer left, right;                             // 1 ch, full resolution
-  Buffer valid, disparity, warp, radial, points;  // 1, 1, 2, 1, 3 ch
-  Buffer confidence;                              // 1 ch; id -1 without the initialiser
+  Buffer left, right;  // 1 ch, full resolution
+  // Finished (Backend::finishResult): 1, 1, 2, 1, 3, 1, 1 ch.
+  Buffer valid, disparity, warp, radial, points, z, confidence;
 };
 
 class StereoCore {

@@ -243,10 +243,9 @@ class DevicePath {
     Input in[2] = {input(left, "left image", ours, 0), input(right, "right image", ours, 1)};
     const long long n = (long long)width_ * height_;
     Result result;
-    std::vector<std::shared_ptr<DeviceBuffer>> buffers;  // every output buffer, in FinishArgs order
-    FinishArgs fa;
+    std::vector<std::shared_ptr<DeviceBuffer>> buffers;  // every output buffer, in PackArgs order
+    PackArgs fa;
     fa.n = n;
-    fa.withDisparity = sel.disparity, fa.withWarp = sel.warp, fa.withPoints = sel.points;
     // Device results: fresh buffers each frame (the DeviceArray objects own them). Host
     // results: carved from one device buffer and one pinned buffer kept by this path, so a
     // frame allocates nothing there and downloads in one copy.
@@ -298,10 +297,10 @@ class DevicePath {
       }
       const cuda::DeviceDepth d = sequence ? stereo_->next(dst[0], dst[1], pose) : stereo_->compute(dst[0], dst[1]);
       result.warm = d.warm;
-      fa.radial = d.radial, fa.disparity = d.disparity, fa.warp = d.warp, fa.points = d.points;
-      fa.confidence = d.confidence;
-      // valid, radial, z, points, disparity, warp, confidence: FinishArgs' outputs.
-      const bool want[7] = {true, true, sel.points, sel.points, sel.disparity, sel.warp, d.confidence != nullptr};
+      fa.validIn = d.valid, fa.radial = d.radial, fa.z = d.z, fa.disparity = d.disparity, fa.warp = d.warp;
+      fa.points = d.points, fa.confidence = d.confidence;
+      // valid, radial, z, points, disparity, warp, confidence: PackArgs' outputs.
+      const bool want[7] = {true, true, sel.points, sel.points, sel.disparity, sel.warp, true};
       const size_t bytes[7] = {1, 4, 4, 12, 4, 8, 4};
       void* out[7] = {};
       for (int i = 0; i < 7; ++i)
@@ -318,7 +317,7 @@ class DevicePath {
       fa.outDisparity = static_cast<float*>(out[4]);
       fa.outWarp = static_cast<float*>(out[5]);
       fa.outConfidence = static_cast<float*>(out[6]);
-      check(launchFinish(fa, s), "finish");
+      check(launchPackResult(fa, s), "result copy");
       if (!returnDevice)
         check(cudaMemcpyAsync(pinnedOut_, hostOutDevice_->ptr, hostBytes, cudaMemcpyDeviceToHost, s), "download");
       check(cudaMemcpyAsync(pinnedFlag_, flag_->ptr, sizeof flag, cudaMemcpyDeviceToHost, s), "flag download");

@@ -14,36 +14,18 @@ __global__ void toGrayKernel(StridedPixels src, int type, int width, int height,
   if (!(v - v == 0.f)) atomicOr(flag, bit);  // NaN or +-inf, the host API's test
 }
 
-// The host's NaN (std::numeric_limits<float>::quiet_NaN()), bit for bit.
-__device__ inline float quietNaN() { return __int_as_float(0x7fc00000); }
-
-__global__ void finishKernel(FinishArgs a) {
+__global__ void packResultKernel(PackArgs a) {
   const long long i = (long long)blockIdx.x * blockDim.x + threadIdx.x;
   if (i >= a.n) return;
-  const float nan = quietNaN();
-  const bool any = a.withDisparity || a.withWarp || a.withPoints;
-  float radial = a.radial[i];
-  bool solved = !isnan(radial);
-  if (any) {
-    if (a.withDisparity) solved = solved && isfinite(a.disparity[i]);
-    if (a.withWarp) solved = solved && isfinite(a.warp[2 * i]) && isfinite(a.warp[2 * i + 1]);
-  }
-  if (!solved) radial = nan;
-  a.valid[i] = solved;
-  a.outRadial[i] = radial;
-  if (a.outConfidence) a.outConfidence[i] = solved ? a.confidence[i] : nan;
-  if (a.outDisparity) a.outDisparity[i] = solved ? a.disparity[i] : nan;
-  if (a.outWarp) {
-    a.outWarp[2 * i] = solved ? a.warp[2 * i] : nan;
-    a.outWarp[2 * i + 1] = solved ? a.warp[2 * i + 1] : nan;
-  }
-  if (a.outPoints) {
-    float p[3];
-    for (int c = 0; c < 3; ++c) p[c] = solved ? a.points[3 * i + c] : nan;
-    for (int c = 0; c < 3; ++c) a.outPoints[3 * i + c] = p[c];
-    // A point at infinity has infinite z too (finishAll).
-    if (a.outZ) a.outZ[i] = isinf(radial) ? radial : p[2];
-  }
+  a.valid[i] = a.validIn[i] != 0.f;
+  a.outRadial[i] = a.radial[i];
+  if (a.outZ) a.outZ[i] = a.z[i];
+  if (a.outConfidence) a.outConfidence[i] = a.confidence[i];
+  if (a.outDisparity) a.outDisparity[i] = a.disparity[i];
+  if (a.outWarp)
+    for (int c = 0; c < 2; ++c) a.outWarp[2 * i + c] = a.warp[2 * i + c];
+  if (a.outPoints)
+    for (int c = 0; c < 3; ++c) a.outPoints[3 * i + c] = a.points[3 * i + c];
 }
 
 }  // namespace
@@ -55,10 +37,10 @@ cudaError_t launchToGray(const StridedPixels& src, int type, int width, int heig
   return cudaGetLastError();
 }
 
-cudaError_t launchFinish(const FinishArgs& args, cudaStream_t stream) {
+cudaError_t launchPackResult(const PackArgs& args, cudaStream_t stream) {
   if (args.n == 0) return cudaSuccess;
   const int block = 256;
-  finishKernel<<<unsigned((args.n + block - 1) / block), block, 0, stream>>>(args);
+  packResultKernel<<<unsigned((args.n + block - 1) / block), block, 0, stream>>>(args);
   return cudaGetLastError();
 }
 

@@ -1,6 +1,6 @@
 // The binding's own CUDA kernels (device_kernels.cu), callable from host C++: GPU arrays
-// of any layout to the library's packed float gray, and the host API's final pass over
-// the result (stereo.cpp finish()) so that device results equal host results bit for bit.
+// of any layout to the library's packed float gray, and DeviceStereo's finished outputs
+// copied into the arrays handed to Python (the valid mask as bytes).
 #pragma once
 #include <cuda_runtime_api.h>
 
@@ -14,18 +14,16 @@ namespace cs::py {
 cudaError_t launchToGray(const StridedPixels& src, int type, int width, int height, float* dst, unsigned* flag,
                          unsigned bit, cudaStream_t stream);
 
-struct FinishArgs {
+struct PackArgs {
   long long n = 0;
-  // DeviceStereo's outputs (cs::cuda::DeviceDepth); confidence may be null.
-  const float *radial = nullptr, *disparity = nullptr, *warp = nullptr, *points = nullptr, *confidence = nullptr;
-  // Which optional outputs were asked for: with none, the valid mask comes from radial
-  // alone (finishDepthOnly), else also from finite disparity and warp (finishAll).
-  bool withDisparity = true, withWarp = true, withPoints = true;
-  // Where to write; null for outputs not wanted.
+  // DeviceStereo's outputs (cs::cuda::DeviceDepth), already finished.
+  const float *validIn = nullptr, *radial = nullptr, *z = nullptr, *disparity = nullptr, *warp = nullptr,
+              *points = nullptr, *confidence = nullptr;
+  // Where to copy them; null for outputs not wanted (valid and radial always are).
   unsigned char* valid = nullptr;
   float *outRadial = nullptr, *outZ = nullptr, *outPoints = nullptr, *outDisparity = nullptr, *outWarp = nullptr,
         *outConfidence = nullptr;
 };
-cudaError_t launchFinish(const FinishArgs& args, cudaStream_t stream);
+cudaError_t launchPackResult(const PackArgs& args, cudaStream_t stream);
 
 }  // namespace cs::py

@@ -66,6 +66,10 @@ struct WarpBuffers {
 // channels and sizes named, parameters in range) and throws cs::Error with one line
 // naming the kernel and the problem; then it calls the protected virtual of the same
 // name with a "do" prefix, which a backend implements knowing its arguments are valid.
+// The backends' upload copy: n floats from src to dst; with `finite`, also whether all of
+// them were finite, in the same pass (vectorised: no extra read of a large image).
+void copyFloats(float* dst, const float* src, size_t n, bool* finite);
+
 class Backend {
  public:
   virtual ~Backend() = default;
@@ -81,7 +85,9 @@ class Backend {
   // view of its start (CPU, Vulkan: the tests' guard buffers) or refuse it (CUDA, which
   // trades buffers' memory within a frame).
   Buffer create(int width, int height, int channels);
-  void upload(const Buffer& dst, const float* host);
+  // finite (optional): set to whether every value was finite (NaN and +-inf are not), found
+  // in the copy's own pass: Stereo's input check at no extra read of the image.
+  void upload(const Buffer& dst, const float* host, bool* finite = nullptr);
   void download(const Buffer& src, float* host);
   void fill(const Buffer& dst, float value);
   void copy(const Buffer& dst, const Buffer& src);  // the same number of floats
@@ -291,6 +297,20 @@ class Backend {
                         const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& mask,
                         const ConfidenceParams& p);
 
+  // --- the result as the user sees it (finish_result) ---
+  // A pixel is solved where radial is not NaN and disparity and warp are finite: a solver
+  // failure, or a warp that left the camera model's valid region, is reported unsolved
+  // rather than passed on as depth. Where solved: valid 1, z = points.z, or +inf where radial
+  // is +inf (a point at infinity has infinite z, also beyond 90 degrees). Elsewhere: valid 0
+  // and radial, z, points, disparity, warp and confidence the quiet NaN 0x7fc00000 (one NaN,
+  // so outputs compare bit for bit across backends). radial, points, disparity, warp and
+  // confidence in place; valid and z written. valid, z, radial, disparity, confidence 1 ch;
+  // warp 2 ch; points 3 ch; one grid. Every output, whichever the caller reads: Stereo and
+  // DeviceStereo then return the same pixels, and the valid mask never depends on which
+  // outputs were asked for.
+  void finishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
+                    const Buffer& disparity, const Buffer& warp, const Buffer& confidence);
+
   // radial depth (1 ch) and 3-D points (3 ch, camera-0 frame) from the warp w (2 ch) where
   // mask is set: NaN elsewhere, radial +inf (points NaN) where the rays do not converge.
   // radial is NaN outside the mask: Stereo derives the valid mask from radial instead of
@@ -329,7 +349,7 @@ class Backend {
   // What each backend implements: the public method of the same name without "do", its
   // arguments already checked.
   virtual Buffer doCreate(int width, int height, int channels) = 0;
-  virtual void doUpload(const Buffer& dst, const float* host) = 0;
+  virtual void doUpload(const Buffer& dst, const float* host, bool* finite) = 0;  // finite: see copyFloats
   virtual void doDownload(const Buffer& src, float* host) = 0;
   virtual void doFill(const Buffer& dst, float value) = 0;
   virtual void doCopy(const Buffer& dst, const Buffer& src) = 0;
@@ -374,6 +394,8 @@ class Backend {
                                     const Buffer& mask, const SweepParams& p) = 0;
   virtual void doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& first,
                                  const Buffer& mask, const SweepParams& p) = 0;
+  virtual void doFinishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
+                              const Buffer& disparity, const Buffer& warp, const Buffer& confidence) = 0;
   virtual void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                            const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) = 0;
   virtual void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
