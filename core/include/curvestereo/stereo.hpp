@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "curvestereo/backends.hpp"
 #include "curvestereo/depth_result.hpp"
 #include "curvestereo/image.hpp"
 #include "curvestereo/params.hpp"
@@ -25,9 +26,6 @@ namespace cs {
 namespace detail {
 class StereoCore;  // construction and validation shared with cs::cuda::DeviceStereo
 }
-
-// Backends compiled into this build, in order of preference for "auto".
-std::vector<std::string> availableBackends();
 
 class Stereo {
  public:
