@@ -6,8 +6,12 @@
 // camera sees it (warm frames after each cold one), after a warm-up that records every kind
 // of frame: the medians of the warm and of the cold frames, each end to end and GPU only.
 //
-//   curvestereo_cuda_bench [--size WxH | --calib CAMCHAIN LEFT.png RIGHT.png] [--preset NAME]
+//   curvestereo_cuda_bench --calib CAMCHAIN LEFT.png RIGHT.png [--preset NAME]
 //                          [--levels L] [--warps N] [--iterations K] [--runs R] [--sequence N]
+//
+// The pair comes from files, as a robot's would, so that the bench needs the library alone;
+// a synthetic one of any size is `curvestereo synth -o DIR --size N --samples 1` (or
+// `--calib CAMCHAIN --size WIDTH` for another rig's lenses, e.g. the T265's 848x800).
 #include <cuda_runtime.h>
 
 #include <algorithm>
@@ -20,7 +24,7 @@
 
 #include "curvestereo/cuda.hpp"
 #include "curvestereo/image_io.hpp"
-#include "synth/scene.hpp"
+#include "curvestereo/rig.hpp"
 
 namespace {
 
@@ -31,7 +35,7 @@ void ok(cudaError_t e, const char* what) {
 }  // namespace
 
 int main(int argc, char** argv) try {
-  std::string size = "848x800", preset = "realtime", calib, leftPath, rightPath;
+  std::string preset = "realtime", calib, leftPath, rightPath;
   int levels = -1, warps = -1, iterations = -1, runs = 50, sequence = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -39,9 +43,7 @@ int main(int argc, char** argv) try {
       if (i + 1 >= argc) throw cs::Error("option " + a + " needs a value");
       return argv[++i];
     };
-    if (a == "--size")
-      size = next();
-    else if (a == "--preset")
+    if (a == "--preset")
       preset = next();
     else if (a == "--levels")
       levels = std::stoi(next());
@@ -65,30 +67,11 @@ int main(int argc, char** argv) try {
   if (warps > 0) params.warps = warps;
   if (iterations > 0) params.iterations = iterations;
 
-  cs::Rig rig;
-  cs::ImageF left, right;
-  std::string what;
-  if (!calib.empty()) {
-    rig = cs::loadKalibr(calib);
-    left = cs::readPngGray(leftPath);
-    right = cs::readPngGray(rightPath);
-    what = calib;
-  } else {
-    int w = 0, h = 0;
-    if (std::sscanf(size.c_str(), "%dx%d", &w, &h) != 2) throw cs::Error("--size expects WxH");
-    cs::synth::SynthConfig cfg;
-    cfg.camera = cs::synth::defaultFisheye(std::max(w, h));
-    cfg.camera.width = w;
-    cfg.camera.height = h;
-    cfg.camera.params[2] = 0.5 * (w - 1);
-    cfg.camera.params[3] = 0.5 * (h - 1);
-    cfg.samplesPerAxis = 1;
-    const cs::synth::SynthPair pair = cs::synth::renderPair(cfg);
-    rig = pair.rig;
-    left = pair.left;
-    right = pair.right;
-    what = "synthetic " + size;
-  }
+  if (calib.empty())
+    throw cs::Error("needs --calib CAMCHAIN LEFT.png RIGHT.png (a synthetic pair: curvestereo synth -o DIR --size N)");
+  const cs::Rig rig = cs::loadKalibr(calib);
+  const cs::ImageF left = cs::readPngGray(leftPath), right = cs::readPngGray(rightPath);
+  const std::string what = calib;
   const int w = left.width, h = left.height;
   const size_t n = size_t(w) * h;
 

@@ -32,7 +32,7 @@ install(TARGETS ${CS_INSTALL_TARGETS} EXPORT curvestereoTargets
 install(DIRECTORY ${CMAKE_SOURCE_DIR}/core/include/curvestereo DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
         FILES_MATCHING PATTERN "*.hpp")
 if(CS_CONFIG_HAVE_CUDA)
-  install(FILES ${CMAKE_SOURCE_DIR}/backend_cuda/include/curvestereo/cuda.hpp
+  install(FILES ${CMAKE_SOURCE_DIR}/stereo/include/curvestereo/cuda.hpp
           DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/curvestereo)
 endif()
 install(EXPORT curvestereoTargets NAMESPACE curvestereo:: DESTINATION ${CS_CMAKE_DIR})

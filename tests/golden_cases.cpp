@@ -10,6 +10,7 @@
 #include "cpu_backend.hpp"
 #include "curvestereo/camera.hpp"
 #include "curvestereo/image_io.hpp"
+#include "curvestereo/pipeline_params.hpp"
 #include "curvestereo/stereo.hpp"
 #include "golden_inputs.hpp"
 #include "synth/scene.hpp"

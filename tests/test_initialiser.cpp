@@ -9,6 +9,7 @@
 #include "cpu_backend.hpp"
 #include "curvestereo/camera.hpp"
 #include "curvestereo/metrics.hpp"
+#include "curvestereo/pipeline_params.hpp"
 #include "curvestereo/stereo.hpp"
 #include "golden_cases.hpp"  // hash01
 #include "synth/scene.hpp"

@@ -9,6 +9,7 @@
 
 #include "cpu_backend.hpp"
 #include "curvestereo/params.hpp"
+#include "curvestereo/pipeline_params.hpp"
 #include "golden_cases.hpp"
 #include "test_util.hpp"
 

@@ -25,14 +25,25 @@ step() { echo; echo "=== $*"; }
 } 2>&1 | tee "$OUT/tests.log"
 CB=$B/backend_cuda/curvestereo_cuda_bench
 T265="--calib devdata/t265/robot/camchain.yaml devdata/t265/robot/left.png devdata/t265/robot/right.png"
+# The bench reads its pair from files: `pair NAME SYNTH-OPTIONS...` renders one once (into
+# $OUT/pairs/NAME) and prints the bench's --calib arguments for it.
+pair() {
+  local dir="$OUT/pairs/$1"
+  shift
+  [ -d "$dir" ] || $B/tools/curvestereo synth -o "$dir" --samples 1 --quiet "$@" >/dev/null
+  echo "--calib $dir/camchain.yaml $dir/left.png $dir/right.png"
+}
+T265LENS="--calib devdata/t265/robot/camchain.yaml"  # synthetic scenes through the T265's lenses, 848x800
 {
   step "T265 848x800 N=5 (realtime: 5 levels x2, K=10)"; $CB $T265 --preset realtime --runs 50
   step "T265 848x800 N=20"; $CB $T265 --preset realtime --warps 20 --runs 50
-  step "synthetic 848x800 N=5"; $CB --size 848x800 --preset realtime --runs 50
-  step "synthetic 848x800 N=20"; $CB --size 848x800 --preset realtime --warps 20 --runs 50
-  step "800x800 paper config"; $CB --size 800x800 --preset realtime --runs 50
-  step "424x400 N=20"; $CB --size 424x400 --preset realtime --warps 20 --runs 50
-  for s in 400 1600; do step "scaling ${s}x${s} paper config"; $CB --size ${s}x${s} --preset realtime --runs 50; done
+  step "synthetic 848x800 N=5"; $CB $(pair t265-848 $T265LENS) --preset realtime --runs 50
+  step "synthetic 848x800 N=20"; $CB $(pair t265-848 $T265LENS) --preset realtime --warps 20 --runs 50
+  step "800x800 paper config"; $CB $(pair square-800 --size 800) --preset realtime --runs 50
+  step "424x400 N=20"; $CB $(pair t265-424 $T265LENS --size 424) --preset realtime --warps 20 --runs 50
+  for s in 400 1600; do
+    step "scaling ${s}x${s} paper config"; $CB $(pair square-$s --size $s) --preset realtime --runs 50
+  done
   step "curvestereo bench --backend cuda (host API, T265, N=5)"
   $B/tools/curvestereo bench --backend cuda $T265 --preset realtime --runs 50 2>&1 | grep -v "benchmark"
   step "curvestereo bench --backend cuda (host API, 848x800, N=20)"
@@ -47,7 +58,7 @@ T265="--calib devdata/t265/robot/camchain.yaml devdata/t265/robot/left.png devda
   timeout 120 ncu --kernel-name regex:primalDual --launch-skip 210 --launch-count 2 \
     --section SpeedOfLight --section MemoryWorkloadAnalysis --section LaunchStats --section Occupancy \
     --metrics dram__bytes_read.sum,dram__bytes_write.sum,lts__t_bytes.sum,gpu__time_duration.sum \
-    $CB --size 848x800 --preset realtime --runs 1 2>&1 | grep -vE "^==PROF==" | tail -120
+    $CB $(pair t265-848 $T265LENS) --preset realtime --runs 1 2>&1 | grep -vE "^==PROF==" | tail -120
 } 2>&1 | tee "$OUT/ncu.log"
 {
   step "compute-sanitizer memcheck test_backends"

@@ -7,6 +7,7 @@
 #include "curvestereo/backend.hpp"
 #include "curvestereo/image.hpp"
 #include "curvestereo/param_table.hpp"
+#include "curvestereo/pipeline_params.hpp"
 
 namespace cs {
 

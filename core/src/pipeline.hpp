@@ -6,6 +6,7 @@
 
 #include "curvestereo/backend.hpp"
 #include "curvestereo/params.hpp"
+#include "curvestereo/pipeline_params.hpp"
 #include "curvestereo/rig.hpp"
 #include "curvestereo/stereo.hpp"
 

@@ -1,5 +1,5 @@
-// What cs::Stereo (core/src/stereo.cpp) and cs::cuda::DeviceStereo
-// (backend_cuda/device_stereo.cpp) share, written once: the validation of the rig, the
+// What cs::Stereo (stereo/stereo.cpp) and cs::cuda::DeviceStereo
+// (stereo/device_stereo.cpp) share, written once: the validation of the rig, the
 // parameters and a mask, the memory check, the pipeline's construction, and setPose /
 // setMask. Internal (not installed).
 #pragma once

@@ -16,7 +16,7 @@
 #include <optional>
 
 #include "binding.hpp"
-#include "curvestereo/backend.hpp"
+#include "curvestereo/backends.hpp"
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/rig.hpp"
 
@@ -33,8 +33,8 @@ using Path = std::filesystem::path;
 Rig loadRig(const Path& path) { return loadCalibration(path.string()); }
 
 void saveRig(const Rig& rig, const Path& path, const std::string& format) {
-  for (CalibFormat f : {CalibFormat::Kalibr, CalibFormat::Basalt, CalibFormat::OpenCv, CalibFormat::OrbSlam3,
-                        CalibFormat::VinsFusion})
+  for (CalibFormat f :
+       {CalibFormat::Kalibr, CalibFormat::Basalt, CalibFormat::OpenCv, CalibFormat::OrbSlam3, CalibFormat::VinsFusion})
     if (format == calibFormatName(f)) return saveCalibration(rig, path.string(), f);
   throw Error("unknown calibration format '" + format + "' (known: kalibr, basalt, opencv, orbslam3, vins)");
 }
@@ -213,14 +213,7 @@ void writePlyFile(const Path& file, pb::handle pointsObj, pb::handle coloursObj)
 std::vector<std::string> backendList(bool usable) {
   std::vector<std::string> names;
   for (const std::string& name : availableBackends()) {
-    if (usable) {
-      try {
-        createBackend(name);  // probes the device; dropped at once
-      } catch (const Error&) {
-        continue;
-      }
-    }
-    names.push_back(name);
+    if (!usable || backendAvailable(name)) names.push_back(name);
   }
   return names;
 }

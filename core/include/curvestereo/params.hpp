@@ -204,10 +204,6 @@ struct Params {
 std::string dataTermName(Params::DataTerm term);
 Params::DataTerm parseDataTerm(const std::string& name);
 
-// The normalisation kernel's taps for p.normSigma and its floor p.noiseLevel.
-struct NormaliseParams;
-NormaliseParams normaliseParams(const Params& p);
-
 // "none" / "planesweep"; parseInit throws cs::Error listing the names.
 std::string initName(Params::Init init);
 Params::Init parseInit(const std::string& name);
@@ -230,19 +226,6 @@ struct LevelSize {
 
 // Level 0 first (full resolution).
 std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p);
-
-// The level the plane sweep runs at among `levels` pyramid levels: initLevel, clamped to
-// the coarsest.
-int sweepLevel(const Params& p, int levels);
-
-// Whether the sweep is a band sweep among `levels` pyramid levels: initBand set and a level
-// coarser than sweepLevel to run the full sweep at.
-bool sweepBanded(const Params& p, int levels);
-
-// Warps at each of `levels` pyramid levels (level 0 first): warps at the coarsest, warpsTaper
-// fewer at each finer one (at least 1), initWarps from the first level a sweep initialises
-// down when set (sweepLevel, or the one above it with a band: its full sweep initialises it).
-std::vector<int> warpSchedule(const Params& p, int levels);
 
 // "levels=5 scale=2 warps=30 ..." for logs and bench reports.
 std::string describe(const Params& p);

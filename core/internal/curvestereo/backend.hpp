@@ -424,7 +424,8 @@ class Camera;
 CameraParams toCameraParams(const Camera& camera);
 Camera toCamera(const CameraParams& params);
 
-// The registry (core/src/backend_registry.cpp; availableBackends() is in stereo.hpp).
+// The registry (stereo/backend_registry.cpp; availableBackends() and backendAvailable() are
+// in backends.hpp).
 // "auto" picks the first available; an explicit name that is not available throws
 // cs::Error naming it and listing the available ones. `why` (optional) receives one line
 // saying which backend was taken and why.

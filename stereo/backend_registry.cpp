@@ -7,6 +7,7 @@
 
 #include "cpu_backend.hpp"
 #include "curvestereo/backend.hpp"
+#include "curvestereo/backends.hpp"
 #include "curvestereo/image.hpp"
 
 #ifdef CS_HAVE_CUDA
@@ -72,6 +73,18 @@ std::unique_ptr<Backend> createBackend(const std::string& spec, std::string* why
   std::string list;
   for (auto& n : availableBackends()) list += (list.empty() ? "" : ", ") + n;
   throw Error("backend '" + name + "' is not available in this build (available: " + list + ", auto)");
+}
+
+// Opening the backend is the only complete test (a Vulkan device may be listed and still fail
+// to create its queues), so the probe is a construction.
+bool backendAvailable(const std::string& name, std::string* why) {
+  try {
+    createBackend(name);
+    return true;
+  } catch (const Error& e) {
+    if (why) *why = e.what();
+    return false;
+  }
 }
 
 }  // namespace cs

@@ -31,12 +31,12 @@ namespace cs::cuda {
 // the pixel was not solved.
 struct DeviceDepth {
   int width = 0, height = 0;
-  const float* valid = nullptr;      // 1 ch: 1 where the pixel was solved, else 0
-  const float* disparity = nullptr;  // 1 ch: u, px along the epipolar curve
-  const float* warp = nullptr;       // 2 ch: w into the calibrated image 1
-  const float* radial = nullptr;     // 1 ch: radial depth, m; +inf at infinity
-  const float* points = nullptr;     // 3 ch: camera-0 points, m; NaN where infinite
-  const float* z = nullptr;          // 1 ch: the points' z, m; +inf at infinity
+  const float* valid = nullptr;       // 1 ch: 1 where the pixel was solved, else 0
+  const float* disparity = nullptr;   // 1 ch: u, px along the epipolar curve
+  const float* warp = nullptr;        // 2 ch: w into the calibrated image 1
+  const float* radial = nullptr;      // 1 ch: radial depth, m; +inf at infinity
+  const float* points = nullptr;      // 3 ch: camera-0 points, m; NaN where infinite
+  const float* z = nullptr;           // 1 ch: the points' z, m; +inf at infinity
   const float* confidence = nullptr;  // 1 ch: the result's confidence in [0, 1] (cs::DepthResult::confidence)
   // next(): whether the frame started from the previous frame's estimate (warm) or was
   // solved cold; false from compute().
