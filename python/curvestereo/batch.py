@@ -22,6 +22,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -128,17 +129,21 @@ def find_cli(given):
     raise BatchError("the curvestereo command was not found: give --cli PATH or set CURVESTEREO_CLI")
 
 
-def start_client(args):
+def start_client(args, scratch):
     """A Dask client: a running cluster's, or a local cluster of one worker per GPU (or
-    --workers CPU workers). Workers are processes: a solve holds its worker's core(s)."""
+    --workers CPU workers). Workers are processes: a solve holds its worker's core(s). The
+    local workers keep their files in `scratch` (removed afterwards), not in Dask's default
+    dask-worker-space of the working folder or /tmp, which outlives the run."""
+    import dask
     from distributed import Client, LocalCluster
 
+    dask.config.set({"temporary-directory": scratch})  # the workers' and the scheduler's lock files too
     if args.scheduler:
         return Client(args.scheduler, timeout="20s"), None
     n = args.gpus or args.workers
     resources = {"GPU": 1} if args.gpus else None
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, resources=resources,
-                           dashboard_address=None)
+                           dashboard_address=None, local_directory=scratch)
     return Client(cluster), cluster
 
 
@@ -257,19 +262,20 @@ def main(argv=None):
     except (BatchError, OSError) as e:
         print(f"curvestereo.batch: {e}", file=sys.stderr)
         return 2
-    try:
-        client, cluster = start_client(args)
-    except (OSError, TimeoutError) as e:  # an unreachable scheduler, no port to listen on
-        where = args.scheduler or "a local cluster"
-        print(f"curvestereo.batch: cannot start or reach {where}: {str(e).splitlines()[0]}", file=sys.stderr)
-        return 2
-    start = time.monotonic()  # the throughput is the solving's, not the cluster's start-up
-    try:
-        outcomes = run_jobs(client, jobs, args, run_args, cli)
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+    with tempfile.TemporaryDirectory(prefix="curvestereo-batch-") as scratch:
+        try:
+            client, cluster = start_client(args, scratch)
+        except (OSError, TimeoutError) as e:  # an unreachable scheduler, no port to listen on
+            where = args.scheduler or "a local cluster"
+            print(f"curvestereo.batch: cannot start or reach {where}: {str(e).splitlines()[0]}", file=sys.stderr)
+            return 2
+        start = time.monotonic()  # the throughput is the solving's, not the cluster's start-up
+        try:
+            outcomes = run_jobs(client, jobs, args, run_args, cli)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
     print(summary(outcomes, time.monotonic() - start, "parts" if args.frames_per_task else "recordings"))
     return 1 if any(o.status == "failed" for o in outcomes) else 0
 
