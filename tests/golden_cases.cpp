@@ -757,7 +757,7 @@ std::vector<Output> runSolve(const SolveInputs& in, const std::string& backend) 
       warp(x, y) = r.warp(x, y).x;
       warp(x, y + r.warp.height) = r.warp(x, y).y;
     }
-  return {{"solve_disparity", r.disparity}, {"solve_warp", warp}};
+  return {{"solve_disparity", r.disparity, Tolerance{}}, {"solve_warp", warp, Tolerance{}}};
 }
 
 Difference compare(const ImageF& actual, const ImageF& expected, double tol) {

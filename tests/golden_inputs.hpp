@@ -86,7 +86,7 @@ struct Session {
   Output get(const std::string& name, const Buffer& buf) {
     std::vector<float> data(buf.count());
     b.download(buf, data.data());
-    Output o{name, ImageF(buf.width, buf.height * buf.channels)};
+    Output o{name, ImageF(buf.width, buf.height * buf.channels), Tolerance{}};
     for (int c = 0; c < buf.channels; ++c)
       for (int y = 0; y < buf.height; ++y)
         for (int x = 0; x < buf.width; ++x)

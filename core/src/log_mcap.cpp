@@ -6,20 +6,12 @@
 #include <map>
 
 #include "log_reader.hpp"
+#include "mcap_format.hpp"
 
 namespace cs::logio {
 namespace {
 
-constexpr uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
-enum Op : uint8_t {
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kChunkIndex = 0x08,
-  kDataEnd = 0x0F,
-};
+using namespace mcap;  // kMagic, the opcodes
 constexpr uint64_t kFooterBytes = 1 + 8 + 20;      // opcode, length, three fields
 constexpr uint64_t kMaxChunk = uint64_t(1) << 32;  // larger claims are corrupt, not allocated
 

@@ -8,25 +8,13 @@
 
 #include "curvestereo/image.hpp"
 #include "log_reader.hpp"
+#include "mcap_format.hpp"
 #include "mcap_writer.hpp"
 
 namespace cs {
 namespace {
 
-constexpr uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
-enum Op : uint8_t {
-  kHeader = 0x01,
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kMessageIndex = 0x07,
-  kChunkIndex = 0x08,
-  kStatistics = 0x0B,
-  kSummaryOffset = 0x0E,
-  kDataEnd = 0x0F,
-};
+using namespace mcap;  // kMagic, the opcodes
 
 template <typename T>
 void put(std::vector<uint8_t>& b, T v) {
