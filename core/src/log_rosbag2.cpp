@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <map>
+#include <utility>
 
 #include "log_reader.hpp"
 
@@ -14,10 +15,23 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// One database file, its connection closed with it: also when the reader's constructor
+// throws part-way (a second file missing, a damaged topics table), where no destructor of
+// the reader runs.
 struct Db {
   sqlite3* db = nullptr;
   std::string path;
   std::map<int64_t, uint32_t> topics;  // topic id -> channel index
+
+  Db() = default;
+  Db(Db&& other) noexcept
+      : db(std::exchange(other.db, nullptr)), path(std::move(other.path)), topics(std::move(other.topics)) {}
+  Db(const Db&) = delete;
+  Db& operator=(const Db&) = delete;
+  Db& operator=(Db&&) = delete;
+  ~Db() {
+    if (db) sqlite3_close_v2(db);  // sqlite3_open_v2 makes a handle to close even when it fails
+  }
 };
 
 class Statement {
@@ -48,9 +62,6 @@ class SqliteReader : public Reader {
   explicit SqliteReader(const std::string& path, const std::vector<std::string>& files) {
     path_ = path;
     for (const std::string& f : files) open(f);
-  }
-  ~SqliteReader() override {
-    for (Db& d : dbs_) sqlite3_close(d.db);
   }
 
   std::string format() const override {
@@ -96,11 +107,10 @@ class SqliteReader : public Reader {
 
  private:
   void open(const std::string& file) {
-    Db db;
-    db.path = file;
     if (!fs::is_regular_file(file)) throw Error("rosbag2 database '" + file + "' does not exist");
+    Db& db = dbs_.emplace_back();
+    db.path = file;
     const int rc = sqlite3_open_v2(file.c_str(), &db.db, SQLITE_OPEN_READONLY, nullptr);
-    dbs_.push_back(db);  // closed by the destructor, even when this throws
     if (rc != SQLITE_OK)
       throw Error("cannot open rosbag2 database '" + file + "': " + shown(sqlite3_errmsg(db.db), 120));
     Statement s(dbs_.back(), "SELECT id, name, type, serialization_format FROM topics");
