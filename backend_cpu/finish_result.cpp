@@ -1,23 +1,13 @@
 // The result as the user sees it (backend.hpp finishResult): unsolved pixels NaN in every
 // output, the valid mask and z. The host API and the device API both read these buffers.
 #include <cmath>
-#include <cstdint>
-#include <cstring>
+#include <limits>
 
 #include "cpu_backend.hpp"
 
 namespace cs::cpu {
 
 namespace {
-
-// The one NaN of every backend's outputs (std::numeric_limits<float>::quiet_NaN()'s bits,
-// spelled out so that the GLSL and CUDA kernels can match them).
-float quietNaN() {
-  constexpr uint32_t kBits = 0x7fc00000u;
-  float v;
-  std::memcpy(&v, &kBits, sizeof v);
-  return v;
-}
 
 bool solvedAt(size_t i, const View& radial, const View& disparity, const View& warp) {
   return !std::isnan(radial.data[i]) && std::isfinite(disparity.data[i]) && std::isfinite(warp.data[2 * i]) &&
@@ -28,7 +18,8 @@ bool solvedAt(size_t i, const View& radial, const View& disparity, const View& w
 
 void finishResult(const View& valid, const View& z, const View& radial, const View& points, const View& disparity,
                   const View& warp, const View& confidence) {
-  const float nan = quietNaN();
+  // The quiet NaN 0x7fc00000, whose bits the CUDA and GLSL kernels write too.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
   const size_t n = size_t(radial.width) * size_t(radial.height);
   for (size_t i = 0; i < n; ++i) {
     if (solvedAt(i, radial, disparity, warp)) {
