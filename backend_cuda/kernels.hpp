@@ -5,6 +5,7 @@
 // return cudaGetLastError(). Included by host C++ (cuda_backend.cpp) and by the .cu files;
 // no Eigen.
 #pragma once
+#include <cstdint>
 #include <cuda_runtime_api.h>
 
 #include "curvestereo/kernel_params.hpp"
