@@ -16,6 +16,8 @@ namespace {
 
 using namespace mcap;  // kMagic, the opcodes
 
+constexpr uint64_t kMessageFields = 2 + 4 + 8 + 8;  // channel, sequence, log time, publish time
+
 template <typename T>
 void put(std::vector<uint8_t>& b, T v) {
   const auto* c = reinterpret_cast<const uint8_t*>(&v);
@@ -35,11 +37,14 @@ std::vector<uint8_t> record(uint8_t op, const std::vector<uint8_t>& content) {
   return r;
 }
 
-std::vector<uint8_t> compress(const std::string& method, const std::vector<uint8_t>& in, const std::string& path) {
-  std::vector<uint8_t> out;
+// Into `out`, whose memory is reused from chunk to chunk, as is zstd's context (`zstd`,
+// made at the first chunk: a fresh one costs megabytes of new pages every chunk).
+void compress(const std::string& method, const std::vector<uint8_t>& in, std::vector<uint8_t>& out,
+              ZSTD_CCtx*& zstd, const std::string& path) {
   if (method == "zstd") {
+    if (!zstd && !(zstd = ZSTD_createCCtx())) throw Error("writing MCAP '" + path + "': out of memory for zstd");
     out.resize(ZSTD_compressBound(in.size()));
-    const size_t n = ZSTD_compress(out.data(), out.size(), in.data(), in.size(), 1);  // fast: depth is noisy anyway
+    const size_t n = ZSTD_compressCCtx(zstd, out.data(), out.size(), in.data(), in.size(), 1);  // fast: depth is noisy
     if (ZSTD_isError(n)) throw Error("writing MCAP '" + path + "': zstd failed (" + ZSTD_getErrorName(n) + ")");
     out.resize(n);
   } else {
@@ -50,7 +55,6 @@ std::vector<uint8_t> compress(const std::string& method, const std::vector<uint8
     if (LZ4F_isError(n)) throw Error("writing MCAP '" + path + "': lz4 failed (" + LZ4F_getErrorName(n) + ")");
     out.resize(n);
   }
-  return out;
 }
 
 }  // namespace
@@ -86,6 +90,7 @@ McapWriter::~McapWriter() {
     std::fprintf(stderr, "curvestereo: %s\n", e.what());
   }
   if (file_) std::fclose(file_);
+  ZSTD_freeCCtx(zstd_);
 }
 
 void McapWriter::out(const std::vector<uint8_t>& bytes) {
@@ -129,15 +134,16 @@ void McapWriter::write(uint16_t channel, uint64_t logTimeNs, const std::vector<u
   chunkStart_ = std::min(chunkStart_, logTimeNs);
   chunkEnd_ = std::max(chunkEnd_, logTimeNs);
   chunkIndex_[channel].emplace_back(logTimeNs, chunk_.size());
-  std::vector<uint8_t> m;
-  m.reserve(data.size() + 22);
-  put(m, channel);
-  put(m, uint32_t(counts_[channel]));  // sequence
-  put(m, logTimeNs);
-  put(m, logTimeNs);  // publish time
-  m.insert(m.end(), data.begin(), data.end());
-  const std::vector<uint8_t> r = record(kMessage, m);
-  chunk_.insert(chunk_.end(), r.begin(), r.end());
+  // The Message record straight into the chunk (a frame's messages are about 14 MB: every
+  // copy of them counts): opcode, length, channel, sequence, log and publish times, data.
+  chunk_.reserve(chunk_.size() + 9 + kMessageFields + data.size());
+  put(chunk_, uint8_t(kMessage));
+  put(chunk_, uint64_t(kMessageFields + data.size()));
+  put(chunk_, channel);
+  put(chunk_, uint32_t(counts_[channel]));  // sequence
+  put(chunk_, logTimeNs);
+  put(chunk_, logTimeNs);  // publish time
+  chunk_.insert(chunk_.end(), data.begin(), data.end());
   if (!messages_ || logTimeNs < firstNs_) firstNs_ = logTimeNs;
   if (!messages_ || logTimeNs > lastNs_) lastNs_ = logTimeNs;
   ++messages_;
@@ -148,16 +154,20 @@ void McapWriter::write(uint16_t channel, uint64_t logTimeNs, const std::vector<u
 void McapWriter::flushChunk() {
   if (chunk_.empty()) return;
   const uint64_t chunkOffset = pos_;
-  const std::vector<uint8_t> packed = compression_.empty() ? chunk_ : compress(compression_, chunk_, path_);
+  if (!compression_.empty()) compress(compression_, chunk_, packed_, zstd_, path_);
+  const std::vector<uint8_t>& packed = compression_.empty() ? chunk_ : packed_;
+  // The Chunk record's fields, then its records as they are (not copied behind the fields).
   std::vector<uint8_t> c;
+  put(c, uint8_t(kChunk));
+  put(c, uint64_t(8 + 8 + 8 + 4 + 4 + compression_.size() + 8 + packed.size()));
   put(c, chunkStart_);
   put(c, chunkEnd_);
   put(c, uint64_t(chunk_.size()));
   put(c, logio::crc32(chunk_.data(), chunk_.size()));
   putStr(c, compression_);
   put(c, uint64_t(packed.size()));
-  c.insert(c.end(), packed.begin(), packed.end());
-  out(record(kChunk, c));
+  out(c);
+  out(packed);
   const uint64_t chunkLength = pos_ - chunkOffset, indexStart = pos_;
   std::vector<uint8_t> offsets;  // the chunk index's map: channel -> its message index's offset
   for (const auto& [channel, entries] : chunkIndex_) {
@@ -182,7 +192,7 @@ void McapWriter::flushChunk() {
   put(ci, uint64_t(chunk_.size()));
   chunkIndexes_.push_back(record(kChunkIndex, ci));
   ++chunks_;
-  chunk_.clear();
+  chunk_.clear();  // keeps its memory for the next chunk (no fresh pages to fault in)
   chunkIndex_.clear();
 }
 

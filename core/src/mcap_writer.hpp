@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+struct ZSTD_CCtx_s;  // zstd.h's compression context
+
 namespace cs {
 
 // CDR, little-endian, with its encapsulation header; primitives aligned to their size from
@@ -69,6 +71,8 @@ class McapWriter {
   bool inData_ = true;  // the data section's bytes feed dataCrc_, the summary's summaryCrc_
   // the open chunk
   std::vector<uint8_t> chunk_;
+  std::vector<uint8_t> packed_;  // the last chunk compressed (its memory reused)
+  ZSTD_CCtx_s* zstd_ = nullptr;  // zstd's context, kept from chunk to chunk
   uint64_t chunkStart_ = 0, chunkEnd_ = 0;
   std::map<uint16_t, std::vector<std::pair<uint64_t, uint64_t>>> chunkIndex_;  // channel -> (time, offset)
   // the summary
