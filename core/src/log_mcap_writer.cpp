@@ -39,8 +39,8 @@ std::vector<uint8_t> record(uint8_t op, const std::vector<uint8_t>& content) {
 
 // Into `out`, whose memory is reused from chunk to chunk, as is zstd's context (`zstd`,
 // made at the first chunk: a fresh one costs megabytes of new pages every chunk).
-void compress(const std::string& method, const std::vector<uint8_t>& in, std::vector<uint8_t>& out,
-              ZSTD_CCtx*& zstd, const std::string& path) {
+void compress(const std::string& method, const std::vector<uint8_t>& in, std::vector<uint8_t>& out, ZSTD_CCtx*& zstd,
+              const std::string& path) {
   if (method == "zstd") {
     if (!zstd && !(zstd = ZSTD_createCCtx())) throw Error("writing MCAP '" + path + "': out of memory for zstd");
     out.resize(ZSTD_compressBound(in.size()));
