@@ -84,9 +84,6 @@ void collectStages(const DepthResult& r, std::map<std::string, std::vector<doubl
   if (swept) sweepTotals.push_back(sweepMs);
 }
 
-// bench --sequence: every frame held in memory, then `runs` passes through Stereo::next
-// (each from a reset: a cold first frame, warm ones after), after one pass that records
-// every kind of frame; a last pass profiles the warm frames' stages.
 // The frames as their files store them: a camera's 8-bit images go to Stereo as bytes.
 struct HeldFrames {
   std::vector<ImageF> lefts, rights;
@@ -110,6 +107,9 @@ struct HeldFrames {
   }
 };
 
+// bench --sequence: every frame held in memory, then `runs` passes through Stereo::next
+// (each from a reset: a cold first frame, warm ones after), after one pass that records
+// every kind of frame; a last pass profiles the warm frames' stages.
 int benchSequence(const Args& args, Stereo& stereo, const Sequence& sequence, int runs) {
   const std::vector<SequenceFrame>& frames = sequence.frames();
   const HeldFrames held(sequence);
