@@ -595,7 +595,8 @@ One Stereo must not be used by two threads at once (it raises if it is); use one
 
 left, right: H x W uint8 / uint16 / float32 arrays (gray, any strides) or H x W x 3 colour
 (R, G, B; converted to Rec. 601 luma as the PNG reader does), of the rig's size. uint8 and
-uint16 are scaled to [0, 1]. With the CUDA backend they may also be GPU arrays (CuPy,
+uint16 are scaled to [0, 1]; gray uint8 frames go to the backend as bytes (a quarter of the
+transfer, the same result). With the CUDA backend they may also be GPU arrays (CuPy,
 PyTorch: __dlpack__ or __cuda_array_interface__), read in place. return_device=True leaves
 the results on the GPU as DeviceArray objects. progress: called with the fraction done
 (0..1) on this thread; an exception it raises is re-raised here (on the CPU backend it
