@@ -1,0 +1,61 @@
+// Fusion of a rig's pair results (host code, a stage above the pair pipeline): each camera's
+// depth from its pairs, and the equirectangular panorama around the rig.
+#pragma once
+#include <Eigen/Core>
+#include <vector>
+
+#include "curvestereo/camera_rig.hpp"
+#include "curvestereo/depth_result.hpp"
+#include "curvestereo/image.hpp"
+
+namespace cs {
+
+// One camera's estimates (each from a pair with that camera as the reference) made one: per
+// pixel the most confident estimate wins, and the others within kAgreement of its inverse
+// depth are averaged with it, weighted by confidence. Disparity and warp are the winner's
+// (they belong to its pair). The confidence is the winner's. `cam` recomputes the points.
+// Throws cs::Error for no estimates or estimates of different sizes.
+DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates);
+constexpr double kAgreement = 0.05;
+
+// The panorama's frame in the body frame: its y axis (down) is the cameras' mean y axis, its
+// z axis (longitude 0) camera 0's optical axis made perpendicular to it, its origin `centre`.
+struct PanoramaFrame {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // X_body = R X_pano + centre
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+};
+PanoramaFrame panoramaFrame(const CameraRig& rig);
+
+// The unit ray of panorama pixel (column j, row i) of a W x W/2 image: longitude -180 deg at
+// the left edge to +180 at the right, latitude +90 (up, -y) at the top; column j's centre at
+// lon = -pi + 2 pi (j + 0.5) / W, row i's at lat = pi/2 - pi (i + 0.5) / H;
+// ray = (cos lat sin lon, -sin lat, cos lat cos lon).
+Eigen::Vector3d panoramaRay(double j, double i, int width);
+// The inverse: the (fractional) column and row of a direction.
+Eigen::Vector2d panoramaPixel(const Eigen::Vector3d& direction, int width);
+
+struct Panorama {
+  ImageF range;       // metres from the centre; +inf at infinity; NaN where no camera gave one
+  ImageF grey;        // the images' grey level, [0, 1]; NaN where no range
+  ImageF confidence;  // the best confidence among the fused estimates; NaN where no range
+};
+
+// Forward-projects every camera's points (per-camera results, cameras[k]'s frame) into the
+// panorama, each pixel as a footprint the size of its neighbours' spacing there. Per
+// panorama pixel, samples below half the best confidence there are dropped; of the rest, the
+// nearest range and those within kAgreement of it (the visible surface: a z-buffer) are
+// averaged, weighted by confidence. width: even, 4 to 32768. Throws cs::Error on sizes that
+// differ from the rig's cameras.
+Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
+                      const PanoramaFrame& frame, int width);
+
+// Every camera's points in the panorama frame, with their grey level, at least minConfidence.
+struct RigPoint {
+  float x, y, z;
+  float grey;
+};
+std::vector<RigPoint> mergedPoints(const CameraRig& rig, const std::vector<DepthResult>& cameras,
+                                   const std::vector<ImageF>& images, const PanoramaFrame& frame,
+                                   float minConfidence = 0.f);
+
+}  // namespace cs
