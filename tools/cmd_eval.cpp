@@ -216,7 +216,7 @@ int cmdEval(const Args& args) {
     if (args.has(sequenceOnly)) throw UsageError(std::string("--") + sequenceOnly + " is for --sequence folders");
   if (args.positional().empty()) throw UsageError("eval needs at least one pair folder (or --sequence DIR)");
   if (isRigFolder(args.positional().front())) {
-    for (const char* pairOnly : {"md", "maps", "methods", "sweep", "sparsification"})
+    for (const char* pairOnly : {"md", "methods", "sweep", "sparsification"})
       if (args.has(pairOnly)) throw UsageError(std::string("--") + pairOnly + " is for pair folders, not a rig folder");
     return evalRig(args);
   }

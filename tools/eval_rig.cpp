@@ -1,4 +1,4 @@
-// curvestereo eval RIGDIR [--csv FILE] [--pairs I-J,... | --partners N] [--out DIR] [solver options]
+// curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N] [solver options]
 // A rig folder (../shared/data/rigs layout): each camera's tau against its depth<k>.exr, in
 // the pixel terms of its pairs; the panorama's range error where the truth is finite; and
 // the coverage, the share of the sphere seen by two cameras or more that gets a range.
@@ -98,7 +98,7 @@ struct PanoramaScore {
 // Sampled every other pixel: the sphere's shares need no more, and each sample projects into
 // every camera.
 PanoramaScore scorePanorama(const CameraRig& rig, const PanoramaFrame& frame, const ImageF& truth,
-                            const ImageF& estimate) {
+                            const ImageF& estimate, ImageF* errorMap) {
   const RigViews views(rig);
   PanoramaScore s;
   double absRelSum = 0;
@@ -115,12 +115,22 @@ PanoramaScore scorePanorama(const CameraRig& rig, const PanoramaFrame& frame, co
       ++s.finite;
       if (!estimated) continue;
       ++finiteEstimated;  // as evaluate()'s abs-rel: over the estimates, +inf counting 1
-      absRelSum += std::isfinite(est) ? std::min(1.0, std::abs(double(est) - gt) / gt) : 1.0;
+      const double error = std::isfinite(est) ? std::min(1.0, std::abs(double(est) - gt) / gt) : 1.0;
+      absRelSum += error;
+      if (errorMap) (*errorMap)(j, i) = float(error);
     }
   s.density = samples ? 100.0 * double(withRange) / double(samples) : 0.0;
   s.coverage = s.twoCameras ? 100.0 * double(covered) / double(s.twoCameras) : 0.0;
   s.absRel = finiteEstimated ? 100.0 * absRelSum / double(finiteEstimated) : 0.0;
   return s;
+}
+
+// The panorama as run writes it, and its relative range error (red: 20 % or more; black:
+// not evaluated), sampled as scorePanorama samples.
+void writeRigMaps(const std::string& dir, const Panorama& panorama, const ImageF& errorMap) {
+  fs::create_directories(dir);
+  writeDepthPng((fs::path(dir) / "panorama_depth.png").string(), panorama.range);
+  writePngRgb((fs::path(dir) / "panorama_error.png").string(), colorizeScalar(errorMap, 0.f, 0.2f));
 }
 
 std::vector<int> partnersOf(int k, const std::vector<PairInfo>& pairs) {
@@ -161,7 +171,9 @@ int evalRig(const Args& args) {
     csv += "cam" + std::to_string(k) + "," + std::to_string(s.tau1) + "," + std::to_string(s.tau3) + "," +
            std::to_string(s.density) + "," + std::to_string(s.pixels) + "\n";
   }
-  const PanoramaScore p = scorePanorama(f.rig, frame, f.panoramaRange, panorama.range);
+  ImageF errorMap(panorama.range.width, panorama.range.height, NAN);
+  const PanoramaScore p = scorePanorama(f.rig, frame, f.panoramaRange, panorama.range, &errorMap);
+  if (args.has("maps")) writeRigMaps(args.get("maps", ""), panorama, errorMap);
   std::printf(
       "panorama %dx%d  abs-rel %5.2f %% (finite truth)  coverage %5.1f %% (of the sphere two cameras see)  "
       "density %5.1f %%\n",
