@@ -101,6 +101,9 @@ int show(const Args& args) {
   if (args.positional().size() != 2) throw UsageError("calib show needs one file: calib show IN");
   CalibFormat format{};
   const Rig rig = loadCalibration(args.positional()[1], &format, calibHintsFromArgs(args));
+  // Read before anything is printed, so that a broken rig is its one line alone.
+  const bool rigFormat = format == CalibFormat::Kalibr || format == CalibFormat::Basalt;
+  const CameraRig cameraRig = rigFormat ? loadCameraRig(args.positional()[1]) : rigFromPair(rig);
   const Eigen::AngleAxisd turn(rig.R);
   std::printf("format: %s\ncam0: %s\ncam1: %s\n", calibFormatName(format), describe(rig.cam0).c_str(),
               describe(rig.cam1).c_str());
@@ -108,7 +111,7 @@ int show(const Args& args) {
               rig.t.z(), rig.t.norm(), turn.angle() * 180.0 / M_PI);
   for (int r = 0; r < 3; ++r)
     std::printf("  [%12.9f %12.9f %12.9f | %12.9f]\n", rig.R(r, 0), rig.R(r, 1), rig.R(r, 2), rig.t(r));
-  if (format == CalibFormat::Kalibr || format == CalibFormat::Basalt) showRig(loadCameraRig(args.positional()[1]));
+  showRig(cameraRig);
   return 0;
 }
 

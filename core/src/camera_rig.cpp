@@ -142,8 +142,9 @@ int RigViews::seeingDirection(const Eigen::Vector3d& bodyDirection) const {
   return n;
 }
 
-double pairOverlap(const CameraRig& rig, int i, int j, int step) {
+double pairOverlap(const CameraRig& rig, int i, int j) {
   const Rig pair = pairRig(rig, i, j);
+  const int step = std::max(1, std::max(pair.cam0.width, pair.cam0.height) / 128);
   const View from(pair.cam0), to(pair.cam1);
   long long inView = 0, seen = 0;
   for (int y = step / 2; y < pair.cam0.height; y += step)

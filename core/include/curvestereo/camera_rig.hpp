@@ -58,8 +58,9 @@ class RigViews {
 
 // How much camera j sees of camera i's view: the share of camera i's pixels in its view
 // whose rays, at 1 m, 5 m and infinity from camera i, land in camera j's view and image
-// (the mean of the three shares), sampled every `step` px.
-double pairOverlap(const CameraRig& rig, int i, int j, int step = 8);
+// (the mean of the three shares), sampled on a grid of at most 128 x 128 pixels (the cost
+// does not grow with the resolution).
+double pairOverlap(const CameraRig& rig, int i, int j);
 // Below this share two cameras do not make a pair.
 constexpr double kMinOverlap = 0.02;
 
