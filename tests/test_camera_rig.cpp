@@ -246,10 +246,13 @@ TEST_CASE("the panorama of exact depths inside a sphere is the sphere's radius, 
   p = cs::fusePanorama(rig, results, {}, frame, width);
   CHECK(p.range(int(between.x()), int(between.y())) == doctest::Approx(3.0).epsilon(1e-3));
   CHECK(p.confidence(int(between.x()), int(between.y())) == doctest::Approx(0.8f));
-  // Where camera 1 alone has an estimate, it stands, however unconfident.
+  // Where camera 1 alone has an estimate, it stands, however unconfident, unless the caller
+  // leaves out estimates below a confidence.
   for (int k : {0, 2, 3}) results[size_t(k)].valid = cs::ImageU8(200, 200, 0);
   p = cs::fusePanorama(rig, results, {}, frame, width);
   CHECK(p.range(int(between.x()), int(between.y())) == doctest::Approx(1.0).epsilon(1e-3));
+  p = cs::fusePanorama(rig, results, {}, frame, width, 0.2f);
+  CHECK(std::isnan(p.range(int(between.x()), int(between.y()))));
 }
 
 TEST_CASE("a camera's estimates are fused by confidence where they agree") {

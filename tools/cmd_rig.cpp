@@ -74,6 +74,12 @@ Params rigParamsFromArgs(const Args& args, const CameraRig& rig) {
   return params;
 }
 
+float panoramaMinConfidence(const Args& args) {
+  const double c = args.getDouble("panorama-min-confidence", 0.0);
+  if (!(c >= 0.0 && c <= 1.0)) throw UsageError("--panorama-min-confidence expects a number in [0, 1]");
+  return float(c);
+}
+
 std::string describePairs(const std::vector<PairInfo>& pairs) {
   std::string out;
   for (const PairInfo& p : pairs) {
@@ -100,6 +106,7 @@ int runRig(const Args& args, const std::string& outDir) {
   const std::vector<PairInfo> pairs = rigPairsFromArgs(args, rig);
   const int width = panoramaWidth(args);
   const float minConfidence = minConfidenceFromArgs(args);
+  const float panoramaConfidence = panoramaMinConfidence(args);
   const Params params = rigParamsFromArgs(args, rig);
   std::vector<ImageF> images;
   for (int k = 0; k < rig.size(); ++k)
@@ -113,7 +120,7 @@ int runRig(const Args& args, const std::string& outDir) {
 
   const auto fuseStart = std::chrono::steady_clock::now();
   const PanoramaFrame frame = panoramaFrame(rig);
-  const Panorama panorama = fusePanorama(rig, r.cameras, images, frame, width);
+  const Panorama panorama = fusePanorama(rig, r.cameras, images, frame, width, panoramaConfidence);
   const double panoramaMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fuseStart).count();
 

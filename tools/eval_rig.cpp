@@ -1,4 +1,5 @@
-// curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N] [solver options]
+// curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N]
+//                         [--panorama-min-confidence C] [solver options]
 // A rig folder (../shared/data/rigs layout): each camera's tau against its depth<k>.exr, in
 // the pixel terms of its pairs; the panorama's range error where the truth is finite; and
 // the coverage, the share of the sphere seen by two cameras or more that gets a range.
@@ -154,13 +155,14 @@ int evalRig(const Args& args) {
   const RigFolder f = loadRigFolder(dir);
   const std::vector<PairInfo> pairs = rigPairsFromArgs(args, f.rig);
   const Params params = rigParamsFromArgs(args, f.rig);
+  const float panoramaConfidence = panoramaMinConfidence(args);
   RigStereo stereo(f.rig, pairs, params, backendFromArgs(args));
   std::printf("rig %s: %d cameras; backend %s; pairs %s\n", dir.c_str(), f.rig.size(), stereo.backendName().c_str(),
               describePairs(pairs).c_str());
   const RigResult r = stereo.compute(f.images);
   const auto start = std::chrono::steady_clock::now();
   const PanoramaFrame frame = panoramaFrame(f.rig);
-  const Panorama panorama = fusePanorama(f.rig, r.cameras, f.images, frame, f.panoramaRange.width);
+  const Panorama panorama = fusePanorama(f.rig, r.cameras, f.images, frame, f.panoramaRange.width, panoramaConfidence);
   const double panoramaMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
   std::string csv = "camera,tau1,tau3,density,pixels\n";

@@ -23,6 +23,9 @@ std::vector<PairInfo> rigPairsFromArgs(const Args& args, const CameraRig& rig);
 // (viewHalfAngle), at least the preset's.
 Params rigParamsFromArgs(const Args& args, const CameraRig& rig);
 
+// --panorama-min-confidence C (0 when absent): the panorama leaves out samples below C.
+float panoramaMinConfidence(const Args& args);
+
 // "0-1 (overlap 48 % / 47 %, baseline 0.113 m), ...".
 std::string describePairs(const std::vector<PairInfo>& pairs);
 // The share of a result's pixels with a depth.

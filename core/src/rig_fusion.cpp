@@ -230,7 +230,7 @@ class PanoramaAccumulator {
 }  // namespace
 
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
-                      const PanoramaFrame& frame, int width) {
+                      const PanoramaFrame& frame, int width, float minConfidence) {
   if (width < 4 || width % 2 || width > 32768)
     throw Error("panorama width must be even and 4 to 32768 px, got " + std::to_string(width));
   if (int(cameras.size()) != rig.size() || (!images.empty() && int(images.size()) != rig.size()))
@@ -245,7 +245,9 @@ Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& came
   auto pass = [&](auto member) {
     for (int k = 0; k < rig.size(); ++k)
       sources[size_t(k)].forEach(cameras[size_t(k)], images.empty() ? ImageF() : images[size_t(k)],
-                                 [&](const Splat& s) { (acc.*member)(s); });
+                                 [&](const Splat& s) {
+                                   if (s.confidence >= minConfidence || minConfidence <= 0.f) (acc.*member)(s);
+                                 });
   };
   pass(&PanoramaAccumulator::bestPass);
   pass(&PanoramaAccumulator::nearestPass);

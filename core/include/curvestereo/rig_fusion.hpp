@@ -44,10 +44,11 @@ struct Panorama {
 // panorama, each pixel as a footprint the size of its neighbours' spacing there. Per
 // panorama pixel, samples below half the best confidence there are dropped; of the rest, the
 // nearest range and those within kAgreement of it (the visible surface: a z-buffer) are
-// averaged, weighted by confidence. width: even, 4 to 32768. Throws cs::Error on sizes that
-// differ from the rig's cameras.
+// averaged, weighted by confidence. Samples below minConfidence are left out altogether (a
+// panorama with fewer holes, or fewer errors: the choice is the caller's). width: even, 4 to
+// 32768. Throws cs::Error on sizes that differ from the rig's cameras.
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
-                      const PanoramaFrame& frame, int width);
+                      const PanoramaFrame& frame, int width, float minConfidence = 0.f);
 
 // Every camera's points in the panorama frame, with their grey level, at least minConfidence.
 struct RigPoint {
