@@ -144,6 +144,24 @@ TEST_CASE("lenses wider than 180 degrees: rays beyond 90 degrees, and back-to-ba
   cs::Vec2<double> back;
   REQUIRE(built.project(ray, back));
   CHECK(std::abs(back.x()) < 1e-6);
+  // Every fisheye model projects and unprojects a ray 100 degrees off its axis (parameters of
+  // lenses wider than 200 degrees).
+  for (const Camera& wide : {Camera::kannalaBrandt4(800, 800, 230, 230, 399.5, 399.5, 0.01, -0.002, 0.0003, -0.0001),
+                             Camera::doubleSphere(800, 800, 180, 180, 399.5, 399.5, -0.2, 0.6),
+                             Camera::extendedUnified(800, 800, 180, 180, 399.5, 399.5, 0.6, 1.1),
+                             Camera::unified(800, 800, 400, 400, 399.5, 399.5, 1.5),
+                             Camera::mei(800, 800, 400, 400, 399.5, 399.5, 1.5, -0.1, 0.01, 0, 0)}) {
+    CAPTURE(wide.modelName());
+    const cs::BuiltCamera model(wide);
+    const double angle = 100 * M_PI / 180;
+    const cs::Vec3<double> p(0.6 * std::sin(angle), 0.8 * std::sin(angle), std::cos(angle));
+    cs::Vec2<double> px;
+    cs::Vec3<double> r;
+    CHECK(model.maxAngle() > angle);
+    REQUIRE(model.project(p, px));
+    REQUIRE(model.unproject(px, r));
+    CHECK((r - p).norm() < 1e-9);
+  }
   // Two 220-degree lenses back to back share a 40-degree band all around (at infinity the
   // pixels from 70 to 110 degrees: 60 % of an equidistant circle); 180-degree ones do not.
   const CameraRig wide = ring(2, 220);

@@ -272,9 +272,9 @@ int cmdRun(const Args& args) {
   }
   for (const char* option : {"poses", "cold", "pair-tolerance-ms", "topics", "compression", "read-threads", "frames"})
     if (args.has(option)) throw UsageError(std::string("--") + option + " is for run --sequence or --log");
-  const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   // Three images or more, or --rig: a rig of as many cameras (cmd_rig.cpp).
   if (args.positional().size() >= 3 || args.has("rig")) {
+    const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
     requireOutputFolder(outDir);
     for (const char* option : {"pinhole", "equirect", "sampling", "scale-intrinsics", "image-size", "mask"})
       if (args.has(option)) throw UsageError(std::string("--") + option + " is for a pair, not a rig of cameras");
@@ -284,7 +284,8 @@ int cmdRun(const Args& args) {
     if (args.has(option))
       throw UsageError(std::string("--") + option + " is for a rig (three images or more, or --rig)");
   if (args.positional().size() != 2)
-    throw UsageError("run needs two images LEFT RIGHT, or one per camera of a rig: IMG0 IMG1 IMG2 ...");
+    throw UsageError("run needs exactly two images: LEFT RIGHT (or one per camera of a rig: IMG0 IMG1 IMG2 ...)");
+  const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   requireOutputFolder(outDir);
   const Params params = paramsFromArgs(args);
   const float minConfidence = minConfidenceFromArgs(args);
