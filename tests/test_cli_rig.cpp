@@ -123,6 +123,29 @@ TEST_CASE("run with four images: every camera's outputs in cam<k>/ and a panoram
   CHECK(compared > 512 * 256 / 2);
 }
 
+TEST_CASE("run --rig with two images: a rig of two cameras gets per-camera outputs and a panorama") {
+  const fs::path dir = smallRigFolder("cli_rig_two");
+  if (dir.empty()) {
+    MESSAGE("skipped: ../shared/data/rigs/rig4_urban_dev not present");
+    return;
+  }
+  cs::CameraRig rig = cs::loadCameraRig((dir / "camchain.yaml").string());
+  rig.cameras.resize(2);
+  rig.poses.resize(2);
+  cs::saveKalibrRig(rig, (dir / "two.yaml").string());
+  const CliOutcome o = runCli(
+      dir, "run --rig --calib two.yaml" + images(2) + " -o out --backend cpu --preset fast --panorama-width 256");
+  CAPTURE(o.err);
+  REQUIRE(o.exitCode == 0);
+  CHECK(o.out.find("pairs: 0-1") != std::string::npos);
+  for (const char* file : {"cam0/depth.exr", "cam1/depth.exr", "panorama_range.exr", "points.ply"})
+    CHECK(fs::exists(dir / "out" / file));
+  // Without --rig two images are a pair, as ever: the outputs of camera 0 in OUT itself.
+  REQUIRE(runCli(dir, "run --calib two.yaml" + images(2) + " -o pair --backend cpu --preset fast").exitCode == 0);
+  CHECK(fs::exists(dir / "pair" / "depth.exr"));
+  CHECK(!fs::exists(dir / "pair" / "cam0"));
+}
+
 TEST_CASE("eval on a rig folder: each camera's tau, the panorama's abs-rel and coverage") {
   const fs::path dir = smallRigFolder("cli_rig_eval");
   if (dir.empty()) {
