@@ -287,6 +287,17 @@ TEST_CASE("a camera's estimates are fused by confidence where they agree") {
   CHECK(f.depth.radial(x + 1, y) == a.depth.radial(x + 1, y));
   CHECK(f.confidence(x + 3, y) == doctest::Approx(0.3f));  // only b there
   CHECK(f.valid(x + 2, y) == 1);
+  // A result without its confidence cannot be fused: one line, not a read out of bounds.
+  cs::DepthResult bare = a;
+  bare.confidence = cs::ImageF();
+  CHECK(errorOf([&] {
+          cs::fuseCameraEstimates(rig.cameras[0], {&a, &bare});
+        }).find("needs every output") != std::string::npos);
+  std::vector<cs::DepthResult> results(4, a);
+  results[2] = bare;
+  CHECK(errorOf([&] {
+          cs::fusePanorama(rig, results, {}, cs::panoramaFrame(rig), 64);
+        }).find("fusePanorama: a result for a camera of 200x200 px needs valid, depth and confidence") == 0);
   // The points follow the fused depth along the pixel's ray.
   const cs::Point3f q = f.depth.points(x, y);
   CHECK(std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z) == doctest::Approx(expected).epsilon(1e-5));

@@ -49,7 +49,7 @@ class KalibrReader {
   }
 
   // cam0..camN-1, posed in camera 0's frame through the T_cn_cnm1 chain, or in the IMU's
-  // frame when no camera but cam0 has T_cn_cnm1 and all have T_cam_imu (or T_imu_cam).
+  // frame when the chain is incomplete and every camera has T_cam_imu (or T_imu_cam).
   CameraRig readRig(const std::string& text) const {
     const YAML::Node root = doc_.parse(text, "YAML");
     if (!root.IsMap()) fail("not a Kalibr camchain (expected a mapping with keys cam0, cam1, ...)");

@@ -34,18 +34,28 @@ Image<Eigen::Vector3f> cameraRays(const Camera& cam) {
   return rays;
 }
 
-void checkSameSize(const ImageU8& valid, const Camera& cam, const char* what) {
-  if (valid.width != cam.width || valid.height != cam.height)
-    throw Error(std::string(what) + ": a result of " + std::to_string(valid.width) + "x" +
-                std::to_string(valid.height) + " px for a camera of " + std::to_string(cam.width) + "x" +
-                std::to_string(cam.height) + " px");
+template <class T>
+bool sameSize(const Image<T>& image, const Camera& cam) {
+  return image.width == cam.width && image.height == cam.height;
+}
+
+// The fusion reads a result's valid mask, radial depth and confidence (and, for a camera's
+// fusion, every other output), so each must be the camera's size.
+void checkResult(const DepthResult& r, const Camera& cam, bool allOutputs, const char* what) {
+  const bool sizes = sameSize(r.valid, cam) && sameSize(r.depth.radial, cam) && sameSize(r.confidence, cam);
+  const bool others = !allOutputs || (sameSize(r.disparity, cam) && sameSize(r.warp, cam) && sameSize(r.depth.z, cam) &&
+                                      sameSize(r.depth.points, cam));
+  if (!sizes || !others)
+    throw Error(std::string(what) + ": a result for a camera of " + std::to_string(cam.width) + "x" +
+                std::to_string(cam.height) + " px needs " +
+                (allOutputs ? "every output" : "valid, depth and confidence") + " at that size (Stereo::setOutputs)");
 }
 
 }  // namespace
 
 DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates) {
   if (estimates.empty()) throw Error("fuseCameraEstimates: no estimates");
-  for (const DepthResult* e : estimates) checkSameSize(e->valid, cam, "fuseCameraEstimates");
+  for (const DepthResult* e : estimates) checkResult(*e, cam, true, "fuseCameraEstimates");
   DepthResult out = *estimates.front();
   const Image<Eigen::Vector3f> rays = cameraRays(cam);
   for (size_t p = 0; p < out.valid.size(); ++p) {
@@ -133,6 +143,7 @@ class SplatSource {
       for (int x = 0; x < radial.width; ++x) {
         if (!r.valid(x, y)) continue;
         const Eigen::Vector3d point = pointOf(x, y, radial(x, y));
+        if (!point.allFinite()) continue;  // a pixel the camera does not unproject
         const Eigen::Vector2d at = panoramaPixel(point, width_);
         double spacing = 0.5;
         // The spacing to the neighbours on the same surface sets the footprint, so that the
@@ -140,7 +151,7 @@ class SplatSource {
         for (const auto& [nx, ny] :
              {std::pair{x + 1, y}, std::pair{x, y + 1}, std::pair{x - 1, y}, std::pair{x, y - 1}}) {
           if (nx < 0 || ny < 0 || nx >= radial.width || ny >= radial.height || !r.valid(nx, ny)) continue;
-          if (!agrees(radial(nx, ny), radial(x, y))) continue;
+          if (!agrees(radial(nx, ny), radial(x, y)) || !rays_(nx, ny).allFinite()) continue;
           Eigen::Vector2d step = panoramaPixel(pointOf(nx, ny, radial(nx, ny)), width_) - at;
           step.x() = std::remainder(step.x(), double(width_));  // across the longitude seam
           spacing = std::max(spacing, 0.5 * step.cwiseAbs().maxCoeff());
@@ -238,7 +249,9 @@ Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& came
                 " images for a rig of " + std::to_string(rig.size()) + " cameras");
   std::vector<SplatSource> sources;
   for (int k = 0; k < rig.size(); ++k) {
-    checkSameSize(cameras[size_t(k)].valid, rig.cameras[size_t(k)], "fusePanorama");
+    checkResult(cameras[size_t(k)], rig.cameras[size_t(k)], false, "fusePanorama");
+    if (!images.empty() && !sameSize(images[size_t(k)], rig.cameras[size_t(k)]))
+      throw Error("fusePanorama: image " + std::to_string(k) + " is not its camera's size");
     sources.emplace_back(rig.cameras[size_t(k)], rig.poses[size_t(k)], frame, width);
   }
   PanoramaAccumulator acc(width);
@@ -257,15 +270,21 @@ Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& came
 
 std::vector<RigPoint> mergedPoints(const CameraRig& rig, const std::vector<DepthResult>& cameras,
                                    const std::vector<ImageF>& images, const PanoramaFrame& frame, float minConfidence) {
+  if (int(cameras.size()) != rig.size() || (!images.empty() && int(images.size()) != rig.size()))
+    throw Error("mergedPoints: " + std::to_string(cameras.size()) + " results and " + std::to_string(images.size()) +
+                " images for a rig of " + std::to_string(rig.size()) + " cameras");
   std::vector<RigPoint> points;
-  for (int k = 0; k < rig.size() && k < int(cameras.size()); ++k) {
+  for (int k = 0; k < rig.size(); ++k) {
     const DepthResult& r = cameras[size_t(k)];
+    if (!sameSize(r.depth.points, rig.cameras[size_t(k)]) ||
+        (!images.empty() && !sameSize(images[size_t(k)], rig.cameras[size_t(k)])))
+      throw Error("mergedPoints: the points and image of camera " + std::to_string(k) + " must be its size");
     const Eigen::Matrix3d R = frame.R.transpose() * rig.poses[size_t(k)].R;
     const Eigen::Vector3d p = frame.R.transpose() * (rig.poses[size_t(k)].p - frame.centre);
     for (size_t i = 0; i < r.depth.points.size(); ++i) {
       const Point3f& q = r.depth.points.data[i];
       if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z)) continue;
-      if (!(r.confidence.empty() || r.confidence.data[i] >= minConfidence)) continue;
+      if (!(r.confidence.size() != r.depth.points.size() || r.confidence.data[i] >= minConfidence)) continue;
       const Eigen::Vector3d x = R * Eigen::Vector3d(q.x, q.y, q.z) + p;
       const float grey = images.empty() ? 0.5f : images[size_t(k)].data[i];
       points.push_back({float(x.x()), float(x.y()), float(x.z()), grey});

@@ -79,8 +79,8 @@ std::vector<PairInfo> choosePairs(const CameraRig& rig, int partners = 2);
 // kMinOverlap); one-line cs::Error otherwise.
 std::vector<PairInfo> parsePairs(const CameraRig& rig, const std::string& text);
 
-// A rig calibration: a Kalibr camchain with cam0..camN-1 (T_cn_cnm1 chains, or every camera's
-// T_cam_imu / T_imu_cam; the body frame is camera 0's, or the IMU's) or a Basalt
+// A rig calibration: a Kalibr camchain with cam0..camN-1 (the T_cn_cnm1 chain; where it is
+// incomplete, every camera's T_cam_imu / T_imu_cam; the body frame is camera 0's, or the IMU's) or a Basalt
 // calibration.json with N cameras (T_imu_cam; the body frame is the IMU's). The rig is
 // validated. One-line cs::Error naming the file and the problem.
 CameraRig loadCameraRig(const std::string& path);

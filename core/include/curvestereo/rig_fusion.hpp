@@ -14,7 +14,7 @@ namespace cs {
 // pixel the most confident estimate wins, and the others within kAgreement of its inverse
 // depth are averaged with it, weighted by confidence. Disparity and warp are the winner's
 // (they belong to its pair). The confidence is the winner's. `cam` recomputes the points.
-// Throws cs::Error for no estimates or estimates of different sizes.
+// Throws cs::Error for no estimates, or an estimate without every output at the camera's size.
 DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates);
 constexpr double kAgreement = 0.05;
 
@@ -46,11 +46,13 @@ struct Panorama {
 // nearest range and those within kAgreement of it (the visible surface: a z-buffer) are
 // averaged, weighted by confidence. Samples below minConfidence are left out altogether (a
 // panorama with fewer holes, or fewer errors: the choice is the caller's). width: even, 4 to
-// 32768. Throws cs::Error on sizes that differ from the rig's cameras.
+// 32768. Throws cs::Error when a result lacks its valid mask, radial depth or confidence at its
+// camera's size, or an image (optional: none gives NaN grey) is not that size.
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
                       const PanoramaFrame& frame, int width, float minConfidence = 0.f);
 
 // Every camera's points in the panorama frame, with their grey level, at least minConfidence.
+// Throws cs::Error when the results or images are not one per camera, at its size.
 struct RigPoint {
   float x, y, z;
   float grey;
