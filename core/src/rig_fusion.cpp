@@ -118,14 +118,25 @@ Eigen::Vector2d panoramaPixel(const Eigen::Vector3d& d, int width) {
 
 namespace {
 
-// A camera pixel's footprint in the panorama: its centre there, its half-size (px) and range.
+// A camera pixel's footprint in the panorama: its centre there, its half-width and
+// half-height (px) and its range.
 struct Splat {
-  Eigen::Vector2d at;
-  double radius;
+  Eigen::Vector2d at, radius;
   float range, confidence, grey;
 };
 
+// The largest half-size of a footprint, in panorama pixels at the equator: larger footprints
+// would smear a surface over what lies beside it.
 constexpr double kMaxSplatRadius = 3.0;
+
+// The footprint's half-sizes: half the spacing to the neighbours on the same surface, at
+// least half a pixel, at most kMaxSplatRadius of the sphere's arc. A column's arc shrinks
+// with cos(latitude), so near the poles a camera pixel spans many columns.
+Eigen::Vector2d footprint(const Eigen::Vector2d& spacing, double row, int width) {
+  const double height = width / 2, latitude = M_PI / 2 - M_PI * (row + 0.5) / height;
+  const double columns = kMaxSplatRadius / std::max(std::cos(latitude), 2.0 * kMaxSplatRadius / width);
+  return {std::clamp(0.5 * spacing.x(), 0.5, columns), std::clamp(0.5 * spacing.y(), 0.5, kMaxSplatRadius)};
+}
 
 // Where camera k's pixels land in the panorama, as forEachSplat's callback receives them.
 class SplatSource {
@@ -145,20 +156,24 @@ class SplatSource {
         const Eigen::Vector3d point = pointOf(x, y, radial(x, y));
         if (!point.allFinite()) continue;  // a pixel the camera does not unproject
         const Eigen::Vector2d at = panoramaPixel(point, width_);
-        double spacing = 0.5;
-        // The spacing to the neighbours on the same surface sets the footprint, so that the
-        // panorama has no holes where it samples more finely than the camera.
+        // The steps to the neighbours on the same surface along the camera's rows (a) and
+        // columns (b) set the footprint: a box of half-size (|a| + |b|) / 2 per axis covers
+        // the cell they span however the camera's grid lies in the panorama, so the panorama
+        // has no holes where it samples more finely than the camera.
+        Eigen::Vector2d a = Eigen::Vector2d::Zero(), b = Eigen::Vector2d::Zero();
         for (const auto& [nx, ny] :
              {std::pair{x + 1, y}, std::pair{x, y + 1}, std::pair{x - 1, y}, std::pair{x, y - 1}}) {
           if (nx < 0 || ny < 0 || nx >= radial.width || ny >= radial.height || !r.valid(nx, ny)) continue;
           if (!agrees(radial(nx, ny), radial(x, y)) || !rays_(nx, ny).allFinite()) continue;
           Eigen::Vector2d step = panoramaPixel(pointOf(nx, ny, radial(nx, ny)), width_) - at;
           step.x() = std::remainder(step.x(), double(width_));  // across the longitude seam
-          spacing = std::max(spacing, 0.5 * step.cwiseAbs().maxCoeff());
+          Eigen::Vector2d& along = ny == y ? a : b;
+          along = along.cwiseMax(step.cwiseAbs());
         }
+        const Eigen::Vector2d spacing = a + b;
         const float grey = image.empty() ? kNaNf : image(x, y);
         const float range = std::isfinite(radial(x, y)) ? float(point.norm()) : INFINITY;
-        emit({at, std::min(spacing, kMaxSplatRadius), range, r.confidence(x, y), grey});
+        emit({at, footprint(spacing, at.y(), width_), range, r.confidence(x, y), grey});
       }
   }
 
@@ -192,9 +207,9 @@ class PanoramaAccumulator {
 
   template <class F>
   void cover(const Splat& s, F&& f) {
-    const int x0 = int(std::ceil(s.at.x() - s.radius)), x1 = int(std::floor(s.at.x() + s.radius));
-    const int y0 = std::max(0, int(std::ceil(s.at.y() - s.radius))),
-              y1 = std::min(height_ - 1, int(std::floor(s.at.y() + s.radius)));
+    const int x0 = int(std::ceil(s.at.x() - s.radius.x())), x1 = int(std::floor(s.at.x() + s.radius.x()));
+    const int y0 = std::max(0, int(std::ceil(s.at.y() - s.radius.y()))),
+              y1 = std::min(height_ - 1, int(std::floor(s.at.y() + s.radius.y())));
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) f(((x % width_) + width_) % width_, y);
   }
