@@ -24,6 +24,11 @@ RigStereo::RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, c
 
 RigStereo::~RigStereo() = default;
 
+void RigStereo::setCrossCheck(double tolerance) {
+  if (!(tolerance >= 0 && tolerance <= 1)) throw Error("cross-check tolerance must be in [0, 1]");
+  crossCheck_ = tolerance;
+}
+
 std::string RigStereo::backendName() const { return directions_.front().stereo->backendName(); }
 
 RigResult RigStereo::compute(const std::vector<ImageF>& images) {
@@ -37,6 +42,15 @@ RigResult RigStereo::compute(const std::vector<ImageF>& images) {
     Direction& dir = directions_[d];
     dir.stereo->compute(images[size_t(dir.reference)], images[size_t(dir.other)], estimates[d]);
     out.solves.push_back({dir.reference, dir.other, estimates[d].totalMs});
+  }
+  if (crossCheck_ > 0) {
+    // Against the other directions as solved, not as already checked.
+    const std::vector<DepthResult> solved = estimates;
+    for (size_t d = 0; d < directions_.size(); ++d)
+      for (size_t back = 0; back < directions_.size(); ++back)
+        if (directions_[back].reference == directions_[d].other && directions_[back].other == directions_[d].reference)
+          out.solves[d].crossCheckInvalidated = crossCheck(
+              pairRig(rig_, directions_[d].reference, directions_[d].other), estimates[d], solved[back], crossCheck_);
   }
   for (int k = 0; k < rig_.size(); ++k) {
     std::vector<const DepthResult*> mine;

@@ -305,6 +305,24 @@ TEST_CASE("a camera's estimates are fused by confidence where they agree") {
   CHECK(std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z) == doctest::Approx(expected).epsilon(1e-5));
 }
 
+TEST_CASE("the cross-check between a pair's directions takes away what the other direction contradicts") {
+  const CameraRig rig = ring(4, 200);
+  cs::DepthResult forward = sphereResult(rig, 0, 3.0, 0.9f);
+  const cs::DepthResult backward = sphereResult(rig, 1, 3.0, 0.9f);
+  const cs::Rig pair = cs::pairRig(rig, 0, 1);
+  CHECK(cs::crossCheck(pair, forward, backward, 0.05) == 0);  // one sphere seen from both
+  // (145, 100) looks 45 degrees to the right, where camera 1 sees too; (54, 100) to the left,
+  // where it does not: only the first can be contradicted.
+  forward.depth.radial(145, 100) = 1.5f;
+  forward.depth.radial(54, 100) = 1.5f;
+  CHECK(cs::crossCheck(pair, forward, backward, 0.05) == 1);
+  CHECK(forward.valid(145, 100) == 0);
+  CHECK(std::isnan(forward.depth.radial(145, 100)));
+  CHECK(std::isnan(forward.confidence(145, 100)));
+  CHECK(forward.valid(54, 100) == 1);
+  CHECK(forward.depth.radial(54, 100) == 1.5f);
+}
+
 TEST_CASE("rig4_urban_dev: four cameras in a ring, its neighbours paired, the panorama frame its body's") {
   const std::string path = cs::test::sharedData("rigs/rig4_urban_dev/camchain.yaml");
   if (path.empty()) {

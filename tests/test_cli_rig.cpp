@@ -199,6 +199,10 @@ TEST_CASE("calib show prints a rig's cameras and overlaps; bad rigs and rig opti
   checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png cam2.png -o out --pairs 0-3"),
                "--pairs: 0-3 is not two cameras of this rig");
   checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png -o out --pairs 0-1"), "--pairs is for a rig", 2);
+  checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png -o out --cross-check 0.1"),
+               "--cross-check is for a rig", 2);
+  checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png cam2.png -o out --cross-check 2"),
+               "--cross-check expects a tolerance in [0, 1]", 2);
   checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png cam2.png -o out --equirect 64"),
                "--equirect is for a pair", 2);
   std::string text = cs::test::readFile(dir / "rig.yaml");

@@ -74,6 +74,12 @@ Params rigParamsFromArgs(const Args& args, const CameraRig& rig) {
   return params;
 }
 
+double crossCheckFromArgs(const Args& args) {
+  const double t = args.getDouble("cross-check", 0.0);
+  if (!(t >= 0.0 && t <= 1.0)) throw UsageError("--cross-check expects a tolerance in [0, 1] (e.g. 0.1)");
+  return t;
+}
+
 float panoramaMinConfidence(const Args& args) {
   const double c = args.getDouble("panorama-min-confidence", 0.0);
   if (!(c >= 0.0 && c <= 1.0)) throw UsageError("--panorama-min-confidence expects a number in [0, 1]");
@@ -112,11 +118,17 @@ int runRig(const Args& args, const std::string& outDir) {
   for (int k = 0; k < rig.size(); ++k)
     images.push_back(loadImageFor(paths[size_t(k)], rig.cameras[size_t(k)], ("cam" + std::to_string(k)).c_str()));
 
+  const double crossCheckTolerance = crossCheckFromArgs(args);
   RigStereo stereo(rig, pairs, params, backendFromArgs(args));
+  stereo.setCrossCheck(crossCheckTolerance);
   std::printf("backend: %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
   std::printf("pairs: %s\n", describePairs(pairs).c_str());
   const RigResult r = stereo.compute(images);
-  for (const RigResult::Solve& s : r.solves) std::printf("  cam%d from cam%d: %.1f ms\n", s.reference, s.other, s.ms);
+  for (const RigResult::Solve& s : r.solves)
+    std::printf("  cam%d from cam%d: %.1f ms%s\n", s.reference, s.other, s.ms,
+                crossCheckTolerance > 0
+                    ? (", cross-check took " + std::to_string(s.crossCheckInvalidated) + " px").c_str()
+                    : "");
 
   const auto fuseStart = std::chrono::steady_clock::now();
   const PanoramaFrame frame = panoramaFrame(rig);

@@ -252,7 +252,7 @@ int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert(
       {"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling", "image-size"});
-  known.insert({"rig", "pairs", "partners", "panorama-width", "panorama-min-confidence"});
+  known.insert({"rig", "pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"});
   known.insert(
       {"sequence", "poses", "cold", "pair-tolerance-ms", "log", "topics", "compression", "read-threads", "frames"});
   args.allowOnly(known);
@@ -262,7 +262,7 @@ int cmdRun(const Args& args) {
     if (!args.positional().empty()) throw UsageError(std::string(which) + " takes no images: the source names them");
     for (const char* option : {"topics", "compression"})
       if (args.has(option) && !args.has("log")) throw UsageError(std::string("--") + option + " is for run --log");
-    for (const char* option : {"rig", "pairs", "partners", "panorama-width", "panorama-min-confidence"})
+    for (const char* option : {"rig", "pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"})
       if (args.has(option))
         throw UsageError(std::string("--") + option + " is for one frame of a rig: " + which + " solves a pair");
     const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
@@ -280,7 +280,7 @@ int cmdRun(const Args& args) {
       if (args.has(option)) throw UsageError(std::string("--") + option + " is for a pair, not a rig of cameras");
     return runRig(args, outDir);
   }
-  for (const char* option : {"pairs", "partners", "panorama-width", "panorama-min-confidence"})
+  for (const char* option : {"pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"})
     if (args.has(option))
       throw UsageError(std::string("--") + option + " is for a rig (three images or more, or --rig)");
   if (args.positional().size() != 2)

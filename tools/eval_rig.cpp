@@ -1,5 +1,5 @@
 // curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N]
-//                         [--panorama-min-confidence C] [solver options]
+//                         [--cross-check T] [--panorama-min-confidence C] [solver options]
 // A rig folder (../shared/data/rigs layout): each camera's tau against its depth<k>.exr, in
 // the pixel terms of its pairs; the panorama's range error where the truth is finite; and
 // the coverage, the share of the sphere seen by two cameras or more that gets a range.
@@ -157,6 +157,7 @@ int evalRig(const Args& args) {
   const Params params = rigParamsFromArgs(args, f.rig);
   const float panoramaConfidence = panoramaMinConfidence(args);
   RigStereo stereo(f.rig, pairs, params, backendFromArgs(args));
+  stereo.setCrossCheck(crossCheckFromArgs(args));
   std::printf("rig %s: %d cameras; backend %s; pairs %s\n", dir.c_str(), f.rig.size(), stereo.backendName().c_str(),
               describePairs(pairs).c_str());
   const RigResult r = stereo.compute(f.images);

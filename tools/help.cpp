@@ -62,6 +62,9 @@ a rig of N cameras (three images or more, or --rig; docs/guide.md "run on a rig"
                          and baseline; `calib show RIG` lists them)
   --partners N           how many partners each camera takes (default 2)
   --panorama-width W     the panorama's width, even (default 2048; its height is W/2)
+  --cross-check T        each camera's depth from a pair checked against the pair's other
+                         direction: pixels whose inverse ranges differ by more than T (e.g.
+                         0.1) are taken away (default 0: off)
   --panorama-min-confidence C   the panorama leaves out estimates of confidence below C
                          (default 0: every estimate; fewer holes, or fewer errors)
 sequences:
@@ -114,7 +117,7 @@ into an MCAP log, each message stamped with its frame's timestamp (ns).
        curvestereo eval PAIRDIR... --sweep warps=A..B|dumax=A..B --csv FILE [--warps-list 5,10,20] [--step X]
        curvestereo eval --sequence DIR... [--cold | --compare] [--blind] [--frames N] [--csv FILE] [--md FILE]
        curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N]
-                         [--panorama-min-confidence C] [solver options]
+                         [--cross-check T] [--panorama-min-confidence C] [solver options]
 
 A PAIRDIR holds left.png, right.png, camchain.yaml and depth_left.exr (optional
 depth_right.exr for the non-occluded scores), as `curvestereo synth` writes it.

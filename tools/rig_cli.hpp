@@ -23,6 +23,8 @@ std::vector<PairInfo> rigPairsFromArgs(const Args& args, const CameraRig& rig);
 // (viewHalfAngle), at least the preset's.
 Params rigParamsFromArgs(const Args& args, const CameraRig& rig);
 
+// --cross-check T (0 when absent): the tolerance of RigStereo::setCrossCheck.
+double crossCheckFromArgs(const Args& args);
 // --panorama-min-confidence C (0 when absent): the panorama leaves out samples below C.
 float panoramaMinConfidence(const Args& args);
 

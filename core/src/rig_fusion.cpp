@@ -86,6 +86,51 @@ DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const Depth
   return out;
 }
 
+namespace {
+
+// Every output of pixel p made NaN: DepthResult's contract where valid is 0.
+void invalidate(DepthResult& r, size_t p) {
+  r.valid.data[p] = 0;
+  r.disparity.data[p] = r.depth.radial.data[p] = r.depth.z.data[p] = r.confidence.data[p] = kNaNf;
+  r.warp.data[p] = {kNaNf, kNaNf};
+  r.depth.points.data[p] = {kNaNf, kNaNf, kNaNf};
+}
+
+// Inverse ranges within tolerance of the larger, or within the slack that a fraction of a
+// pixel of parallax makes of distant points.
+bool consistent(double inverseA, double inverseB, double tolerance) {
+  constexpr double kInverseSlack = 0.005;
+  return std::abs(inverseA - inverseB) <= tolerance * std::max(inverseA, inverseB) + kInverseSlack;
+}
+
+}  // namespace
+
+long long crossCheck(const Rig& pair, DepthResult& forward, const DepthResult& backward, double tolerance) {
+  checkResult(forward, pair.cam0, true, "crossCheck");
+  checkResult(backward, pair.cam1, false, "crossCheck");
+  const Image<Eigen::Vector3f> rays = cameraRays(pair.cam0);
+  const BuiltCamera other(pair.cam1);
+  long long invalidated = 0;
+  for (int y = 0; y < forward.valid.height; ++y)
+    for (int x = 0; x < forward.valid.width; ++x) {
+      const double depth = forward.depth.radial(x, y);
+      const Eigen::Vector3d ray = rays(x, y).cast<double>();
+      if (!forward.valid(x, y) || !ray.allFinite()) continue;
+      // A point at infinity is its direction; in camera j it is at infinity too.
+      const Eigen::Vector3d inOther =
+          std::isfinite(depth) ? Eigen::Vector3d(pair.R * (depth * ray) + pair.t) : Eigen::Vector3d(pair.R * ray);
+      Vec2<double> px;
+      if (!other.project(inOther, px) || !other.inImage(px)) continue;
+      const int u = int(std::lround(px.x())), v = int(std::lround(px.y()));
+      if (u < 0 || v < 0 || u >= backward.valid.width || v >= backward.valid.height || !backward.valid(u, v)) continue;
+      const double inverseHere = std::isfinite(depth) ? 1.0 / inOther.norm() : 0.0;
+      if (consistent(inverseHere, 1.0 / double(backward.depth.radial(u, v)), tolerance)) continue;
+      invalidate(forward, size_t(y) * size_t(forward.valid.width) + size_t(x));
+      ++invalidated;
+    }
+  return invalidated;
+}
+
 PanoramaFrame panoramaFrame(const CameraRig& rig) {
   PanoramaFrame f;
   f.centre = rig.centre();

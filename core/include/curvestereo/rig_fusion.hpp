@@ -18,6 +18,16 @@ namespace cs {
 DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates);
 constexpr double kAgreement = 0.05;
 
+// The round trip between a pair's two directions, on the host, at no solve's cost: each pixel
+// of `forward` (camera i's depth from the pair with j; pair = pairRig(rig, i, j)) is carried
+// at its depth into camera j and compared with `backward` (camera j's depth from i) at the
+// nearest pixel. Where both have a depth and their inverse ranges differ by more than
+// `tolerance` of the larger (plus 0.005 / m, so that far points compare in parallax), the
+// pixel becomes invalid in `forward` (every output NaN). Pixels whose point leaves camera j's
+// image or meets no estimate there stay. Returns how many were invalidated. Throws cs::Error
+// when a result lacks its outputs at its camera's size.
+long long crossCheck(const Rig& pair, DepthResult& forward, const DepthResult& backward, double tolerance);
+
 // The panorama's frame in the body frame: its y axis (down) is the cameras' mean y axis, its
 // z axis (longitude 0) camera 0's optical axis made perpendicular to it, its origin `centre`.
 struct PanoramaFrame {

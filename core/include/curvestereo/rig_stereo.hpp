@@ -23,6 +23,7 @@ struct RigResult {
   struct Solve {
     int reference = 0, other = 0;  // the pair's cameras: depth for `reference`
     double ms = 0;
+    long long crossCheckInvalidated = 0;  // pixels the cross-check took away (setCrossCheck)
   };
   std::vector<Solve> solves;
   double totalMs = 0;  // the solves and the fusion
@@ -41,6 +42,9 @@ class RigStereo {
 
   // images[k] is camera k's (float grey in [0, 1], its camera's size).
   RigResult compute(const std::vector<ImageF>& images);
+  // With a tolerance > 0, each camera's estimate from a pair is checked against the pair's
+  // other direction before the fusion (crossCheck in rig_fusion.hpp); 0 (default) leaves it.
+  void setCrossCheck(double tolerance);
   // The backend the solves run on, as Stereo names it.
   std::string backendName() const;
 
@@ -51,6 +55,7 @@ class RigStereo {
   };
   CameraRig rig_;
   std::vector<Direction> directions_;
+  double crossCheck_ = 0;
 };
 
 }  // namespace cs
