@@ -139,6 +139,10 @@ void CpuBackend::doUpload(const Buffer& dst, const float* host, bool* finite) {
   copyFloats(view(dst).data, host, dst.count(), finite);
 }
 
+void CpuBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
+  floatsFromBytes(view(dst).data, host, dst.count());
+}
+
 void CpuBackend::doDownload(const Buffer& src, float* host) {
   const float* d = view(src).data;
   std::copy(d, d + src.count(), host);
@@ -182,8 +186,8 @@ void CpuBackend::doFinishResult(const Buffer& valid, const Buffer& z, const Buff
 
 void CpuBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                              const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
-  cpu::roundTrip(view(error), view(w), view(calibration), view(reverseW), view(reverseCalibration),
-                 view(reverseMask), view(mask));
+  cpu::roundTrip(view(error), view(w), view(calibration), view(reverseW), view(reverseCalibration), view(reverseMask),
+                 view(mask));
 }
 
 void CpuBackend::doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,

@@ -53,10 +53,9 @@ void finishResult(const View& valid, const View& z, const View& radial, const Vi
                   const View& warp, const View& confidence);
 void roundTrip(const View& error, const View& w, const View& calibration, const View& reverseW,
                const View& reverseCalibration, const View& reverseMask, const View& mask);
-void resultConfidence(const View& confidence, const View& radial, const View& points, const View& image,
-                      const View& n0, const View& n1, const View& w, const View& trajectory,
-                      const View* sweepConfidence, const View* roundTripError, const View& mask,
-                      const ConfidenceParams& p);
+void resultConfidence(const View& confidence, const View& radial, const View& points, const View& image, const View& n0,
+                      const View& n1, const View& w, const View& trajectory, const View* sweepConfidence,
+                      const View* roundTripError, const View& mask, const ConfidenceParams& p);
 
 // Physical memory, or the container's memory limit when lower (0 if unknown): create()
 // refuses buffers beyond it with a cs::Error naming the size instead of being OOM-killed.
@@ -71,6 +70,7 @@ class CpuBackend final : public Backend {
  protected:
   Buffer doCreate(int width, int height, int channels) override;
   void doUpload(const Buffer& dst, const float* host, bool* finite) override;
+  void doUploadBytes(const Buffer& dst, const uint8_t* host) override;
   void doDownload(const Buffer& src, float* host) override;
   void doFill(const Buffer& dst, float value) override;
   void doCopy(const Buffer& dst, const Buffer& src) override;

@@ -107,6 +107,7 @@ CudaBackend::~CudaBackend() {
   for (Slot& s : slots_) {
     cudaFree(s.dev);
     if (s.pinned) cudaFreeHost(s.pinned);
+    cudaFree(s.bytes);
     if (s.staged) cudaEventDestroy(s.staged);
   }
   for (auto& kv : scratch_) cudaFree(kv.second);
@@ -268,6 +269,21 @@ void CudaBackend::doUpload(const Buffer& dst, const float* host, bool* finite) {
   copyFloats(staging, host, dst.count(), finite);
   ok(cudaMemcpyAsync(s.dev, staging, bytes, cudaMemcpyHostToDevice, stream_), "upload");
   ok(cudaEventRecord(s.staged, stream_), "cudaEventRecord");
+}
+
+// The bytes cross the bus and are converted by a kernel: a quarter of a float image's
+// copy into the staging memory and of its transfer.
+void CudaBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
+  flush();
+  Slot& s = slots_[size_t(slot(dst).buffer.id)];
+  const size_t n = dst.count();
+  if (!s.bytes) ok(cudaMalloc(&s.bytes, n), "cudaMalloc (byte upload)");
+  uint8_t* staging = reinterpret_cast<uint8_t*>(pinnedFor(s));
+  ok(cudaEventSynchronize(s.staged), "cudaEventSynchronize");  // the previous upload left the staging area
+  std::memcpy(staging, host, n);
+  ok(cudaMemcpyAsync(s.bytes, staging, n, cudaMemcpyHostToDevice, stream_), "upload");
+  ok(cudaEventRecord(s.staged, stream_), "cudaEventRecord");
+  check(cudak::launchFloatsFromBytes(stream_, s.dev, s.bytes, n), "upload (bytes to floats)");
 }
 
 void CudaBackend::doDownload(const Buffer& src, float* host) {

@@ -77,6 +77,7 @@ class CudaBackend final : public Backend {
  protected:
   Buffer doCreate(int width, int height, int channels) override;
   void doUpload(const Buffer& dst, const float* host, bool* finite) override;
+  void doUploadBytes(const Buffer& dst, const uint8_t* host) override;
   void doDownload(const Buffer& src, float* host) override;
   void doFill(const Buffer& dst, float value) override;
   void doCopy(const Buffer& dst, const Buffer& src) override;
@@ -146,6 +147,7 @@ class CudaBackend final : public Backend {
     float* pinned = nullptr;       // host staging, allocated at the first transfer
     CUevent_st* staged = nullptr;  // completes when the last upload from `pinned` is done
     float* home = nullptr;         // the memory allocated for it: dev at every frame's start and end
+    uint8_t* bytes = nullptr;      // device copy of an uploadBytes() image, before its conversion
     Buffer buffer;
   };
   struct PrimalDualScratch {

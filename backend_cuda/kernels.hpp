@@ -5,6 +5,7 @@
 // return cudaGetLastError(). Included by host C++ (cuda_backend.cpp) and by the .cu files;
 // no Eigen.
 #pragma once
+#include <cstdint>
 #include <cuda_runtime_api.h>
 
 #include "curvestereo/kernel_params.hpp"
@@ -84,6 +85,8 @@ struct InlineFloats {
   float value[kMaxInlineFloats];
 };
 cudaError_t launchSetFloats(cudaStream_t s, float* dst, const InlineFloats& values);
+// dst[i] = unitFromByte(src[i]) for n bytes (uploadBytes).
+cudaError_t launchFloatsFromBytes(cudaStream_t s, float* dst, const uint8_t* src, size_t n);
 cudaError_t launchFields(cudaStream_t s, Img mask, Img calibration, Img trajectory, const FieldsParams& p,
                          const FieldsBaseline& baseline);
 cudaError_t launchTriangulate(cudaStream_t s, Img radial, Img points, Img w, Img mask, const CameraParams& cam0,

@@ -233,8 +233,12 @@ struct PcFinishResult {
   Addr valid, z, radial, points, disparity, warp, confidence;
   int32_t width, height;
 };
+struct PcConfidenceTerms {
+  Addr terms, image, n0, n1, w, mask;
+  int32_t width, height;
+};
 struct PcResultConfidence {
-  Addr confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError, mask, params;
+  Addr confidence, radial, points, terms, w, trajectory, sweepConfidence, roundTripError, mask, params;
   int32_t width, height, hasSweep, hasRoundTrip;  // absent buffers: mask
 };
 static_assert(sizeof(PcResultConfidence) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
@@ -742,12 +746,16 @@ void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& r
   VkConfidenceParams prm{p.radius,         p.noise,      p.sigmaPx,      p.residualScale, p.roundTripPx,
                          p.roundTripMaxPx, p.infinityPx, p.invalidBelow, p.maxDeviationPx};
   const bool hasSweep = sweepConfidence.id >= 0, hasTrip = roundTripError.id >= 0;
+  const int width = confidence.width, height = confidence.height;
+  // Two passes, as on CUDA: each pixel's terms once, then the windows' sums of them.
+  const Buffer terms = scratch(kConfidenceTermsScratch, width, height, 4);
+  dispatch(kResultConfidenceTerms,
+           PcConfidenceTerms{addr(terms), addr(image), addr(n0), addr(n1), addr(w), addr(mask), width, height}, width,
+           height);
   PcResultConfidence pc{addr(confidence),
                         addr(radial),
                         addr(points),
-                        addr(image),
-                        addr(n0),
-                        addr(n1),
+                        addr(terms),
                         addr(w),
                         addr(trajectory),
                         addr(hasSweep ? sweepConfidence : mask),
@@ -758,7 +766,7 @@ void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& r
                         confidence.height,
                         hasSweep ? 1 : 0,
                         hasTrip ? 1 : 0};
-  dispatch(kResultConfidence, pc, confidence.width, confidence.height);
+  dispatch(kResultConfidence, pc, width, height);
 }
 
 }  // namespace cs::vk

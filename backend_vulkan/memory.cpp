@@ -152,16 +152,28 @@ VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
 // staging buffer after the uploads before it: a frame's uploads go in one submission (the
 // next flush: beginFrame, replayFrame, a download), not one round trip each. Queue order
 // and the barrier before every command keep them after the work submitted before, and the
-// frame (replayFrame submits it behind them without waiting) after them.
-void VulkanBackend::doUpload(const Buffer& dst, const float* host, bool* finite) {
+// frame (replayFrame submits it behind them without waiting) after them. `fill` writes the
+// floats into the staging memory.
+template <class Fill>
+void VulkanBackend::copyFromStaging(const Buffer& dst, Fill&& fill) {
   const Alloc& a = alloc(dst);
   const VkDeviceSize bytes = dst.count() * sizeof(float);
   const VkDeviceSize offset = claimStaging(bytes);
-  copyFloats(reinterpret_cast<float*>(static_cast<char*>(staging_.mapped) + offset), host, dst.count(), finite);
+  fill(reinterpret_cast<float*>(static_cast<char*>(staging_.mapped) + offset));
   VkCommandBuffer cb = recorder();
   barrier(cb, Cmd::Transfer);
   VkBufferCopy region{offset, a.offset, bytes};
   inst_.fn.vkCmdCopyBuffer(cb, staging_.buffer, arenas_[size_t(a.arena)].buffer, 1, &region);
+}
+
+void VulkanBackend::doUpload(const Buffer& dst, const float* host, bool* finite) {
+  copyFromStaging(dst, [&](float* staged) { copyFloats(staged, host, dst.count(), finite); });
+}
+
+// Converted on the host as they are written into the mapped staging memory: the bytes are
+// read once either way, and GLSL's division is not exact enough to give unitFromByte's bits.
+void VulkanBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
+  copyFromStaging(dst, [&](float* staged) { floatsFromBytes(staged, host, dst.count()); });
 }
 
 // One submission and one wait: the copy joins the immediate command buffer (after any

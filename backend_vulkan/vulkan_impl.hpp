@@ -52,6 +52,7 @@ class VulkanBackend final : public Backend {
  protected:
   Buffer doCreate(int width, int height, int channels) override;
   void doUpload(const Buffer& dst, const float* host, bool* finite) override;
+  void doUploadBytes(const Buffer& dst, const uint8_t* host) override;
   void doDownload(const Buffer& src, float* host) override;
   void doFill(const Buffer& dst, float value) override;
   void doCopy(const Buffer& dst, const Buffer& src) override;
@@ -140,6 +141,8 @@ class VulkanBackend final : public Backend {
   Addr addr(const Buffer& b) const;
   Addr paramBlock(const void* data, size_t bytes);
   VkDeviceSize claimStaging(VkDeviceSize bytes);
+  template <class Fill>
+  void copyFromStaging(const Buffer& dst, Fill&& fill);
   Addr sweepParamBlock(const SweepParams& p);
   // primalDual (barsFromPrimals false) and warpIterations (true: the first iteration reads
   // u, v as uBar, vBar) in primal_dual.comp's fused dispatches.
@@ -164,6 +167,9 @@ class VulkanBackend final : public Backend {
   // groupsX x groupsY work groups, for shaders that map their invocations otherwise.
   template <class PC>
   void dispatchGroups(Shader s, const PC& pc, uint32_t groupsX, uint32_t groupsY);
+  // Slots: 0, 1 the structure tensor's blur; 2 the sweeps' direction volumes; 3..8 the
+  // primal-dual's spares; kConfidenceTermsScratch the confidence's first pass.
+  static constexpr int kConfidenceTermsScratch = 9;
   Buffer scratch(int slot, int w, int h, int channels = 1);
 
   std::string description_;

@@ -3,8 +3,8 @@
 // The final result's confidence (backend_cpu/result_confidence.cpp, backend.hpp
 // resultConfidence): structure along the epipolar curve x photometric agreement x the
 // sweep's consistency x the round trip; then the invalid pixels and the points at infinity.
+// Its second pass: the first (result_confidence_terms.comp) left each pixel's terms.
 #include "common.glsl"
-#include "sampling.glsl"
 
 // Mirrors VkConfidenceParams in backend_vulkan/kernels.cpp.
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer ConfidenceParamsRef {
@@ -13,47 +13,40 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer ConfidencePa
 };
 
 layout(push_constant) uniform PC {
-  FBuf confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError, mask;
+  FBuf confidence, radial, points, terms, w, trajectory, sweepConfidence, roundTripError, mask;
   ConfidenceParamsRef prm;
   int width, height, hasSweep, hasRoundTrip;
 } pc;
 
 bool m(int x, int y) { return masked(pc.mask, pc.width, pc.height, x, y); }
 
-float structureTerm(int x, int y, int r) {
+// The window's sums of the first pass's terms (result_confidence_terms.comp), in the
+// oracle's order (rows, then columns): the structure along the epipolar curve and the
+// photometric agreement.
+vec2 windowTerms(int x, int y, int r) {
   const int i = y * pc.width + x;
   const float gx = pc.trajectory.v[2 * i], gy = pc.trajectory.v[2 * i + 1];
-  float s = 0.0;
-  for (int dy = -r; dy <= r; ++dy)
-    for (int dx = -r; dx <= r; ++dx) {
-      const int cx = x + dx, cy = y + dy;
-      if (!m(cx, cy) || !m(cx - 1, cy) || !m(cx + 1, cy) || !m(cx, cy - 1) || !m(cx, cy + 1)) continue;
-      const int c = cy * pc.width + cx;
-      const float ix = 0.5 * (pc.image.v[c + 1] - pc.image.v[c - 1]);
-      const float iy = 0.5 * (pc.image.v[c + pc.width] - pc.image.v[c - pc.width]);
-      const float along = gx * ix + gy * iy;
-      s += along * along;
-    }
-  const float signal = s * pc.prm.sigmaPx * pc.prm.sigmaPx;
-  return signal / (signal + 2.0 * pc.prm.noise * pc.prm.noise);
-}
-
-float photometricTerm(int x, int y, int r) {
-  float sum = 0.0;
+  float s = 0.0, sum = 0.0;
   int count = 0;
   for (int dy = -r; dy <= r; ++dy)
     for (int dx = -r; dx <= r; ++dx) {
       const int cx = x + dx, cy = y + dy;
-      if (!m(cx, cy)) continue;
-      const int c = cy * pc.width + cx;
-      const float wx = pc.w.v[2 * c], wy = pc.w.v[2 * c + 1];
-      if (isnan(wx) || isinf(wx) || isnan(wy) || isinf(wy)) continue;
-      sum += abs(sampleBilinear(pc.n1, pc.width, pc.height, 1, 0, float(cx) + wx, float(cy) + wy) - pc.n0.v[c]);
-      ++count;
+      if (cx < 0 || cy < 0 || cx >= pc.width || cy >= pc.height) continue;
+      const int c = 4 * (cy * pc.width + cx);
+      const int flags = int(pc.terms.v[c + 3]);
+      if ((flags & 1) != 0) {
+        const float along = gx * pc.terms.v[c] + gy * pc.terms.v[c + 1];
+        s += along * along;
+      }
+      if ((flags & 2) != 0) {
+        sum += pc.terms.v[c + 2];
+        ++count;
+      }
     }
-  if (count == 0) return 0.0;
-  const float q = sum / float(count) / pc.prm.residualScale;
-  return exp(-q * q);
+  const float signal = s * pc.prm.sigmaPx * pc.prm.sigmaPx;
+  const float structure = signal / (signal + 2.0 * pc.prm.noise * pc.prm.noise);
+  const float q = sum / float(max(count, 1)) / pc.prm.residualScale;
+  return vec2(structure, count == 0 ? 0.0 : exp(-q * q));
 }
 
 void main() {
@@ -63,8 +56,9 @@ void main() {
   pc.confidence.v[i] = 0.0;
   if (!m(x, y) || isnan(pc.radial.v[i])) return;
   const int r = pc.prm.radius;
-  const float structure = structureTerm(x, y, r);
-  float c = structure * photometricTerm(x, y, r);
+  const vec2 terms = windowTerms(x, y, r);
+  const float structure = terms.x;
+  float c = structure * terms.y;
   if (pc.hasSweep != 0) c *= min(1.0, max(0.0, pc.sweepConfidence.v[i]));
   bool invalid = false;
   if (pc.hasRoundTrip != 0) {

@@ -17,7 +17,8 @@ namespace {
 using detail::sizeText;
 
 // The sizes here; NaN and infinities as the pipeline copies the images (Pipeline::upload).
-void checkImage(const ImageF& img, const Camera& cam, const char* which) {
+template <class Img>
+void checkImage(const Img& img, const Camera& cam, const char* which) {
   if (img.width != cam.width || img.height != cam.height)
     throw Error(std::string(which) + " image is " + sizeText(img.width, img.height) + " but the calibration says " +
                 sizeText(cam.width, cam.height));
@@ -25,8 +26,8 @@ void checkImage(const ImageF& img, const Camera& cam, const char* which) {
 
 // One frame of compute() or next(): the inputs checked against the rig, `solve` run, the
 // time taken, and a host allocation failure reported as the frame's.
-template <class Solve>
-void timedSolve(const Rig& rig, const ImageF& left, const ImageF& right, DepthResult& result, Solve&& solve) {
+template <class Img, class Solve>
+void timedSolve(const Rig& rig, const Img& left, const Img& right, DepthResult& result, Solve&& solve) {
   checkImage(left, rig.cam0, "left");
   checkImage(right, rig.cam1, "right");
   const auto t0 = std::chrono::steady_clock::now();
@@ -62,7 +63,8 @@ unsigned long long Stereo::bufferBytes() const { return Pipeline::bufferBytes(ri
 const Rig& Stereo::rig() const { return core_->rig(); }
 const Params& Stereo::params() const { return core_->params(); }
 
-void Stereo::compute(const ImageF& left, const ImageF& right, DepthResult& result) {
+template <class Img>
+void Stereo::computeImages(const Img& left, const Img& right, DepthResult& result) {
   timedSolve(core_->rig(), left, right, result, [&] {
     core_->pipeline().run(left, right, profiling_, progress_, result);
     result.lrPassShare = core_->pipeline().roundTripShare();
@@ -71,7 +73,8 @@ void Stereo::compute(const ImageF& left, const ImageF& right, DepthResult& resul
   });
 }
 
-void Stereo::next(const ImageF& left, const ImageF& right, DepthResult& result, const Pose* pose) {
+template <class Img>
+void Stereo::nextImages(const Img& left, const Img& right, DepthResult& result, const Pose* pose) {
   timedSolve(core_->rig(), left, right, result, [&] {
     Pipeline& pipeline = core_->pipeline();
     detail::StereoCore::SequenceFrame frame = core_->beginSequenceFrame(pose);
@@ -95,18 +98,40 @@ void Stereo::next(const ImageF& left, const ImageF& right, DepthResult& result, 
   });
 }
 
+void Stereo::compute(const ImageF& left, const ImageF& right, DepthResult& result) {
+  computeImages(left, right, result);
+}
+void Stereo::compute(const ImageU8& left, const ImageU8& right, DepthResult& result) {
+  computeImages(left, right, result);
+}
+void Stereo::next(const ImageF& left, const ImageF& right, DepthResult& result, const Pose* pose) {
+  nextImages(left, right, result, pose);
+}
+void Stereo::next(const ImageU8& left, const ImageU8& right, DepthResult& result, const Pose* pose) {
+  nextImages(left, right, result, pose);
+}
+
+DepthResult Stereo::compute(const ImageF& left, const ImageF& right) {
+  DepthResult result;
+  computeImages(left, right, result);
+  return result;
+}
+DepthResult Stereo::compute(const ImageU8& left, const ImageU8& right) {
+  DepthResult result;
+  computeImages(left, right, result);
+  return result;
+}
 DepthResult Stereo::next(const ImageF& left, const ImageF& right, const Pose* pose) {
   DepthResult result;
-  next(left, right, result, pose);
+  nextImages(left, right, result, pose);
+  return result;
+}
+DepthResult Stereo::next(const ImageU8& left, const ImageU8& right, const Pose* pose) {
+  DepthResult result;
+  nextImages(left, right, result, pose);
   return result;
 }
 
 void Stereo::resetSequence() { core_->resetSequence(); }
-
-DepthResult Stereo::compute(const ImageF& left, const ImageF& right) {
-  DepthResult result;
-  compute(left, right, result);
-  return result;
-}
 
 }  // namespace cs

@@ -18,6 +18,7 @@ class ForwardingBackend : public Backend {
  protected:
   Buffer doCreate(int w, int h, int c) override { return b_.create(w, h, c); }
   void doUpload(const Buffer& d, const float* h, bool* f) override { b_.upload(d, h, f); }
+  void doUploadBytes(const Buffer& d, const uint8_t* h) override { b_.uploadBytes(d, h); }
   void doDownload(const Buffer& s, float* h) override { b_.download(s, h); }
   void doFill(const Buffer& d, float v) override { b_.fill(d, v); }
   void doCopy(const Buffer& d, const Buffer& s) override { b_.copy(d, s); }

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <mutex>
 #include <string>
@@ -14,6 +15,12 @@
 #include "synth/scene.hpp"
 
 namespace cs::test {
+
+// Whether two float images hold the same bits, NaN included (equal sizes).
+inline bool sameBits(const ImageF& a, const ImageF& b) {
+  return a.width == b.width && a.height == b.height &&
+         std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0;
+}
 
 // Path of a file in ../shared/data, or "" when the data set is not present.
 inline std::string sharedData(const std::string& rel) {

@@ -87,18 +87,41 @@ void collectStages(const DepthResult& r, std::map<std::string, std::vector<doubl
 // bench --sequence: every frame held in memory, then `runs` passes through Stereo::next
 // (each from a reset: a cold first frame, warm ones after), after one pass that records
 // every kind of frame; a last pass profiles the warm frames' stages.
+// The frames as their files store them: a camera's 8-bit images go to Stereo as bytes.
+struct HeldFrames {
+  std::vector<ImageF> lefts, rights;
+  std::vector<ImageU8> leftBytes, rightBytes;
+  bool bytes = true;
+
+  explicit HeldFrames(const Sequence& sequence) {
+    const size_t n = sequence.frames().size();
+    leftBytes.resize(n), rightBytes.resize(n);
+    for (size_t i = 0; i < n && bytes; ++i) bytes = sequence.loadBytes(i, leftBytes[i], rightBytes[i]);
+    if (bytes) return;
+    leftBytes.clear(), rightBytes.clear();
+    lefts.resize(n), rights.resize(n);
+    for (size_t i = 0; i < n; ++i) sequence.load(i, lefts[i], rights[i]);
+  }
+  void next(Stereo& stereo, size_t i, DepthResult& r, const Pose* pose) const {
+    if (bytes)
+      stereo.next(leftBytes[i], rightBytes[i], r, pose);
+    else
+      stereo.next(lefts[i], rights[i], r, pose);
+  }
+};
+
 int benchSequence(const Args& args, Stereo& stereo, const Sequence& sequence, int runs) {
   const std::vector<SequenceFrame>& frames = sequence.frames();
-  std::vector<ImageF> lefts(frames.size()), rights(frames.size());
-  for (size_t i = 0; i < frames.size(); ++i) sequence.load(i, lefts[i], rights[i]);
-  std::printf("input:    sequence %s\n", sequence.summary().c_str());
+  const HeldFrames held(sequence);
+  std::printf("input:    sequence %s; %s\n", sequence.summary().c_str(),
+              held.bytes ? "8-bit images, passed as bytes" : "images passed as floats");
   std::printf("runs:     %d passes of %zu frames after 1 warm-up pass\n", runs, frames.size());
   DepthResult r;
   auto pass = [&](bool profiled, const std::function<void(const DepthResult&)>& each) {
     stereo.setProfiling(profiled);
     stereo.resetSequence();
     for (size_t i = 0; i < frames.size(); ++i) {
-      stereo.next(lefts[i], rights[i], r, frames[i].hasPose ? &frames[i].pose : nullptr);
+      held.next(stereo, i, r, frames[i].hasPose ? &frames[i].pose : nullptr);
       each(r);
     }
   };

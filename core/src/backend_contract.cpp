@@ -146,6 +146,11 @@ void Backend::upload(const Buffer& dst, const float* host, bool* finite) {
   doUpload(dst, host, finite);
 }
 
+void Backend::uploadBytes(const Buffer& dst, const uint8_t* host) {
+  BackendContract(*this, "uploadBytes").buffer(dst, "dst");
+  doUploadBytes(dst, host);
+}
+
 void Backend::download(const Buffer& src, float* host) {
   BackendContract(*this, "download").buffer(src, "src");
   doDownload(src, host);

@@ -195,7 +195,7 @@ bool applyGrayTransforms(png_structp png, png_infop info, PngLayout* layout) {
 
 float pngSample(const png_byte* row, size_t index, int bitDepth) {
   if (bitDepth == 16) return float((unsigned(row[2 * index]) << 8 | row[2 * index + 1]) / 65535.0);
-  return float(row[index] / 255.0);
+  return unitFromByte(row[index]);
 }
 
 void convertRowToGray(const png_byte* row, const PngLayout& layout, float* out) {
@@ -456,8 +456,17 @@ uint32_t flowColour(const Vec2f& f, float maxMagnitude) {
 
 namespace {
 
-// The PNG in `file` (signature already checked); `name` names it in errors.
-ImageF readPngStream(std::FILE* file, const std::string& name, PngFormat* format) {
+// An 8-bit gray image's rows as stored (readPngGray's `bytes`).
+bool decodePngBytes(png_structp png, const PngLayout* layout, uint8_t* out) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  for (png_uint_32 y = 0; y < layout->height; ++y) png_read_row(png, out + size_t(y) * layout->width, nullptr);
+  png_read_end(png, nullptr);
+  return true;
+}
+
+// The PNG in `file` (signature already checked); `name` names it in errors. With `bytes`,
+// an 8-bit one-channel non-interlaced file's samples go there and the image returned is empty.
+ImageF readPngStream(std::FILE* file, const std::string& name, PngFormat* format, ImageU8* bytes) {
   PngErrorState errors{};
   PngHandle handle(PngHandle::kRead, &errors);
   if (!handle.valid()) throw Error("cannot read PNG " + quoted(name) + ": libpng initialisation failed");
@@ -477,6 +486,11 @@ ImageF readPngStream(std::FILE* file, const std::string& name, PngFormat* format
   }
   PngLayout layout;
   if (!applyGrayTransforms(handle.png(), handle.info(), &layout)) throwCorruptPng(name, file, errors);
+  if (bytes && layout.bitDepth == 8 && layout.channels == 1 && layout.passes == 1) {
+    *bytes = ImageU8(static_cast<int>(layout.width), static_cast<int>(layout.height));
+    if (!decodePngBytes(handle.png(), &layout, bytes->data.data())) throwCorruptPng(name, file, errors);
+    return ImageF();
+  }
   ImageF image(static_cast<int>(layout.width), static_cast<int>(layout.height));
   std::vector<png_byte> buffer(layout.passes > 1 ? layout.rowBytes * layout.height : layout.rowBytes);
   if (!decodePngRows(handle.png(), &layout, buffer.data(), image.data.data())) throwCorruptPng(name, file, errors);
@@ -485,10 +499,10 @@ ImageF readPngStream(std::FILE* file, const std::string& name, PngFormat* format
 
 }  // namespace
 
-ImageF readPngGray(const std::string& path, PngFormat* format) {
+ImageF readPngGray(const std::string& path, PngFormat* format, ImageU8* bytes) {
   FilePtr file = openForRead(path, "image");
   requirePngSignature(file.get(), path);
-  return readPngStream(file.get(), path, format);
+  return readPngStream(file.get(), path, format, bytes);
 }
 
 ImageF decodePngGray(const uint8_t* data, size_t size, const std::string& name, PngFormat* format) {
@@ -497,7 +511,7 @@ ImageF decodePngGray(const uint8_t* data, size_t size, const std::string& name, 
   FilePtr file(fmemopen(const_cast<uint8_t*>(data), size, "rb"));
   if (!file) throw Error("cannot read PNG " + quoted(name) + ": " + std::strerror(errno));
   std::fseek(file.get(), 8, SEEK_SET);
-  return readPngStream(file.get(), name, format);
+  return readPngStream(file.get(), name, format, nullptr);
 }
 
 void writePngGray(const std::string& path, const ImageF& img) {

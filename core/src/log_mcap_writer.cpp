@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <future>
 
 #include "curvestereo/image.hpp"
 #include "log_reader.hpp"
@@ -15,6 +16,8 @@ namespace cs {
 namespace {
 
 using namespace mcap;  // kMagic, the opcodes
+
+constexpr uint64_t kMessageFields = 2 + 4 + 8 + 8;  // channel, sequence, log time, publish time
 
 template <typename T>
 void put(std::vector<uint8_t>& b, T v) {
@@ -35,11 +38,14 @@ std::vector<uint8_t> record(uint8_t op, const std::vector<uint8_t>& content) {
   return r;
 }
 
-std::vector<uint8_t> compress(const std::string& method, const std::vector<uint8_t>& in, const std::string& path) {
-  std::vector<uint8_t> out;
+// Into `out`, whose memory is reused from chunk to chunk, as is zstd's context (`zstd`,
+// made at the first chunk: a fresh one costs megabytes of new pages every chunk).
+void compress(const std::string& method, const std::vector<uint8_t>& in, std::vector<uint8_t>& out, ZSTD_CCtx*& zstd,
+              const std::string& path) {
   if (method == "zstd") {
+    if (!zstd && !(zstd = ZSTD_createCCtx())) throw Error("writing MCAP '" + path + "': out of memory for zstd");
     out.resize(ZSTD_compressBound(in.size()));
-    const size_t n = ZSTD_compress(out.data(), out.size(), in.data(), in.size(), 1);  // fast: depth is noisy anyway
+    const size_t n = ZSTD_compressCCtx(zstd, out.data(), out.size(), in.data(), in.size(), 1);  // fast: depth is noisy
     if (ZSTD_isError(n)) throw Error("writing MCAP '" + path + "': zstd failed (" + ZSTD_getErrorName(n) + ")");
     out.resize(n);
   } else {
@@ -50,7 +56,6 @@ std::vector<uint8_t> compress(const std::string& method, const std::vector<uint8
     if (LZ4F_isError(n)) throw Error("writing MCAP '" + path + "': lz4 failed (" + LZ4F_getErrorName(n) + ")");
     out.resize(n);
   }
-  return out;
 }
 
 }  // namespace
@@ -85,15 +90,21 @@ McapWriter::~McapWriter() {
   } catch (const Error& e) {
     std::fprintf(stderr, "curvestereo: %s\n", e.what());
   }
+  closing_.clear();  // a failed close(): each chunk's worker is waited for before it goes
   if (file_) std::fclose(file_);
+  for (ZSTD_CCtx* c : zstdContexts_) ZSTD_freeCCtx(c);
 }
 
-void McapWriter::out(const std::vector<uint8_t>& bytes) {
+void McapWriter::out(const std::vector<uint8_t>& bytes) { out(bytes, logio::crc32(bytes.data(), bytes.size())); }
+
+// bytesCrc: the CRC of `bytes` alone (a chunk's, computed as it was packed), folded into the
+// running one without reading them again.
+void McapWriter::out(const std::vector<uint8_t>& bytes, uint32_t bytesCrc) {
   if (!file_) throw Error("MCAP file '" + path_ + "' is closed");
   if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size())
     throw Error("cannot write MCAP file '" + path_ + "': " + std::strerror(errno));
   uint32_t& crc = inData_ ? dataCrc_ : summaryCrc_;
-  crc = logio::crc32(bytes.data(), bytes.size(), crc);
+  crc = logio::crc32Combine(crc, bytesCrc, bytes.size());
   pos_ += bytes.size();
 }
 
@@ -129,15 +140,16 @@ void McapWriter::write(uint16_t channel, uint64_t logTimeNs, const std::vector<u
   chunkStart_ = std::min(chunkStart_, logTimeNs);
   chunkEnd_ = std::max(chunkEnd_, logTimeNs);
   chunkIndex_[channel].emplace_back(logTimeNs, chunk_.size());
-  std::vector<uint8_t> m;
-  m.reserve(data.size() + 22);
-  put(m, channel);
-  put(m, uint32_t(counts_[channel]));  // sequence
-  put(m, logTimeNs);
-  put(m, logTimeNs);  // publish time
-  m.insert(m.end(), data.begin(), data.end());
-  const std::vector<uint8_t> r = record(kMessage, m);
-  chunk_.insert(chunk_.end(), r.begin(), r.end());
+  // The Message record straight into the chunk (a frame's messages are about 14 MB: every
+  // copy of them counts): opcode, length, channel, sequence, log and publish times, data.
+  chunk_.reserve(chunk_.size() + 9 + kMessageFields + data.size());
+  put(chunk_, uint8_t(kMessage));
+  put(chunk_, uint64_t(kMessageFields + data.size()));
+  put(chunk_, channel);
+  put(chunk_, uint32_t(counts_[channel]));  // sequence
+  put(chunk_, logTimeNs);
+  put(chunk_, logTimeNs);  // publish time
+  chunk_.insert(chunk_.end(), data.begin(), data.end());
   if (!messages_ || logTimeNs < firstNs_) firstNs_ = logTimeNs;
   if (!messages_ || logTimeNs > lastNs_) lastNs_ = logTimeNs;
   ++messages_;
@@ -145,22 +157,77 @@ void McapWriter::write(uint16_t channel, uint64_t logTimeNs, const std::vector<u
   if (chunk_.size() >= chunkBytes_) flushChunk();
 }
 
+// Packing (compression and the records' CRC) runs on a worker thread per chunk, so that a
+// frame's chunks compress in parallel while the next messages fill the next chunk; the
+// chunks are written in order, so the file does not depend on the threads.
 void McapWriter::flushChunk() {
   if (chunk_.empty()) return;
+  auto closed = std::make_unique<ClosedChunk>();
+  closed->records.swap(chunk_);
+  closed->index.swap(chunkIndex_);
+  closed->start = chunkStart_;
+  closed->end = chunkEnd_;
+  if (!spareRecords_.empty()) {  // a written chunk's memory: no fresh pages to fault in
+    chunk_.swap(spareRecords_.back());
+    spareRecords_.pop_back();
+  }
+  ClosedChunk* c = closed.get();
+  c->packing = std::async(std::launch::async, [this, c] { pack(*c); });
+  closing_.push_back(std::move(closed));
+  while (closing_.size() > kChunksInFlight) writeOldestChunk();
+}
+
+void McapWriter::pack(ClosedChunk& c) {
+  c.recordsCrc = logio::crc32(c.records.data(), c.records.size());
+  if (compression_.empty()) {
+    c.packedCrc = c.recordsCrc;
+    return;
+  }
+  ZSTD_CCtx* zstd = takeZstdContext();
+  try {
+    compress(compression_, c.records, c.packed, zstd, path_);
+  } catch (...) {
+    giveZstdContext(zstd);
+    throw;
+  }
+  giveZstdContext(zstd);
+  c.packedCrc = logio::crc32(c.packed.data(), c.packed.size());
+}
+
+ZSTD_CCtx* McapWriter::takeZstdContext() {
+  const std::lock_guard<std::mutex> lock(zstdMutex_);
+  if (zstdContexts_.empty()) return nullptr;  // compress() makes one
+  ZSTD_CCtx* c = zstdContexts_.back();
+  zstdContexts_.pop_back();
+  return c;
+}
+
+void McapWriter::giveZstdContext(ZSTD_CCtx* context) {
+  if (!context) return;
+  const std::lock_guard<std::mutex> lock(zstdMutex_);
+  zstdContexts_.push_back(context);
+}
+
+void McapWriter::writeOldestChunk() {
+  ClosedChunk& c = *closing_.front();
+  c.packing.get();  // rethrows a compression failure
+  const std::vector<uint8_t>& packed = compression_.empty() ? c.records : c.packed;
   const uint64_t chunkOffset = pos_;
-  const std::vector<uint8_t> packed = compression_.empty() ? chunk_ : compress(compression_, chunk_, path_);
-  std::vector<uint8_t> c;
-  put(c, chunkStart_);
-  put(c, chunkEnd_);
-  put(c, uint64_t(chunk_.size()));
-  put(c, logio::crc32(chunk_.data(), chunk_.size()));
-  putStr(c, compression_);
-  put(c, uint64_t(packed.size()));
-  c.insert(c.end(), packed.begin(), packed.end());
-  out(record(kChunk, c));
+  // The Chunk record's fields, then its records as they are (not copied behind the fields).
+  std::vector<uint8_t> fields;
+  put(fields, uint8_t(kChunk));
+  put(fields, uint64_t(8 + 8 + 8 + 4 + 4 + compression_.size() + 8 + packed.size()));
+  put(fields, c.start);
+  put(fields, c.end);
+  put(fields, uint64_t(c.records.size()));
+  put(fields, c.recordsCrc);
+  putStr(fields, compression_);
+  put(fields, uint64_t(packed.size()));
+  out(fields);
+  out(packed, c.packedCrc);
   const uint64_t chunkLength = pos_ - chunkOffset, indexStart = pos_;
   std::vector<uint8_t> offsets;  // the chunk index's map: channel -> its message index's offset
-  for (const auto& [channel, entries] : chunkIndex_) {
+  for (const auto& [channel, entries] : c.index) {
     put(offsets, channel);
     put(offsets, pos_);
     std::vector<uint8_t> m;
@@ -170,8 +237,8 @@ void McapWriter::flushChunk() {
     out(record(kMessageIndex, m));
   }
   std::vector<uint8_t> ci;
-  put(ci, chunkStart_);
-  put(ci, chunkEnd_);
+  put(ci, c.start);
+  put(ci, c.end);
   put(ci, chunkOffset);
   put(ci, chunkLength);
   put(ci, uint32_t(offsets.size()));
@@ -179,11 +246,12 @@ void McapWriter::flushChunk() {
   put(ci, pos_ - indexStart);
   putStr(ci, compression_);
   put(ci, uint64_t(packed.size()));
-  put(ci, uint64_t(chunk_.size()));
+  put(ci, uint64_t(c.records.size()));
   chunkIndexes_.push_back(record(kChunkIndex, ci));
   ++chunks_;
-  chunk_.clear();
-  chunkIndex_.clear();
+  c.records.clear();
+  spareRecords_.push_back(std::move(c.records));
+  closing_.pop_front();
 }
 
 void McapWriter::writeSummary() {
@@ -232,6 +300,7 @@ void McapWriter::writeSummary() {
 void McapWriter::close() {
   if (!file_) return;
   flushChunk();
+  while (!closing_.empty()) writeOldestChunk();
   std::vector<uint8_t> end;
   put(end, dataCrc_);
   out(record(kDataEnd, end));  // its own bytes are not in the CRC it carries: out() adds them after

@@ -59,6 +59,10 @@ uint32_t crc32(const uint8_t* p, uint64_t n, uint32_t crc) {
   return crc;
 }
 
+uint32_t crc32Combine(uint32_t crcA, uint32_t crcB, uint64_t lengthB) {
+  return uint32_t(::crc32_combine(crcA, crcB, z_off_t(lengthB)));  // z_off_t: 64 bits on LP64
+}
+
 std::string shown(const std::string& text, size_t max) {
   std::string s = text.size() > max ? text.substr(0, max) + "..." : text;
   for (char& c : s)

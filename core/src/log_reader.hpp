@@ -171,6 +171,8 @@ void decompressAhead(const std::vector<uint64_t>& chunks, const std::function<Ch
                      const std::function<void(uint64_t, const ChunkData&)>& use, unsigned threads = 0);
 
 uint32_t crc32(const uint8_t* p, uint64_t n, uint32_t crc = 0);
+// The CRC of A followed by B from crc32(A), crc32(B) and B's length (zlib's crc32_combine).
+uint32_t crc32Combine(uint32_t crcA, uint32_t crcB, uint64_t lengthB);
 // Decompresses a whole buffer of a known size ("zstd", "lz4" frame, "bz2"); throws cs::Error
 // naming `what` when the data is corrupt or decompresses to another size.
 void decompress(const std::string& method, const uint8_t* in, uint64_t inSize, uint8_t* out, uint64_t outSize,

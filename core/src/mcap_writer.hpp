@@ -5,9 +5,15 @@
 #pragma once
 #include <cstdint>
 #include <cstdio>
+#include <deque>
+#include <future>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
+
+struct ZSTD_CCtx_s;  // zstd.h's compression context
 
 namespace cs {
 
@@ -56,8 +62,23 @@ class McapWriter {
   void close();  // idempotent
 
  private:
+  // A chunk whose records are packed (compressed, CRCs) on a worker thread.
+  struct ClosedChunk {
+    std::vector<uint8_t> records, packed;
+    std::map<uint16_t, std::vector<std::pair<uint64_t, uint64_t>>> index;  // channel -> (time, offset)
+    uint64_t start = 0, end = 0;
+    uint32_t recordsCrc = 0, packedCrc = 0;
+    std::future<void> packing;
+  };
+  static constexpr size_t kChunksInFlight = 4;  // packed at once; the oldest is written first
+
   void out(const std::vector<uint8_t>& bytes);
+  void out(const std::vector<uint8_t>& bytes, uint32_t bytesCrc);
   void flushChunk();
+  void pack(ClosedChunk& chunk);  // on the chunk's worker thread
+  void writeOldestChunk();
+  ZSTD_CCtx_s* takeZstdContext();  // a reused context, or null
+  void giveZstdContext(ZSTD_CCtx_s* context);
   void writeSummary();
 
   std::string path_;
@@ -69,6 +90,10 @@ class McapWriter {
   bool inData_ = true;  // the data section's bytes feed dataCrc_, the summary's summaryCrc_
   // the open chunk
   std::vector<uint8_t> chunk_;
+  std::deque<std::unique_ptr<ClosedChunk>> closing_;  // being packed, in file order
+  std::vector<std::vector<uint8_t>> spareRecords_;    // written chunks' memory, for new chunks
+  std::mutex zstdMutex_;
+  std::vector<ZSTD_CCtx_s*> zstdContexts_;  // zstd's contexts, reused from chunk to chunk
   uint64_t chunkStart_ = 0, chunkEnd_ = 0;
   std::map<uint16_t, std::vector<std::pair<uint64_t, uint64_t>>> chunkIndex_;  // channel -> (time, offset)
   // the summary

@@ -259,16 +259,20 @@ void Pipeline::stage(const char* name) {
   if (profiling_) backend_.beginStage(name);
 }
 
-// The images are checked for NaN and infinities as they are copied (Backend::upload), not
-// in a pass of their own: at 30 fps a frame's images are new to the cache, and reading
+// Float images are checked for NaN and infinities as they are copied (Backend::upload),
+// not in a pass of their own: at 30 fps a frame's images are new to the cache, and reading
 // them twice costs a tenth of a warm frame.
-void Pipeline::upload(const ImageF& left, const ImageF& right) {
+void Pipeline::upload(const InputImage& left, const InputImage& right) {
   stage("upload");
+  uploadImage(levels_[0].i0, left, "left");
+  uploadImage(rawRight_, right, "right");
+}
+
+void Pipeline::uploadImage(const Buffer& dst, const InputImage& image, const char* side) {
+  if (image.bytes) return backend_.uploadBytes(dst, image.bytes);
   bool finite = true;
-  backend_.upload(levels_[0].i0, left.data.data(), &finite);
-  if (!finite) throw Error("left image contains NaN or infinite pixels");
-  backend_.upload(rawRight_, right.data.data(), &finite);
-  if (!finite) throw Error("right image contains NaN or infinite pixels");
+  backend_.upload(dst, image.floats, &finite);
+  if (!finite) throw Error(std::string(side) + " image contains NaN or infinite pixels");
 }
 
 // lrCheck: the other direction's inputs are this one's, swapped, copied on the device.
@@ -678,8 +682,8 @@ void Pipeline::setMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
 
 void Pipeline::commitSequenceFrame() { backend_.copy(state_, next_); }
 
-void Pipeline::run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
-                   DepthResult& out, FrameKind kind) {
+void Pipeline::run(const InputImage& left, const InputImage& right, bool profile,
+                   const std::function<void(double)>& progress, DepthResult& out, FrameKind kind) {
   profiling_ = profile;
   upload(left, right);
   if (reverse_) {

@@ -30,6 +30,16 @@ T* fitImage(Image<T>& img, int w, int h) {
 // frame's estimate carried into its view: no levels above the band sweep's, no full sweep),
 // with or without the temporal filter. Each kind is its own recorded frame
 // (Backend::beginFrame's slot).
+// A frame's input image as the caller holds it: floats in [0, 1] (checked for NaN and
+// infinities as they upload) or a camera's 8-bit samples (Backend::uploadBytes), which
+// cross to a GPU at a quarter of the bytes. The caller has checked its size.
+struct InputImage {
+  const float* floats = nullptr;
+  const uint8_t* bytes = nullptr;
+  InputImage(const ImageF& image) : floats(image.data.data()) {}
+  InputImage(const ImageU8& image) : bytes(image.data.data()) {}
+};
+
 struct FrameKind {
   bool warm = false, filter = false;
   int slot() const { return (warm ? 2 : 0) + (filter ? 1 : 0); }
@@ -66,7 +76,7 @@ class Pipeline {
   // replaying). Images of the right size keep their storage, so a caller reusing `out`
   // allocates nothing. The valid mask is not downloaded: finishResult leaves radial NaN
   // exactly where it is 0.
-  void run(const ImageF& left, const ImageF& right, bool profile, const std::function<void(double)>& progress,
+  void run(const InputImage& left, const InputImage& right, bool profile, const std::function<void(double)>& progress,
            DepthResult& out, FrameKind kind = {});
 
   // --- sequences ---
@@ -145,7 +155,8 @@ class Pipeline {
   // `values` (same grid) satisfies `counts`.
   template <class Predicate>
   double shareOf(const Buffer& values, Predicate counts, const Buffer& mask, long long& maskPixels);
-  void upload(const ImageF& left, const ImageF& right);
+  void upload(const InputImage& left, const InputImage& right);
+  void uploadImage(const Buffer& dst, const InputImage& image, const char* side);
   void issueFrame(const std::function<void(double)>& progress, FrameKind kind);
   void issueOrReplay(const std::function<void(double)>& progress, FrameKind kind);
   void buildPyramid(size_t levels);

@@ -390,27 +390,60 @@ std::string Sequence::summary() const {
          std::to_string(unpaired_) + " unpaired";
 }
 
-void Sequence::load(size_t i, ImageF& left, ImageF& right) const {
-  if (i >= frames_.size())
-    throw Error("sequence frame " + std::to_string(i) + " does not exist (" + std::to_string(frames_.size()) +
-                " frames)");
-  if (log_) return loadLog(i, left, right);
-  const SequenceFrame& f = frames_[i];
-  const std::string frame = "frame " + std::to_string(i) + " (t " + std::to_string(f.timestampNs) + " ns)";
-  const auto read = [&](const std::string& path, const char* side) {
-    try {
-      return readPngGray(path);
-    } catch (const Error& e) {
-      throw Error(oneLine(frame + ", " + side + " image: " + e.what()));  // e names the file
-    }
-  };
-  ImageF l = read(f.leftPath, "left"), r = read(f.rightPath, "right");
+namespace {
+
+std::string frameName(size_t i, const SequenceFrame& f) {
+  return "frame " + std::to_string(i) + " (t " + std::to_string(f.timestampNs) + " ns)";
+}
+
+// readPngGray with the frame named in its errors.
+ImageF readFrameImage(const std::string& frame, const std::string& path, const char* side, ImageU8* bytes) {
+  try {
+    return readPngGray(path, nullptr, bytes);
+  } catch (const Error& e) {
+    throw Error(oneLine(frame + ", " + side + " image: " + e.what()));  // e names the file
+  }
+}
+
+template <class Img>
+void requireSameSize(const std::string& frame, const SequenceFrame& f, const Img& l, const Img& r) {
   if (l.width != r.width || l.height != r.height)
     throw Error(oneLine(frame + ": left image '" + f.leftPath + "' is " + std::to_string(l.width) + "x" +
                         std::to_string(l.height) + " but right image '" + f.rightPath + "' is " +
                         std::to_string(r.width) + "x" + std::to_string(r.height)));
+}
+
+}  // namespace
+
+const SequenceFrame& Sequence::frameAt(size_t i) const {
+  if (i >= frames_.size())
+    throw Error("sequence frame " + std::to_string(i) + " does not exist (" + std::to_string(frames_.size()) +
+                " frames)");
+  return frames_[i];
+}
+
+void Sequence::load(size_t i, ImageF& left, ImageF& right) const {
+  const SequenceFrame& f = frameAt(i);
+  if (log_) return loadLog(i, left, right);
+  const std::string frame = frameName(i, f);
+  ImageF l = readFrameImage(frame, f.leftPath, "left", nullptr),
+         r = readFrameImage(frame, f.rightPath, "right", nullptr);
+  requireSameSize(frame, f, l, r);
   left = std::move(l);
   right = std::move(r);
+}
+
+bool Sequence::loadBytes(size_t i, ImageU8& left, ImageU8& right) const {
+  const SequenceFrame& f = frameAt(i);
+  if (log_) return false;
+  const std::string frame = frameName(i, f);
+  ImageU8 l, r;
+  if (!readFrameImage(frame, f.leftPath, "left", &l).empty()) return false;
+  if (!readFrameImage(frame, f.rightPath, "right", &r).empty()) return false;
+  requireSameSize(frame, f, l, r);
+  left = std::move(l);
+  right = std::move(r);
+  return true;
 }
 
 }  // namespace cs

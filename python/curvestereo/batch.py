@@ -138,6 +138,12 @@ def start_client(args, scratch):
     from distributed import Client, LocalCluster
 
     dask.config.set({"temporary-directory": scratch})  # the workers' and the scheduler's lock files too
+    # Each task picks its GPU itself (CUDA_VISIBLE_DEVICES); Dask's own NVML monitor is not
+    # needed, and Debian 12's distributed (2022.12) fails to start a cluster with it where a
+    # newer pynvml is installed (nvmlDeviceGetName returns str; it calls .decode()). Set in
+    # the environment too, which the worker processes inherit.
+    os.environ["DASK_DISTRIBUTED__DIAGNOSTICS__NVML"] = "False"
+    dask.config.set({"distributed.diagnostics.nvml": False})
     if args.scheduler:
         return Client(args.scheduler, timeout="20s"), None
     n = args.gpus or args.workers

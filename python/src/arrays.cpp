@@ -159,6 +159,24 @@ void imageFromArray(pb::handle obj, const char* which, ImageF& into) {
   convertGray(h, into.data.data());
 }
 
+bool bytesFromArray(const HostImage& h, ImageU8& into) {
+  if (h.type != PixelType::U8 || h.pixels.channels != 1) return false;
+  into.width = h.width;
+  into.height = h.height;
+  into.data.resize(size_t(h.width) * size_t(h.height));
+  const bool packedRows = h.pixels.colStride == 1;
+  for (int y = 0; y < h.height; ++y) {
+    const unsigned char* row = h.pixels.data + y * h.pixels.rowStride;
+    uint8_t* out = into.data.data() + size_t(y) * size_t(h.width);
+    if (packedRows) {
+      std::memcpy(out, row, size_t(h.width));
+      continue;
+    }
+    for (int x = 0; x < h.width; ++x) out[x] = row[x * h.pixels.colStride];
+  }
+  return true;
+}
+
 ImageU8 maskFromArray(pb::handle obj, const char* which) {
   pb::array a = asArray(obj, which);
   if (a.ndim() != 2) throw Error(std::string(which) + " has shape " + shapeText(a) + ": expected H x W");

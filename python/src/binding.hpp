@@ -46,6 +46,10 @@ void convertGray(const HostImage& h, float* dst);
 // (the per-frame inputs of a Stereo: no allocation and no page faults after the first).
 ImageF imageFromArray(pb::handle obj, const char* which);
 void imageFromArray(pb::handle obj, const char* which, ImageF& into);
+// A gray uint8 array (H x W, or H x W x 1), any strides, copied as it is into `into` (kept
+// storage as above): a camera's 8-bit frame, which Stereo takes as bytes. False for any
+// other array (imageFromArray converts those).
+bool bytesFromArray(const HostImage& h, ImageU8& into);
 // Non-zero pixels of a 2-D array of any numeric or bool dtype, as a mask.
 ImageU8 maskFromArray(pb::handle obj, const char* which);
 

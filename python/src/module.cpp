@@ -328,8 +328,13 @@ class PyStereo {
     if (returnDevice || isDeviceArray(left) || isDeviceArray(right))
       return computeOnDevice(left, right, returnDevice, kind, pose);
     // Into this object's input images (claimed above): no allocation after the first frame.
-    imageFromArray(left, "left image", left_);
-    imageFromArray(right, "right image", right_);
+    // A camera's 8-bit frames go to the library as they are (a quarter of the bytes).
+    const HostImage leftHost = hostImage(left, "left image"), rightHost = hostImage(right, "right image");
+    const bool bytes = bytesFromArray(leftHost, leftBytes_) && bytesFromArray(rightHost, rightBytes_);
+    if (!bytes) {
+      imageFromArray(left, "left image", left_);
+      imageFromArray(right, "right image", right_);
+    }
     if (kind == Kind::Sequence) enterSequencePath(SequenceOn::Host);
     if (!progress.is_none() && !PyCallable_Check(progress.ptr())) throw Error("progress must be callable");
     // The callback runs on this thread with the GIL taken back. If it raises, the exception
@@ -359,8 +364,12 @@ class PyStereo {
     {
       pb::gil_scoped_release nogil;
       try {
-        if (kind == Kind::Sequence)
+        if (kind == Kind::Sequence && bytes)
+          stereo_->next(leftBytes_, rightBytes_, out, pose);
+        else if (kind == Kind::Sequence)
           stereo_->next(left_, right_, out, pose);
+        else if (bytes)
+          stereo_->compute(leftBytes_, rightBytes_, out);
         else
           stereo_->compute(left_, right_, out);
       } catch (const ProgressAbort&) {
@@ -424,7 +433,8 @@ class PyStereo {
   Stereo::Outputs outputs_;
   std::unique_ptr<Stereo> stereo_;
   ImageU8 mask_;
-  ImageF left_, right_;  // the last frame's converted inputs, reused (compute() holds the claim)
+  ImageF left_, right_;             // the last frame's converted inputs, reused (compute() holds the claim)
+  ImageU8 leftBytes_, rightBytes_;  // the same for 8-bit gray frames
   SequenceOn sequencePath_ = SequenceOn::None;
   std::shared_ptr<ResultPool> pool_ = std::make_shared<ResultPool>();
 #ifdef CS_PY_CUDA

@@ -163,6 +163,22 @@ def test_colour_png_reads_as_the_array_converts(tmp_path, tiny):
     assert same_bits(stereo.compute(rgba[0], rgba[1]).depth, from_arrays.depth)
 
 
+def test_uint8_frames_solve_as_their_float_conversion(tiny):
+    """8-bit frames go to the library as bytes: the same bits as the float images, for a
+    pair, for warm sequence frames, and for a strided view."""
+    calib, left, right = tiny
+    as_float = lambda a: (a / 255.0).astype(np.float32)  # noqa: E731  the PNG reader's scaling
+    stereo = cs.Stereo(cs.load_calibration(calib), backend="cpu")
+    assert same_bits(stereo.compute(left, right).depth, stereo.compute(as_float(left), as_float(right)).depth)
+    runs = []
+    for frames in ((left, right), (as_float(left), as_float(right))):
+        stereo.reset_sequence()
+        runs.append([stereo.next(*frames) for _ in range(2)])
+    assert runs[0][1].warm == runs[1][1].warm and same_bits(runs[0][1].depth, runs[1][1].depth)
+    wide = [np.repeat(img, 2, axis=1) for img in (left, right)]
+    assert same_bits(stereo.compute(wide[0][:, ::2], wide[1][:, ::2]).depth, stereo.compute(left, right).depth)
+
+
 def test_write_ply(tmp_path):
     pts = np.array([[[0, 0, 1], [np.nan, 0, 0]], [[1, 2, 3], [4, 5, np.inf]]], np.float32)
     cs.write_ply(str(tmp_path / "a.ply"), pts)

@@ -30,6 +30,11 @@ struct Image {
 
 using ImageF = Image<float>;
 using ImageU8 = Image<uint8_t>;
+
+// An 8-bit sample as the library reads it: v / 255, in float arithmetic. Every reader and
+// every backend's byte upload uses this, so an 8-bit image gives the same floats whichever
+// way it enters (float division of these values equals the rounded double v / 255.0).
+inline float unitFromByte(uint8_t v) { return float(v) / 255.f; }
 using FlowImage = Image<Vec2f>;
 
 // Every recoverable failure of the library (bad input, unreadable file, missing

@@ -19,8 +19,10 @@ struct PngFormat {
 
 // 8- or 16-bit PNG, gray / gray+alpha / RGB / RGBA / palette; colour is converted to
 // luma (Rec. 601 weights), alpha dropped. Values scaled to [0, 1]. `format` (optional)
-// receives what the file held.
-ImageF readPngGray(const std::string& path, PngFormat* format = nullptr);
+// receives what the file held. With `bytes`, a camera's 8-bit gray file (one channel, not
+// interlaced) is returned there as stored, and the float image returned is empty
+// (Stereo takes either; unitFromByte converts).
+ImageF readPngGray(const std::string& path, PngFormat* format = nullptr, ImageU8* bytes = nullptr);
 // The same from a PNG held in memory (a log's CompressedImage); `name` names it in errors.
 ImageF decodePngGray(const uint8_t* data, size_t size, const std::string& name, PngFormat* format = nullptr);
 void writePngGray(const std::string& path, const ImageF& img);          // clamps to [0,1], 8-bit

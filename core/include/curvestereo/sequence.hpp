@@ -77,6 +77,10 @@ class Sequence {
   // A log's frames are decoded from their messages the same way (mono8 / mono16 as 8 / 16-bit
   // PNG samples, rgb8 / bgr8 to luma, png / jpeg CompressedImage decoded). Thread-safe.
   void load(size_t i, ImageF& left, ImageF& right) const;
+  // Frame i as its files store it when both are 8-bit gray PNGs, what cameras give (Stereo
+  // takes them as they are: a quarter of the bytes to move); false for any other frame (a
+  // log's, 16-bit or colour files), which load() converts. Same errors; thread-safe.
+  bool loadBytes(size_t i, ImageU8& left, ImageU8& right) const;
 
   struct LogFrames;  // a log's reader and message references (log_sequence.cpp)
   struct Stamped;
@@ -84,6 +88,7 @@ class Sequence {
  private:
   void attachPoses(const std::string& path, double toleranceMs);
   void loadLog(size_t i, ImageF& left, ImageF& right) const;
+  const SequenceFrame& frameAt(size_t i) const;  // frames_[i], or an error naming i
   static void pairLogFrames(Sequence& seq, LogFrames& log, std::vector<Stamped>& left, std::vector<Stamped>& right,
                             double toleranceMs);
 

@@ -64,14 +64,18 @@ class Stereo {
   // submitted and 1 once its results are back: it is one submission with no host code
   // between its levels, and reporting per level would stall the real-time path there.
   void setProgress(std::function<void(double)> progress);
-  // Images: float gray in [0,1], both of the rig's resolution. Throws cs::Error on
-  // mismatched sizes or non-finite pixels.
+  // Images: float gray in [0,1], or a camera's 8-bit gray (v / 255, as the image files
+  // are read: the same result as the float image, with a quarter of the bytes to copy and
+  // transfer), both of the rig's resolution. Throws cs::Error on mismatched sizes or
+  // non-finite pixels.
   DepthResult compute(const ImageF& left, const ImageF& right);
+  DepthResult compute(const ImageU8& left, const ImageU8& right);
   // The same result, written into `result`: its images keep their storage where their size
   // already matches, so a loop that passes the same DepthResult every frame allocates
   // nothing after the first. Every field is overwritten (outputs not selected become empty
   // images). If it throws, `result` is left in an unspecified but valid state.
   void compute(const ImageF& left, const ImageF& right, DepthResult& result);
+  void compute(const ImageU8& left, const ImageU8& right, DepthResult& result);
 
   // --- sequences: frame after frame of one rig (a live camera or a recording) ---
   // The next frame of a sequence. From the second frame on it starts from the previous
@@ -84,6 +88,8 @@ class Stereo {
   // (result.redone). Same checks and outputs as compute(); result.warm says which it was.
   void next(const ImageF& left, const ImageF& right, DepthResult& result, const Pose* pose = nullptr);
   DepthResult next(const ImageF& left, const ImageF& right, const Pose* pose = nullptr);
+  void next(const ImageU8& left, const ImageU8& right, DepthResult& result, const Pose* pose = nullptr);
+  DepthResult next(const ImageU8& left, const ImageU8& right, const Pose* pose = nullptr);
   // A new sequence: the next frame is solved cold and nothing is carried into it.
   void resetSequence();
 
@@ -99,6 +105,11 @@ class Stereo {
   unsigned long long bufferBytes() const;
 
  private:
+  // compute() and next() for either kind of image.
+  template <class Img>
+  void computeImages(const Img& left, const Img& right, DepthResult& result);
+  template <class Img>
+  void nextImages(const Img& left, const Img& right, DepthResult& result, const Pose* pose);
   std::string backendWhy_;
   std::unique_ptr<detail::StereoCore> core_;  // rig, parameters, backend, pipeline
   std::function<void(double)> progress_;

@@ -69,6 +69,8 @@ struct WarpBuffers {
 // The backends' upload copy: n floats from src to dst; with `finite`, also whether all of
 // them were finite, in the same pass (vectorised: no extra read of a large image).
 void copyFloats(float* dst, const float* src, size_t n, bool* finite);
+// The byte upload's conversion on the host: dst[i] = unitFromByte(src[i]).
+void floatsFromBytes(float* dst, const uint8_t* src, size_t n);
 
 class Backend {
  public:
@@ -88,6 +90,9 @@ class Backend {
   // finite (optional): set to whether every value was finite (NaN and +-inf are not), found
   // in the copy's own pass: Stereo's input check at no extra read of the image.
   void upload(const Buffer& dst, const float* host, bool* finite = nullptr);
+  // dst.count() 8-bit samples, stored as unitFromByte(v): a camera's 8-bit image uploaded
+  // as it is, a quarter of the floats' bytes, converted where the backend's memory is.
+  void uploadBytes(const Buffer& dst, const uint8_t* host);
   void download(const Buffer& src, float* host);
   void fill(const Buffer& dst, float value);
   void copy(const Buffer& dst, const Buffer& src);  // the same number of floats
@@ -350,6 +355,7 @@ class Backend {
   // arguments already checked.
   virtual Buffer doCreate(int width, int height, int channels) = 0;
   virtual void doUpload(const Buffer& dst, const float* host, bool* finite) = 0;  // finite: see copyFloats
+  virtual void doUploadBytes(const Buffer& dst, const uint8_t* host) = 0;
   virtual void doDownload(const Buffer& src, float* host) = 0;
   virtual void doFill(const Buffer& dst, float value) = 0;
   virtual void doCopy(const Buffer& dst, const Buffer& src) = 0;
