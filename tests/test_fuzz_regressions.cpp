@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "curvestereo/camera_rig.hpp"
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/rig.hpp"
 #include "curvestereo/sequence.hpp"
@@ -33,6 +34,9 @@ std::string load(const std::string& target, const fs::path& file) {
     if (target == "camchain") {
       cs::parseKalibr(readAll(file), file.filename().string());
       cs::loadKalibr(file.string());
+    } else if (target == "camera_rig") {
+      cs::parseCameraRig(readAll(file), file.filename().string());
+      cs::loadCameraRig(file.string());
     } else if (target == "calib") {
       cs::parseCalibration(readAll(file), file.filename().string());
       cs::loadCalibration(file.string());

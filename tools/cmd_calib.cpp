@@ -3,6 +3,7 @@
 // Calibration files between Kalibr, Basalt, OpenCV, ORB-SLAM3 and VINS-Fusion; the input's
 // format is read from its keys, the output's from --format or from OUT's name.
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -11,7 +12,9 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "curvestereo/camera_rig.hpp"
 #include "curvestereo/rig.hpp"
+#include "rig_cli.hpp"
 
 namespace cs::cli {
 
@@ -73,10 +76,34 @@ int convert(const Args& args) {
   return 0;
 }
 
+// A file of more than two cameras: every camera's place on the body, each pair's overlap and
+// the pairs run would solve.
+void showRig(const CameraRig& rig) {
+  if (rig.size() <= 2) return;
+  std::printf("rig of %d cameras (cam0 and cam1 above are its first pair); body frame: %s\n", rig.size(),
+              rig.poses[0].p.norm() == 0 && rig.poses[0].R.isIdentity() ? "cam0's" : "the IMU's");
+  for (int k = 2; k < rig.size(); ++k) std::printf("cam%d: %s\n", k, describe(rig.cameras[size_t(k)]).c_str());
+  for (int k = 0; k < rig.size(); ++k) {
+    const BodyPose& p = rig.poses[size_t(k)];
+    const Eigen::Vector3d axis = p.R.col(2);
+    std::printf("cam%d: centre [%.4f, %.4f, %.4f] m, optical axis [%.3f, %.3f, %.3f], view %.1f deg\n", k, p.p.x(),
+                p.p.y(), p.p.z(), axis.x(), axis.y(), axis.z(),
+                2.0 * viewHalfAngle(rig.cameras[size_t(k)]) * 180.0 / M_PI);
+  }
+  std::printf("overlap (share of camera i's view that camera j sees, at 1 m, 5 m and infinity):\n");
+  for (const PairInfo& p : pairTable(rig))
+    std::printf("  cam%d-cam%d: %5.1f %% / %5.1f %%, baseline %.4f m%s\n", p.i, p.j, 100.0 * p.overlapIJ,
+                100.0 * p.overlapJI, p.baseline, std::min(p.overlapIJ, p.overlapJI) < kMinOverlap ? " (no pair)" : "");
+  std::printf("pairs run solves (--partners 2): %s\n", describePairs(choosePairs(rig)).c_str());
+}
+
 int show(const Args& args) {
   if (args.positional().size() != 2) throw UsageError("calib show needs one file: calib show IN");
   CalibFormat format{};
   const Rig rig = loadCalibration(args.positional()[1], &format, calibHintsFromArgs(args));
+  // Read before anything is printed, so that a broken rig is its one line alone.
+  const bool rigFormat = format == CalibFormat::Kalibr || format == CalibFormat::Basalt;
+  const CameraRig cameraRig = rigFormat ? loadCameraRig(args.positional()[1]) : rigFromPair(rig);
   const Eigen::AngleAxisd turn(rig.R);
   std::printf("format: %s\ncam0: %s\ncam1: %s\n", calibFormatName(format), describe(rig.cam0).c_str(),
               describe(rig.cam1).c_str());
@@ -84,6 +111,7 @@ int show(const Args& args) {
               rig.t.z(), rig.t.norm(), turn.angle() * 180.0 / M_PI);
   for (int r = 0; r < 3; ++r)
     std::printf("  [%12.9f %12.9f %12.9f | %12.9f]\n", rig.R(r, 0), rig.R(r, 1), rig.R(r, 2), rig.t(r));
+  showRig(cameraRig);
   return 0;
 }
 

@@ -21,6 +21,7 @@
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/metrics.hpp"
 #include "eval.hpp"
+#include "rig_cli.hpp"
 
 namespace cs::cli {
 
@@ -208,11 +209,19 @@ int cmdEval(const Args& args) {
   known.insert({"csv", "md", "maps", "methods", "fov", "sgbm-fov", "ps-scale", "ps-window", "ps-step", "min-depth",
                 "sweep", "warps-list", "step", "plot", "replot", "sparsification"});
   known.insert({"sequence", "cold", "compare", "frames", "calib", "blind"});
+  known.insert({"pairs", "partners", "panorama-min-confidence", "cross-check"});
   args.allowOnly(known);
   if (args.has("sequence")) return runSequences(args, paramsFromArgs(args), backendFromArgs(args));
   for (const char* sequenceOnly : {"cold", "compare", "frames", "calib"})
     if (args.has(sequenceOnly)) throw UsageError(std::string("--") + sequenceOnly + " is for --sequence folders");
   if (args.positional().empty()) throw UsageError("eval needs at least one pair folder (or --sequence DIR)");
+  if (isRigFolder(args.positional().front())) {
+    for (const char* pairOnly : {"md", "methods", "sweep", "sparsification"})
+      if (args.has(pairOnly)) throw UsageError(std::string("--") + pairOnly + " is for pair folders, not a rig folder");
+    return evalRig(args);
+  }
+  for (const char* rigOnly : {"pairs", "partners", "panorama-min-confidence", "cross-check"})
+    if (args.has(rigOnly)) throw UsageError(std::string("--") + rigOnly + " is for a rig folder");
   const Params params = paramsFromArgs(args);
   const std::string backend = backendFromArgs(args);
   if (args.has("sweep")) return runStudy(args, params, backend);

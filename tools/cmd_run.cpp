@@ -19,6 +19,7 @@
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/log.hpp"
 #include "curvestereo/sequence.hpp"
+#include "rig_cli.hpp"
 
 namespace cs::cli {
 
@@ -79,12 +80,7 @@ ViewOptions viewOptions(const Args& args, const Camera& cam0) {
 void writeViews(const std::string& dir, const ViewOptions& v, const Camera& cam0, const DepthResult& r,
                 float minConfidence) {
   auto path = [&](const char* name) { return (std::filesystem::path(dir) / name).string(); };
-  Image<Point3f> points = r.depth.points;
-  // The organised cloud keeps its grid: points below --min-confidence become NaN.
-  if (!r.confidence.empty())
-    for (size_t i = 0; i < points.size(); ++i)
-      if (!(r.confidence.data[i] >= minConfidence)) points.data[i] = {NAN, NAN, NAN};
-  writePcd(path("points.pcd"), points);
+  writeOrganisedCloud(dir, r, minConfidence);
   if (v.pinhole) {
     const ImageF z = pinholeDepth(cam0, r.depth.radial, v.view, v.sampling);
     writeExr(path("depth_pinhole.exr"), z);
@@ -256,6 +252,7 @@ int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert(
       {"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling", "image-size"});
+  known.insert({"rig", "pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"});
   known.insert(
       {"sequence", "poses", "cold", "pair-tolerance-ms", "log", "topics", "compression", "read-threads", "frames"});
   args.allowOnly(known);
@@ -265,6 +262,9 @@ int cmdRun(const Args& args) {
     if (!args.positional().empty()) throw UsageError(std::string(which) + " takes no images: the source names them");
     for (const char* option : {"topics", "compression"})
       if (args.has(option) && !args.has("log")) throw UsageError(std::string("--") + option + " is for run --log");
+    for (const char* option : {"rig", "pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"})
+      if (args.has(option))
+        throw UsageError(std::string("--") + option + " is for one frame of a rig: " + which + " solves a pair");
     const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
     if (!mcapOutput(outDir)) requireOutputFolder(outDir);
     if (args.has("compression") && !mcapOutput(outDir)) throw UsageError("--compression is for -o OUT.mcap");
@@ -272,7 +272,19 @@ int cmdRun(const Args& args) {
   }
   for (const char* option : {"poses", "cold", "pair-tolerance-ms", "topics", "compression", "read-threads", "frames"})
     if (args.has(option)) throw UsageError(std::string("--") + option + " is for run --sequence or --log");
-  if (args.positional().size() != 2) throw UsageError("run needs exactly two images: LEFT RIGHT");
+  // Three images or more, or --rig: a rig of as many cameras (cmd_rig.cpp).
+  if (args.positional().size() >= 3 || args.has("rig")) {
+    const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
+    requireOutputFolder(outDir);
+    for (const char* option : {"pinhole", "equirect", "sampling", "scale-intrinsics", "image-size", "mask"})
+      if (args.has(option)) throw UsageError(std::string("--") + option + " is for a pair, not a rig of cameras");
+    return runRig(args, outDir);
+  }
+  for (const char* option : {"pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"})
+    if (args.has(option))
+      throw UsageError(std::string("--") + option + " is for a rig (three images or more, or --rig)");
+  if (args.positional().size() != 2)
+    throw UsageError("run needs exactly two images: LEFT RIGHT (or one per camera of a rig: IMG0 IMG1 IMG2 ...)");
   const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
   requireOutputFolder(outDir);
   const Params params = paramsFromArgs(args);

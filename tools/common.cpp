@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "curvestereo/depth_views.hpp"
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/param_table.hpp"
 
@@ -216,6 +217,14 @@ void writeOutputs(const std::string& dir, const DepthResult& r, const ImageF& le
     points.push_back({p.x, p.y, p.z, uint8_t(std::lround(255.f * g))});
   }
   writePly(path("points.ply"), points);
+}
+
+void writeOrganisedCloud(const std::string& dir, const DepthResult& r, float minConfidence) {
+  Image<Point3f> points = r.depth.points;
+  if (!r.confidence.empty())
+    for (size_t i = 0; i < points.size(); ++i)
+      if (!(r.confidence.data[i] >= minConfidence)) points.data[i] = {NAN, NAN, NAN};
+  writePcd((std::filesystem::path(dir) / "points.pcd").string(), points);
 }
 
 Progress::Progress(std::string label) : label_(std::move(label)), tty_(isatty(fileno(stderr))) {}

@@ -48,6 +48,10 @@ StereoInputs loadStereoInputs(const std::string& calib, const std::string& leftP
 // keeps only points of confidence >= minConfidence.
 void writeOutputs(const std::string& dir, const DepthResult& result, const ImageF& left, float minConfidence = 0.f);
 
+// points.pcd in dir: the organised cloud, which keeps its grid (points below minConfidence
+// become NaN).
+void writeOrganisedCloud(const std::string& dir, const DepthResult& result, float minConfidence);
+
 // --min-confidence (0 when absent); an error outside [0, 1].
 float minConfidenceFromArgs(const Args& args);
 

@@ -33,8 +33,9 @@ it and prints tau>1, tau>3, the end-point error, depth abs-rel and the time per 
   --seed N             the scene's random seed (default 7)
 )",
      true, true},
-    {"run", "solve a calibrated pair (or a sequence) and write depth, points and flow",
+    {"run", "solve a calibrated pair (a rig of N cameras, or a sequence) and write depth, points and flow",
      R"(usage: curvestereo run --calib CALIB LEFT RIGHT -o OUTDIR [options] [solver options]
+       curvestereo run --calib RIG IMG0 IMG1 IMG2 ... -o OUTDIR [rig options] [solver options]
        curvestereo run --sequence SRC -o OUTDIR [--calib CALIB] [--poses FILE] [--cold] [solver options]
        curvestereo run --log FILE --topics LEFT,RIGHT --calib CALIB -o OUT.mcap|OUTDIR [--cold] [solver options]
 
@@ -53,6 +54,19 @@ points.pcd and confidence.exr/.png (docs/confidence.md) into OUTDIR.
                          z-depth in a virtual pinhole camera of FOV degrees
   --equirect W           also range_equirect.exr, W x W/2 radial range around camera 0's axis
   --sampling nearest|bilinear   how --pinhole and --equirect sample the depth (default nearest)
+a rig of N cameras (three images or more, or --rig; docs/guide.md "run on a rig"):
+  each camera's outputs into OUTDIR/cam<k>/, and panorama_range.exr, panorama.png,
+  panorama_depth.png, panorama_confidence.exr and the merged points.ply / points.pcd into OUTDIR
+  --rig                  two images are a rig of two cameras (per-camera outputs, panorama)
+  --pairs I-J,...        the pairs to solve (default: each camera's best partners by overlap
+                         and baseline; `calib show RIG` lists them)
+  --partners N           how many partners each camera takes (default 2)
+  --panorama-width W     the panorama's width, even (default 2048; its height is W/2)
+  --cross-check T        each camera's depth from a pair checked against the pair's other
+                         direction: pixels whose inverse ranges differ by more than T (e.g.
+                         0.1) are taken away (default 0: off)
+  --panorama-min-confidence C   the panorama leaves out estimates of confidence below C
+                         (default 0: every estimate; fewer holes, or fewer errors)
 sequences:
   --sequence SRC         an ASL/EuRoC folder (mav0/cam0, mav0/cam1; its poses_cam0.csv and
                          camchain.yaml are used) or "LEFT,RIGHT" folders or globs paired by
@@ -102,11 +116,16 @@ into an MCAP log, each message stamped with its frame's timestamp (ns).
                          [solver options]
        curvestereo eval PAIRDIR... --sweep warps=A..B|dumax=A..B --csv FILE [--warps-list 5,10,20] [--step X]
        curvestereo eval --sequence DIR... [--cold | --compare] [--blind] [--frames N] [--csv FILE] [--md FILE]
+       curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N]
+                         [--cross-check T] [--panorama-min-confidence C] [solver options]
 
 A PAIRDIR holds left.png, right.png, camchain.yaml and depth_left.exr (optional
 depth_right.exr for the non-occluded scores), as `curvestereo synth` writes it.
 The CSV's columns: pair,method,tau1,tau3,epe,tau1_noc,tau3_noc,epe_noc,absrel,density,ms,sky
 (sky: the percent of ground-truth sky pixels at +inf or invalid; NaN without sky).
+A RIGDIR holds cam<k>.png, depth<k>.exr, camchain.yaml and panorama_range.exr: each camera's
+tau over the pixels a partner sees, the panorama's abs-rel where the truth is finite and its
+coverage of the sphere two cameras see (docs/guide.md "eval").
 
   --csv FILE             the results table (required for pairs)
   --md FILE              the same as a Markdown table
@@ -174,7 +193,9 @@ Writes mask.png, calibration.flo / .png (where image 1 is sampled for each pixel
 convert: rewrites IN in another format, chosen by --format or by OUT's name (.json: Basalt,
 *camchain*.yaml: Kalibr, .xml: OpenCV; any other name needs --format). A camera model the
 target format cannot hold is refused before anything is written.
-show: prints the format read, both cameras' models and parameters, the baseline and the pose.
+show: prints the format read, both cameras' models and parameters, the baseline and the pose;
+for a rig of more than two cameras also each camera's place, every pair's overlap and the
+pairs run solves.
 --image-size: the images' size for a file that holds none (OpenCV lists, ORB-SLAM3).
 See docs/calibration.md for every format and an example of each.
 )",

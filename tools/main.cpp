@@ -54,6 +54,7 @@ int main(int argc, char** argv) {
     std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold", "compare", "blind"};
     if (command == "synth") flags.insert("sequence");
     if (command == "log") flags.insert("time-read");
+    if (command == "run") flags.insert("rig");
     const cs::cli::Args args(int(rest.size()), rest.data(), flags);
     if (command == "run") return cs::cli::cmdRun(args);
     if (command == "demo") return cs::cli::cmdDemo(args);

@@ -14,6 +14,7 @@
 
 #include "calib_common.hpp"
 #include "curvestereo/camera_models.hpp"
+#include "curvestereo/camera_rig.hpp"
 #include "curvestereo/rig.hpp"
 
 namespace cs {
@@ -97,6 +98,30 @@ class BasaltReader {
     rig.R = p1.R.transpose() * p0.R;
     rig.t = p1.R.transpose() * (p0.p - p1.p);
     calib::checkRig(rig, doc_.name(), "T_imu_cam");
+    return rig;
+  }
+
+  // Every camera, posed in the IMU frame; the three lists must have one entry per camera.
+  CameraRig readRig(const std::string& text) {
+    const YAML::Node root = doc_.parse(text, "JSON");
+    if (!root.IsMap())
+      doc_.fail("not a Basalt calibration (expected a JSON object with value0.T_imu_cam, intrinsics and resolution)");
+    const YAML::Node value0 = YamlDoc::find(root, "value0");
+    prefix_ = value0.IsDefined() ? "value0" : "";
+    const YAML::Node v = value0.IsDefined() ? value0 : root;
+    const YAML::Node poses = twoOrMore(v, "T_imu_cam");
+    const YAML::Node intrinsics = twoOrMore(v, "intrinsics");
+    const YAML::Node resolution = twoOrMore(v, "resolution");
+    if (intrinsics.size() != poses.size() || resolution.size() != poses.size())
+      doc_.fail(key("T_imu_cam") + ", " + key("intrinsics") + " and " + key("resolution") + " have " +
+                std::to_string(poses.size()) + ", " + std::to_string(intrinsics.size()) + " and " +
+                std::to_string(resolution.size()) + " entries: each needs one per camera");
+    CameraRig rig;
+    for (int i = 0; i < int(poses.size()); ++i) {
+      rig.cameras.push_back(readCamera(intrinsics[i], resolution[i], i));
+      const Pose pose = readPose(poses[i], i);
+      rig.poses.push_back({pose.R, pose.p});
+    }
     return rig;
   }
 
@@ -274,6 +299,12 @@ std::string zeros(int n) {
 }  // namespace
 
 Rig parseBasalt(const std::string& json, const std::string& name) { return BasaltReader(name).read(json); }
+
+CameraRig parseBasaltRig(const std::string& json, const std::string& name) {
+  CameraRig rig = BasaltReader(name).readRig(json);
+  calib::checkCameraRig(rig, name);
+  return rig;
+}
 
 Rig loadBasalt(const std::string& path) { return BasaltReader(path).read(calib::readTextFile(path)); }
 

@@ -114,6 +114,14 @@ void checkRig(Rig& rig, const std::string& file, const std::string& poseName) {
   }
 }
 
+void checkCameraRig(const CameraRig& rig, const std::string& file) {
+  try {
+    rig.validate();
+  } catch (const Error& e) {
+    throw Error(oneLine(file + ": " + e.what()));
+  }
+}
+
 void checkRigBeforeSaving(const Rig& rig, const std::string& path) {
   try {
     rig.validate();

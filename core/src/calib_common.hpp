@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "curvestereo/camera_rig.hpp"
 #include "curvestereo/image.hpp"
 #include "curvestereo/rig.hpp"
 
@@ -35,6 +36,8 @@ void checkPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const std::st
 void checkCamera(const Camera& cam, const std::string& name);
 // Both cameras and the pose; a failure becomes "<file>: <problem>".
 void checkRig(Rig& rig, const std::string& file, const std::string& poseName);
+// CameraRig::validate; a failure becomes "<file>: <problem>".
+void checkCameraRig(const CameraRig& rig, const std::string& file);
 // Throws "<path>: not saving an invalid rig: ..." for a rig a reader would refuse.
 void checkRigBeforeSaving(const Rig& rig, const std::string& path);
 

@@ -11,6 +11,7 @@
 
 #include "calib_common.hpp"
 #include "curvestereo/camera_models.hpp"
+#include "curvestereo/camera_rig.hpp"
 #include "curvestereo/image.hpp"
 
 namespace cs {
@@ -47,7 +48,84 @@ class KalibrReader {
     return rig;
   }
 
+  // cam0..camN-1, posed in camera 0's frame through the T_cn_cnm1 chain, or in the IMU's
+  // frame when the chain is incomplete and every camera has T_cam_imu (or T_imu_cam).
+  CameraRig readRig(const std::string& text) const {
+    const YAML::Node root = doc_.parse(text, "YAML");
+    if (!root.IsMap()) fail("not a Kalibr camchain (expected a mapping with keys cam0, cam1, ...)");
+    const int n = cameraCount(root);
+    CameraRig rig;
+    for (int k = 0; k < n; ++k) rig.cameras.push_back(readCamera(root, cameraName(k)));
+    const bool imuOnly =
+        !allHave(root, n, "T_cn_cnm1", 1) && (allHave(root, n, "T_cam_imu", 0) || allHave(root, n, "T_imu_cam", 0));
+    rig.poses = imuOnly ? imuPoses(root, n) : chainPoses(root, n);
+    return rig;
+  }
+
  private:
+  static std::string cameraName(int k) { return "cam" + std::to_string(k); }
+
+  // The keys camK must be cam0, cam1, ... without a gap.
+  int cameraCount(const YAML::Node& root) const {
+    int n = 0;
+    while (YamlDoc::find(root, cameraName(n)).IsDefined()) ++n;
+    for (const auto& entry : root) {
+      const std::string key = entry.first.as<std::string>("");
+      if (key.rfind("cam", 0) != 0 || key.size() < 4 || key.find_first_not_of("0123456789", 3) != std::string::npos)
+        continue;
+      if (std::stol(key.substr(3, 9)) >= n)
+        fail("has " + key + " but no " + cameraName(n) + ": the cameras must be cam0, cam1, ... without a gap");
+    }
+    if (n < 2) fail("a rig needs at least two cameras (cam0 and cam1), found " + std::to_string(n));
+    return n;
+  }
+
+  bool allHave(const YAML::Node& root, int n, const char* key, int from) const {
+    for (int k = from; k < n; ++k)
+      if (!YamlDoc::find(YamlDoc::find(root, cameraName(k)), key).IsDefined()) return false;
+    return true;
+  }
+
+  std::vector<BodyPose> chainPoses(const YAML::Node& root, int n) const {
+    std::vector<BodyPose> poses(static_cast<size_t>(n));
+    Eigen::Matrix4d bodyFromCam = Eigen::Matrix4d::Identity();
+    for (int k = 1; k < n; ++k) {
+      const std::string key = cameraName(k) + ".T_cn_cnm1";
+      const YAML::Node node = YamlDoc::find(YamlDoc::find(root, cameraName(k)), "T_cn_cnm1");
+      if (!node.IsDefined())
+        fail("missing key \"" + key + "\": the chain from " + cameraName(k - 1) + " to " + cameraName(k) +
+             " is broken (nor do all cameras have T_cam_imu or T_imu_cam to pose them by)");
+      const Eigen::Matrix4d T = readPose(node, key);
+      checkRotation(T, key);
+      bodyFromCam = bodyFromCam * calib::rigidInverse(T);
+      poses[size_t(k)] = {bodyFromCam.topLeftCorner<3, 3>(), bodyFromCam.topRightCorner<3, 1>()};
+    }
+    return poses;
+  }
+
+  std::vector<BodyPose> imuPoses(const YAML::Node& root, int n) const {
+    const bool camImu = allHave(root, n, "T_cam_imu", 0);
+    std::vector<BodyPose> poses;
+    for (int k = 0; k < n; ++k) {
+      const std::string key = cameraName(k) + (camImu ? ".T_cam_imu" : ".T_imu_cam");
+      const Eigen::Matrix4d T =
+          readPose(YamlDoc::find(YamlDoc::find(root, cameraName(k)), camImu ? "T_cam_imu" : "T_imu_cam"), key);
+      checkRotation(T, key);
+      const Eigen::Matrix4d bodyFromCam = camImu ? calib::rigidInverse(T) : T;
+      poses.push_back({bodyFromCam.topLeftCorner<3, 3>(), bodyFromCam.topRightCorner<3, 1>()});
+    }
+    return poses;
+  }
+
+  // The pose check without the baseline's (a camera may sit at the IMU's origin).
+  void checkRotation(const Eigen::Matrix4d& T, const std::string& key) const {
+    try {
+      calib::checkPose(T.topLeftCorner<3, 3>(), Eigen::Vector3d::UnitX(), key);
+    } catch (const Error& e) {
+      fail(e.what());
+    }
+  }
+
   calib::YamlDoc doc_;
 
   [[noreturn]] void fail(const std::string& problem) const { doc_.fail(problem); }
@@ -213,6 +291,34 @@ void writeCamera(std::ostream& os, const Camera& cam) {
 Rig loadKalibr(const std::string& path) { return KalibrReader(path).read(calib::readTextFile(path)); }
 
 Rig parseKalibr(const std::string& yaml, const std::string& name) { return KalibrReader(name).read(yaml); }
+
+CameraRig parseKalibrRig(const std::string& yaml, const std::string& name) {
+  CameraRig rig = KalibrReader(name).readRig(yaml);
+  calib::checkCameraRig(rig, name);
+  return rig;
+}
+
+void saveKalibrRig(const CameraRig& rig, const std::string& path) {
+  try {
+    rig.validate();
+  } catch (const Error& e) {
+    throw Error(path + ": not saving an invalid rig: " + e.what());
+  }
+  std::ostringstream os;
+  os << "# Kalibr camchain written by curvestereo. camK's T_cn_cnm1 maps camK-1 to camK.\n";
+  for (int k = 0; k < rig.size(); ++k) {
+    os << "cam" << k << ":\n";
+    if (k > 0) {
+      const Rig pair = pairRig(rig, k - 1, k);
+      os << "  T_cn_cnm1:\n";
+      for (int r = 0; r < 3; ++r)
+        os << "  - " << numberList({pair.R(r, 0), pair.R(r, 1), pair.R(r, 2), pair.t(r)}) << "\n";
+      os << "  - [0.0, 0.0, 0.0, 1.0]\n";
+    }
+    writeCamera(os, rig.cameras[size_t(k)]);
+  }
+  calib::writeTextFile(path, os.str());
+}
 
 void saveKalibr(const Rig& rig, const std::string& path) {
   calib::checkRigBeforeSaving(rig, path);  // never write a file that loadKalibr would refuse

@@ -123,3 +123,46 @@ out("calib", "kalibr_kb4.yaml", (cam("cam0", *models["kb4"]) + cam("cam1", *mode
 out("calib", "basalt_ds.json", basalt(("ds", basalt_types["ds"])).encode())
 out("calib", "opencv_fisheye.yaml", cv_yaml(*opencv_models["fisheye"]).encode())
 out("calib", "opencv_plumb_bob.xml", cv_xml(*opencv_models["plumb_bob"]).encode())
+
+# The camera_rig target: rigs of N cameras. Cameras k = 0..N-1 yawed by k * 360/N degrees on a
+# ring of radius 8 cm (x right, y down, z forward), with equidistant lenses of `fov` degrees
+# whose image circle fills a 400 x 400 image; Kalibr chains (T_cn_cnm1 of camK maps camK-1 to
+# camK) and a Basalt file (T_imu_cam of every camera).
+def ring_pose(k, n):
+    a = 2 * math.pi * k / n
+    R = [[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0], [-math.sin(a), 0.0, math.cos(a)]]  # camera to body
+    p = [0.08 * math.sin(a), 0.0, 0.08 * math.cos(a)]
+    return R, p
+def relative(k, n):  # T_cn_cnm1 = inv(T_body_camK) T_body_camK-1
+    Rb, pb = ring_pose(k, n)
+    Ra, pa = ring_pose(k - 1, n)
+    Rt = [[Rb[c][r] for c in range(3)] for r in range(3)]
+    R = [[sum(Rt[r][m] * Ra[m][c] for m in range(3)) for c in range(3)] for r in range(3)]
+    t = [sum(Rt[r][m] * (pa[m] - pb[m]) for m in range(3)) for r in range(3)]
+    return R, t
+def ring_camera(k, n, fov):
+    f = 200.0 / math.radians(fov / 2)
+    s = f"cam{k}:\n"
+    if k > 0:
+        R, t = relative(k, n)
+        s += "  T_cn_cnm1:\n" + "".join(f"  - [{R[r][0]!r}, {R[r][1]!r}, {R[r][2]!r}, {t[r]!r}]\n" for r in range(3))
+        s += "  - [0.0, 0.0, 0.0, 1.0]\n"
+    s += ("  camera_model: pinhole\n  distortion_coeffs: [0.0, 0.0, 0.0, 0.0]\n  distortion_model: equidistant\n"
+          f"  intrinsics: [{f!r}, {f!r}, 199.5, 199.5]\n  resolution: [400, 400]\n")
+    return s
+out("camera_rig", "ring4_200deg.yaml", "".join(ring_camera(k, 4, 200.0) for k in range(4)).encode())
+out("camera_rig", "back_to_back_220deg.yaml", "".join(ring_camera(k, 2, 220.0) for k in range(2)).encode())
+def rig_basalt(n, fov):
+    f = 200.0 / math.radians(fov / 2)
+    poses, cams = [], []
+    for k in range(n):
+        a = 2 * math.pi * k / n
+        _, p = ring_pose(k, n)
+        poses.append(f'{{"px": {p[0]!r}, "py": 0.0, "pz": {p[2]!r}, "qx": 0.0, "qy": {math.sin(a / 2)!r}, '
+                     f'"qz": 0.0, "qw": {math.cos(a / 2)!r}}}')
+        cams.append(f'{{"camera_type": "kb4", "intrinsics": {{"fx": {f!r}, "fy": {f!r}, "cx": 199.5, "cy": 199.5, '
+                    '"k1": 0.0, "k2": 0.0, "k3": 0.0, "k4": 0.0}}')
+    return (f'{{\n    "value0": {{\n        "T_imu_cam": [{", ".join(poses)}],\n'
+            f'        "intrinsics": [{", ".join(cams)}],\n'
+            f'        "resolution": [{", ".join(["[400, 400]"] * n)}]\n    }}\n}}\n')
+out("camera_rig", "ring3_basalt.json", rig_basalt(3, 200.0).encode())

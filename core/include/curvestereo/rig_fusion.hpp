@@ -1,0 +1,74 @@
+// Fusion of a rig's pair results (host code, a stage above the pair pipeline): each camera's
+// depth from its pairs, and the equirectangular panorama around the rig.
+#pragma once
+#include <Eigen/Core>
+#include <vector>
+
+#include "curvestereo/camera_rig.hpp"
+#include "curvestereo/depth_result.hpp"
+#include "curvestereo/image.hpp"
+
+namespace cs {
+
+// One camera's estimates (each from a pair with that camera as the reference) made one: per
+// pixel the most confident estimate wins, and the others within kAgreement of its inverse
+// depth are averaged with it, weighted by confidence. Disparity and warp are the winner's
+// (they belong to its pair). The confidence is the winner's. `cam` recomputes the points.
+// Throws cs::Error for no estimates, or an estimate without every output at the camera's size.
+DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates);
+constexpr double kAgreement = 0.05;
+
+// The round trip between a pair's two directions, on the host, at no solve's cost: each pixel
+// of `forward` (camera i's depth from the pair with j; pair = pairRig(rig, i, j)) is carried
+// at its depth into camera j and compared with `backward` (camera j's depth from i) at the
+// nearest pixel. Where both have a depth and their inverse ranges differ by more than
+// `tolerance` of the larger (plus 0.005 / m, so that far points compare in parallax), the
+// pixel becomes invalid in `forward` (every output NaN). Pixels whose point leaves camera j's
+// image or meets no estimate there stay. Returns how many were invalidated. Throws cs::Error
+// when a result lacks its outputs at its camera's size.
+long long crossCheck(const Rig& pair, DepthResult& forward, const DepthResult& backward, double tolerance);
+
+// The panorama's frame in the body frame: its y axis (down) is the cameras' mean y axis, its
+// z axis (longitude 0) camera 0's optical axis made perpendicular to it, its origin `centre`.
+struct PanoramaFrame {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // X_body = R X_pano + centre
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+};
+PanoramaFrame panoramaFrame(const CameraRig& rig);
+
+// The unit ray of panorama pixel (column j, row i) of a W x W/2 image: longitude -180 deg at
+// the left edge to +180 at the right, latitude +90 (up, -y) at the top; column j's centre at
+// lon = -pi + 2 pi (j + 0.5) / W, row i's at lat = pi/2 - pi (i + 0.5) / H;
+// ray = (cos lat sin lon, -sin lat, cos lat cos lon).
+Eigen::Vector3d panoramaRay(double j, double i, int width);
+// The inverse: the (fractional) column and row of a direction.
+Eigen::Vector2d panoramaPixel(const Eigen::Vector3d& direction, int width);
+
+struct Panorama {
+  ImageF range;       // metres from the centre; +inf at infinity; NaN where no camera gave one
+  ImageF grey;        // the images' grey level, [0, 1]; NaN where no range
+  ImageF confidence;  // the best confidence among the fused estimates; NaN where no range
+};
+
+// Forward-projects every camera's points (per-camera results, cameras[k]'s frame) into the
+// panorama, each pixel as a footprint the size of its neighbours' spacing there. Per
+// panorama pixel, samples below half the best confidence there are dropped; of the rest, the
+// nearest range and those within kAgreement of it (the visible surface: a z-buffer) are
+// averaged, weighted by confidence. Samples below minConfidence are left out altogether (a
+// panorama with fewer holes, or fewer errors: the choice is the caller's). width: even, 4 to
+// 32768. Throws cs::Error when a result lacks its valid mask, radial depth or confidence at its
+// camera's size, or an image (optional: none gives NaN grey) is not that size.
+Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
+                      const PanoramaFrame& frame, int width, float minConfidence = 0.f);
+
+// Every camera's points in the panorama frame, with their grey level, at least minConfidence.
+// Throws cs::Error when the results or images are not one per camera, at its size.
+struct RigPoint {
+  float x, y, z;
+  float grey;
+};
+std::vector<RigPoint> mergedPoints(const CameraRig& rig, const std::vector<DepthResult>& cameras,
+                                   const std::vector<ImageF>& images, const PanoramaFrame& frame,
+                                   float minConfidence = 0.f);
+
+}  // namespace cs

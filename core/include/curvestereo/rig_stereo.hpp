@@ -1,0 +1,61 @@
+// RigStereo: depth for every camera of a rig, from its pairs, each solved by cs::Stereo in
+// both directions, and fused per camera (rig_fusion.hpp). Defined in the top layer (stereo/),
+// like Stereo; the backend is Stereo's choice.
+//
+//   cs::CameraRig rig = cs::loadCameraRig("camchain.yaml");
+//   cs::RigStereo stereo(rig, cs::choosePairs(rig));
+//   cs::RigResult r = stereo.compute(images);   // r.cameras[k]: camera k's depth
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "curvestereo/camera_rig.hpp"
+#include "curvestereo/depth_result.hpp"
+#include "curvestereo/params.hpp"
+
+namespace cs {
+
+class Stereo;
+
+struct RigResult {
+  std::vector<DepthResult> cameras;  // per camera, radial depth from that camera
+  struct Solve {
+    int reference = 0, other = 0;  // the pair's cameras: depth for `reference`
+    double ms = 0;
+    long long crossCheckInvalidated = 0;  // pixels the cross-check took away (setCrossCheck)
+  };
+  std::vector<Solve> solves;
+  double totalMs = 0;  // the solves and the fusion
+};
+
+class RigStereo {
+ public:
+  // Each pair is solved both ways (reference i against j, and j against i), so each camera
+  // of a pair gets a depth from it. Throws cs::Error as Stereo's constructor does, or when a
+  // camera of the rig is in no pair.
+  RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, const Params& params = preset("realtime"),
+            const std::string& backend = "auto");
+  ~RigStereo();
+  RigStereo(const RigStereo&) = delete;
+  RigStereo& operator=(const RigStereo&) = delete;
+
+  // images[k] is camera k's (float grey in [0, 1], its camera's size).
+  RigResult compute(const std::vector<ImageF>& images);
+  // With a tolerance > 0, each camera's estimate from a pair is checked against the pair's
+  // other direction before the fusion (crossCheck in rig_fusion.hpp); 0 (default) leaves it.
+  void setCrossCheck(double tolerance);
+  // The backend the solves run on, as Stereo names it.
+  std::string backendName() const;
+
+ private:
+  struct Direction {
+    int reference, other;
+    std::unique_ptr<Stereo> stereo;
+  };
+  CameraRig rig_;
+  std::vector<Direction> directions_;
+  double crossCheck_ = 0;
+};
+
+}  // namespace cs

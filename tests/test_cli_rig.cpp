@@ -1,0 +1,212 @@
+// The command line of a rig (issue 32): `run` with one image per camera writes cam<k>/ and
+// the panorama, `eval` on a rig folder scores them, `calib show` prints the overlaps, and bad
+// rigs or options are one line. The end-to-end cases use rig4_urban_dev at a quarter of its
+// resolution (skipped without ../shared/data).
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_util.hpp"
+#include "curvestereo/camera_rig.hpp"
+#include "curvestereo/image_io.hpp"
+#include "test_util.hpp"
+
+namespace fs = std::filesystem;
+using cs::test::CliOutcome;
+using cs::test::runCli;
+
+namespace {
+
+void checkRefused(const CliOutcome& o, const std::string& needle, int exitCode = 1) {
+  CAPTURE(o.err);
+  CHECK(o.exitCode == exitCode);
+  CHECK(o.err.rfind("curvestereo: error: ", 0) == 0);
+  CHECK(std::count(o.err.begin(), o.err.end(), '\n') == 1);
+  CHECK(o.err.find(needle) != std::string::npos);
+}
+
+// The mean of each factor x factor block (images), or the block's centre sample (depth and
+// range: averaging would mix surfaces).
+cs::ImageF shrink(const cs::ImageF& in, int factor, bool average) {
+  cs::ImageF out(in.width / factor, in.height / factor);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) {
+      if (!average) {
+        out(x, y) = in(x * factor + factor / 2, y * factor + factor / 2);
+        continue;
+      }
+      float sum = 0;
+      for (int v = 0; v < factor; ++v)
+        for (int u = 0; u < factor; ++u) sum += in(x * factor + u, y * factor + v);
+      out(x, y) = sum / float(factor * factor);
+    }
+  return out;
+}
+
+// rig4_urban_dev at a quarter of its resolution, in the rig folder layout; "" without the data.
+fs::path smallRigFolder(const std::string& name) {
+  const std::string source = cs::test::sharedData("rigs/rig4_urban_dev");
+  if (source.empty()) return {};
+  const fs::path dir = cs::test::tempDir(name);
+  cs::CameraRig rig = cs::loadCameraRig(source + "/camchain.yaml");
+  for (cs::Camera& cam : rig.cameras) cam = cam.scaled(0.25);
+  cs::saveKalibrRig(rig, (dir / "camchain.yaml").string());
+  for (int k = 0; k < rig.size(); ++k) {
+    const std::string n = std::to_string(k);
+    cs::writePngGray((dir / ("cam" + n + ".png")).string(),
+                     shrink(cs::readPngGray(source + "/cam" + n + ".png"), 4, true));
+    cs::writeExr((dir / ("depth" + n + ".exr")).string(),
+                 shrink(cs::readExr(source + "/depth" + n + ".exr"), 4, false));
+  }
+  cs::writeExr((dir / "panorama_range.exr").string(), shrink(cs::readExr(source + "/panorama_range.exr"), 4, false));
+  return dir;
+}
+
+// The median of |a - b| / b where both are finite and positive.
+double medianRelativeError(const cs::ImageF& a, const cs::ImageF& b, long long* compared = nullptr) {
+  std::vector<double> e;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (std::isfinite(a.data[i]) && std::isfinite(b.data[i]) && a.data[i] > 0 && b.data[i] > 0)
+      e.push_back(std::abs(a.data[i] - b.data[i]) / b.data[i]);
+  if (compared) *compared = (long long)e.size();
+  if (e.empty()) return INFINITY;
+  std::nth_element(e.begin(), e.begin() + long(e.size() / 2), e.end());
+  return e[e.size() / 2];
+}
+
+std::string images(int n) {
+  std::string s;
+  for (int k = 0; k < n; ++k) s += " cam" + std::to_string(k) + ".png";
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("run with four images: every camera's outputs in cam<k>/ and a panorama near the truth") {
+  const fs::path dir = smallRigFolder("cli_rig_run");
+  if (dir.empty()) {
+    MESSAGE("skipped: ../shared/data/rigs/rig4_urban_dev not present");
+    return;
+  }
+  const CliOutcome o =
+      runCli(dir, "run --calib camchain.yaml" + images(4) + " -o out --backend cpu --preset fast --panorama-width 512");
+  CAPTURE(o.err);
+  REQUIRE(o.exitCode == 0);
+  CHECK(o.out.find("pairs: 0-1") != std::string::npos);
+  for (int k = 0; k < 4; ++k) {
+    const fs::path cam = dir / "out" / ("cam" + std::to_string(k));
+    for (const char* file : {"depth.exr", "depth.png", "disparity.exr", "flow.flo", "points.ply", "points.pcd",
+                             "confidence.exr", "confidence.png"})
+      CHECK(fs::exists(cam / file));
+    long long compared = 0;
+    const double error =
+        medianRelativeError(cs::readExr((cam / "depth.exr").string()),
+                            cs::readExr((dir / ("depth" + std::to_string(k) + ".exr")).string()), &compared);
+    CAPTURE(k);
+    CHECK(compared > 200 * 200 / 3);  // about half of each image overlaps a partner's
+    // At a quarter of the resolution a pixel of disparity is four of the original's: a few
+    // percent is what the solver gives; a wrong pose or frame gives tens of percent.
+    CHECK(error < 0.10);
+  }
+  for (const char* file : {"panorama_range.exr", "panorama.png", "panorama_confidence.exr", "points.ply"})
+    CHECK(fs::exists(dir / "out" / file));
+  const cs::ImageF range = cs::readExr((dir / "out" / "panorama_range.exr").string());
+  REQUIRE(range.width == 512);
+  REQUIRE(range.height == 256);
+  long long compared = 0;
+  CHECK(medianRelativeError(range, cs::readExr((dir / "panorama_range.exr").string()), &compared) < 0.05);
+  CHECK(compared > 512 * 256 / 2);
+}
+
+TEST_CASE("run --rig with two images: a rig of two cameras gets per-camera outputs and a panorama") {
+  const fs::path dir = smallRigFolder("cli_rig_two");
+  if (dir.empty()) {
+    MESSAGE("skipped: ../shared/data/rigs/rig4_urban_dev not present");
+    return;
+  }
+  cs::CameraRig rig = cs::loadCameraRig((dir / "camchain.yaml").string());
+  rig.cameras.resize(2);
+  rig.poses.resize(2);
+  cs::saveKalibrRig(rig, (dir / "two.yaml").string());
+  const CliOutcome o = runCli(
+      dir, "run --rig --calib two.yaml" + images(2) + " -o out --backend cpu --preset fast --panorama-width 256");
+  CAPTURE(o.err);
+  REQUIRE(o.exitCode == 0);
+  CHECK(o.out.find("pairs: 0-1") != std::string::npos);
+  for (const char* file : {"cam0/depth.exr", "cam1/depth.exr", "panorama_range.exr", "points.ply"})
+    CHECK(fs::exists(dir / "out" / file));
+  // Without --rig two images are a pair, as ever: the outputs of camera 0 in OUT itself.
+  REQUIRE(runCli(dir, "run --calib two.yaml" + images(2) + " -o pair --backend cpu --preset fast").exitCode == 0);
+  CHECK(fs::exists(dir / "pair" / "depth.exr"));
+  CHECK(!fs::exists(dir / "pair" / "cam0"));
+}
+
+TEST_CASE("eval on a rig folder: each camera's tau, the panorama's abs-rel and coverage") {
+  const fs::path dir = smallRigFolder("cli_rig_eval");
+  if (dir.empty()) {
+    MESSAGE("skipped: ../shared/data/rigs/rig4_urban_dev not present");
+    return;
+  }
+  const CliOutcome o = runCli(dir, "eval . --backend cpu --preset fast --csv eval.csv");
+  CAPTURE(o.err);
+  REQUIRE(o.exitCode == 0);
+  const std::string csv = cs::test::readFile(dir / "eval.csv");
+  CAPTURE(csv);
+  auto value = [&](const std::string& key) {
+    const size_t at = csv.find("\n" + key + ",");
+    REQUIRE(at != std::string::npos);
+    return std::stod(csv.substr(at + key.size() + 2));
+  };
+  for (int k = 0; k < 4; ++k) {
+    std::istringstream row(csv.substr(csv.find("\ncam" + std::to_string(k) + ",") + 6));
+    double tau1 = 0, tau3 = 0;
+    char comma = 0;
+    row >> tau1 >> comma >> tau3;
+    CHECK(tau3 <= tau1);
+    CHECK(tau1 < 30.0);  // a quarter of the resolution: a pixel is four of the original's
+  }
+  CHECK(value("panorama_coverage") > 90.0);
+  CHECK(value("panorama_absrel") < 15.0);
+  CHECK(value("panorama_absrel") > 0.0);
+}
+
+TEST_CASE("calib show prints a rig's cameras and overlaps; bad rigs and rig options are one line") {
+  const fs::path dir = cs::test::tempDir("cli_rig_errors");
+  cs::CameraRig ring;
+  for (int k = 0; k < 3; ++k) {
+    const double yaw = 2.0 * M_PI * k / 3;
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    ring.cameras.push_back(cs::Camera::kannalaBrandt4(64, 64, 18.3, 18.3, 31.5, 31.5));  // 200 degrees
+    ring.poses.push_back({R, R * Eigen::Vector3d(0, 0, 0.1)});
+  }
+  cs::saveKalibrRig(ring, (dir / "rig.yaml").string());
+  CliOutcome o = runCli(dir, "calib show rig.yaml");
+  CAPTURE(o.err);
+  REQUIRE(o.exitCode == 0);
+  CHECK(o.out.find("rig of 3 cameras") != std::string::npos);
+  CHECK(o.out.find("cam0-cam1:") != std::string::npos);
+  CHECK(o.out.find("pairs run solves (--partners 2): 0-1") != std::string::npos);
+
+  for (int k = 0; k < 3; ++k)
+    cs::writePngGray((dir / ("cam" + std::to_string(k) + ".png")).string(), cs::ImageF(64, 64, 0.5f));
+  checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png cam2.png cam0.png -o out"),
+               "the rig has 3 cameras: run needs 3 images", 2);
+  checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png cam2.png -o out --pairs 0-3"),
+               "--pairs: 0-3 is not two cameras of this rig");
+  checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png -o out --pairs 0-1"), "--pairs is for a rig", 2);
+  checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png -o out --cross-check 0.1"),
+               "--cross-check is for a rig", 2);
+  checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png cam2.png -o out --cross-check 2"),
+               "--cross-check expects a tolerance in [0, 1]", 2);
+  checkRefused(runCli(dir, "run --calib rig.yaml cam0.png cam1.png cam2.png -o out --equirect 64"),
+               "--equirect is for a pair", 2);
+  std::string text = cs::test::readFile(dir / "rig.yaml");
+  text.replace(text.find("cam2:"), 5, "cam7:");
+  std::ofstream(dir / "gap.yaml") << text;
+  checkRefused(runCli(dir, "calib show gap.yaml"), "has cam7 but no cam2");
+}

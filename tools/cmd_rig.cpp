@@ -1,0 +1,152 @@
+// curvestereo run --calib RIG IMG0 IMG1 ... -o OUTDIR [--pairs I-J,...] [--partners N]
+//                 [--panorama-width W] [solver options]
+// A rig of N cameras: its pairs solved, each camera's outputs in OUTDIR/cam<k>/ under a pair
+// run's names, the panorama and the merged cloud in OUTDIR.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "commands.hpp"
+#include "common.hpp"
+#include "curvestereo/camera_rig.hpp"
+#include "curvestereo/depth_views.hpp"
+#include "curvestereo/image_io.hpp"
+#include "curvestereo/rig_fusion.hpp"
+#include "curvestereo/rig_stereo.hpp"
+#include "rig_cli.hpp"
+
+namespace cs::cli {
+
+namespace {
+
+int panoramaWidth(const Args& args) {
+  const int width = args.getInt("panorama-width", 2048);
+  if (width < 4 || width % 2 || width > 32768)
+    throw UsageError("--panorama-width expects an even width of 4 to 32768 px (the image is W x W/2)");
+  return width;
+}
+
+void writePanorama(const std::string& dir, const Panorama& p) {
+  auto path = [&](const char* name) { return (std::filesystem::path(dir) / name).string(); };
+  writeExr(path("panorama_range.exr"), p.range);
+  writeExr(path("panorama_confidence.exr"), p.confidence);
+  ImageF grey = p.grey;
+  for (float& g : grey.data) g = std::isfinite(g) ? g : 0.f;
+  writePngGray(path("panorama.png"), grey);
+  writeDepthPng(path("panorama_depth.png"), p.range);
+}
+
+void writeMergedCloud(const std::string& dir, const std::vector<RigPoint>& points) {
+  std::vector<PlyPoint> ply;
+  ply.reserve(points.size());
+  Image<Point3f> pcd(int(points.size()), 1);
+  for (size_t k = 0; k < points.size(); ++k) {
+    const RigPoint& p = points[k];
+    ply.push_back({p.x, p.y, p.z, uint8_t(std::lround(255.f * std::clamp(p.grey, 0.f, 1.f)))});
+    pcd.data[k] = {p.x, p.y, p.z};
+  }
+  writePly((std::filesystem::path(dir) / "points.ply").string(), ply);
+  if (!points.empty()) writePcd((std::filesystem::path(dir) / "points.pcd").string(), pcd);
+}
+
+}  // namespace
+
+std::vector<PairInfo> rigPairsFromArgs(const Args& args, const CameraRig& rig) {
+  if (args.has("pairs")) {
+    if (args.has("partners")) throw UsageError("give --pairs or --partners, not both");
+    return parsePairs(rig, args.get("pairs", ""));
+  }
+  const int partners = args.getInt("partners", 2);
+  if (partners < 1 || partners > 8) throw UsageError("--partners expects 1 to 8");
+  return choosePairs(rig, partners);
+}
+
+// A lens wider than 180 degrees shows its whole image circle: unless the user sets the field
+// of view, the solve uses the widest camera's.
+Params rigParamsFromArgs(const Args& args, const CameraRig& rig) {
+  Params params = paramsFromArgs(args);
+  if (args.has("max-fov") || args.has("max-fov-deg")) return params;
+  double widest = 0;
+  for (const Camera& cam : rig.cameras) widest = std::max(widest, viewHalfAngle(cam));
+  params.maxFovDeg = std::max(params.maxFovDeg, std::floor(2.0 * widest * 180.0 / M_PI * 1e6) / 1e6);
+  return params;
+}
+
+double crossCheckFromArgs(const Args& args) {
+  const double t = args.getDouble("cross-check", 0.0);
+  if (!(t >= 0.0 && t <= 1.0)) throw UsageError("--cross-check expects a tolerance in [0, 1] (e.g. 0.1)");
+  return t;
+}
+
+float panoramaMinConfidence(const Args& args) {
+  const double c = args.getDouble("panorama-min-confidence", 0.0);
+  if (!(c >= 0.0 && c <= 1.0)) throw UsageError("--panorama-min-confidence expects a number in [0, 1]");
+  return float(c);
+}
+
+std::string describePairs(const std::vector<PairInfo>& pairs) {
+  std::string out;
+  for (const PairInfo& p : pairs) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%s%d-%d (overlap %.0f %% / %.0f %%, baseline %.3f m)", out.empty() ? "" : ", ", p.i,
+                  p.j, 100.0 * p.overlapIJ, 100.0 * p.overlapJI, p.baseline);
+    out += buf;
+  }
+  return out;
+}
+
+double validShare(const DepthResult& r) {
+  long long valid = 0;
+  for (auto v : r.valid.data) valid += v;
+  return r.valid.size() ? double(valid) / double(r.valid.size()) : 0.0;
+}
+
+int runRig(const Args& args, const std::string& outDir) {
+  const CameraRig rig = loadCameraRig(args.require("calib"));
+  const std::vector<std::string>& paths = args.positional();
+  if (int(paths.size()) != rig.size())
+    throw UsageError("the rig has " + std::to_string(rig.size()) + " cameras: run needs " + std::to_string(rig.size()) +
+                     " images, one per camera in order, got " + std::to_string(paths.size()));
+  const std::vector<PairInfo> pairs = rigPairsFromArgs(args, rig);
+  const int width = panoramaWidth(args);
+  const float minConfidence = minConfidenceFromArgs(args);
+  const float panoramaConfidence = panoramaMinConfidence(args);
+  const Params params = rigParamsFromArgs(args, rig);
+  std::vector<ImageF> images;
+  for (int k = 0; k < rig.size(); ++k)
+    images.push_back(loadImageFor(paths[size_t(k)], rig.cameras[size_t(k)], ("cam" + std::to_string(k)).c_str()));
+
+  const double crossCheckTolerance = crossCheckFromArgs(args);
+  RigStereo stereo(rig, pairs, params, backendFromArgs(args));
+  stereo.setCrossCheck(crossCheckTolerance);
+  std::printf("backend: %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
+  std::printf("pairs: %s\n", describePairs(pairs).c_str());
+  const RigResult r = stereo.compute(images);
+  for (const RigResult::Solve& s : r.solves)
+    std::printf("  cam%d from cam%d: %.1f ms%s\n", s.reference, s.other, s.ms,
+                crossCheckTolerance > 0
+                    ? (", cross-check took " + std::to_string(s.crossCheckInvalidated) + " px").c_str()
+                    : "");
+
+  const auto fuseStart = std::chrono::steady_clock::now();
+  const PanoramaFrame frame = panoramaFrame(rig);
+  const Panorama panorama = fusePanorama(rig, r.cameras, images, frame, width, panoramaConfidence);
+  const double panoramaMs =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fuseStart).count();
+
+  for (int k = 0; k < rig.size(); ++k) {
+    const std::string dir = (std::filesystem::path(outDir) / ("cam" + std::to_string(k))).string();
+    writeOutputs(dir, r.cameras[size_t(k)], images[size_t(k)], minConfidence);
+    writeOrganisedCloud(dir, r.cameras[size_t(k)], minConfidence);
+    std::printf("cam%d: %.1f %% of the image has a depth\n", k, 100.0 * validShare(r.cameras[size_t(k)]));
+  }
+  writePanorama(outDir, panorama);
+  writeMergedCloud(outDir, mergedPoints(rig, r.cameras, images, frame, minConfidence));
+  std::printf("total %.1f ms (pairs and per-camera fusion) + %.1f ms panorama %dx%d (host); outputs in %s\n", r.totalMs,
+              panoramaMs, width, width / 2, outDir.c_str());
+  return 0;
+}
+
+}  // namespace cs::cli

@@ -1,0 +1,36 @@
+// The rig commands' pieces (cmd_rig.cpp: run with N images; eval_rig.cpp: eval of a rig folder).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "args.hpp"
+#include "curvestereo/camera_rig.hpp"
+#include "curvestereo/depth_result.hpp"
+#include "curvestereo/params.hpp"
+
+namespace cs::cli {
+
+// run --calib RIG IMG0 ... IMGN-1 -o OUTDIR.
+int runRig(const Args& args, const std::string& outDir);
+// eval RIGDIR (a folder with cam<k>.png, depth<k>.exr, camchain.yaml, panorama_range.exr).
+int evalRig(const Args& args);
+// Whether a folder is a rig folder (cam0.png, cam1.png, ...) rather than a pair's.
+bool isRigFolder(const std::string& dir);
+
+// --pairs I-J,... or --partners N (default 2): the pairs to solve.
+std::vector<PairInfo> rigPairsFromArgs(const Args& args, const CameraRig& rig);
+// The solver options; unless --max-fov is given, the field of view of the widest camera
+// (viewHalfAngle), at least the preset's.
+Params rigParamsFromArgs(const Args& args, const CameraRig& rig);
+
+// --cross-check T (0 when absent): the tolerance of RigStereo::setCrossCheck.
+double crossCheckFromArgs(const Args& args);
+// --panorama-min-confidence C (0 when absent): the panorama leaves out samples below C.
+float panoramaMinConfidence(const Args& args);
+
+// "0-1 (overlap 48 % / 47 %, baseline 0.113 m), ...".
+std::string describePairs(const std::vector<PairInfo>& pairs);
+// The share of a result's pixels with a depth.
+double validShare(const DepthResult& r);
+
+}  // namespace cs::cli
