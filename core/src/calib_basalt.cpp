@@ -79,14 +79,19 @@ class BasaltReader {
  public:
   explicit BasaltReader(std::string name) : doc_(std::move(name)) {}
 
-  Rig read(const std::string& text) {
+  // The calibration's object: cereal names the archive's root value0; the object itself is
+  // accepted as well.
+  YAML::Node calibrationObject(const std::string& text) {
     const YAML::Node root = doc_.parse(text, "JSON");
     if (!root.IsMap())
       doc_.fail("not a Basalt calibration (expected a JSON object with value0.T_imu_cam, intrinsics and resolution)");
-    // cereal names the archive's root object value0; accept the object itself as well.
     const YAML::Node value0 = YamlDoc::find(root, "value0");
     prefix_ = value0.IsDefined() ? "value0" : "";
-    const YAML::Node v = value0.IsDefined() ? value0 : root;
+    return value0.IsDefined() ? value0 : root;
+  }
+
+  Rig read(const std::string& text) {
+    const YAML::Node v = calibrationObject(text);
     const YAML::Node poses = twoOrMore(v, "T_imu_cam");
     const YAML::Node intrinsics = twoOrMore(v, "intrinsics");
     const YAML::Node resolution = twoOrMore(v, "resolution");
@@ -103,12 +108,7 @@ class BasaltReader {
 
   // Every camera, posed in the IMU frame; the three lists must have one entry per camera.
   CameraRig readRig(const std::string& text) {
-    const YAML::Node root = doc_.parse(text, "JSON");
-    if (!root.IsMap())
-      doc_.fail("not a Basalt calibration (expected a JSON object with value0.T_imu_cam, intrinsics and resolution)");
-    const YAML::Node value0 = YamlDoc::find(root, "value0");
-    prefix_ = value0.IsDefined() ? "value0" : "";
-    const YAML::Node v = value0.IsDefined() ? value0 : root;
+    const YAML::Node v = calibrationObject(text);
     const YAML::Node poses = twoOrMore(v, "T_imu_cam");
     const YAML::Node intrinsics = twoOrMore(v, "intrinsics");
     const YAML::Node resolution = twoOrMore(v, "resolution");
