@@ -314,12 +314,13 @@ void Pipeline::initialiseLevel(size_t l) {
   stage("structure tensor");
   const TensorParams tp{params_.beta, params_.eta, params_.wMin, params_.tensorSigma, params_.alpha0, params_.alpha1};
   backend_.structureTensor(L.tensor, L.steps, L.i0, L.mask, tp);
-  // A warm frame's first level is the band sweep's coarse level, initialised by the
-  // carried estimate instead of the coarser levels and the full sweep.
+  // A warm frame's band sweep coarse level is initialised by the carried estimate instead
+  // of the full sweep; the pixels its check rejects keep the coarser levels' estimate,
+  // where a warm frame solved them (Params::warmCoarseWarps).
   const bool carried = warmFrame_ && sweep_.banded && l == sweep_.level + 1;
   stage("upsample");
-  if (carried) {
-    carryIntoCoarseSweep();
+  if (carried && params_.warmCoarseWarps == 0) {
+    // The coarser levels were skipped: rejected pixels keep the last frame's values here.
   } else if (l + 1 == levels_.size()) {
     backend_.fill(L.pd.u, 0.f);
     backend_.fill(L.w, 0.f);
@@ -335,6 +336,7 @@ void Pipeline::initialiseLevel(size_t l) {
     }
     if (initialising() && l < sweep_.level) backend_.upsample(L.confidence, coarse.confidence, s, 1.f);
   }
+  if (carried) carryIntoCoarseSweep();
   if (!carried && initialising() && sweep_.banded && l == sweep_.level + 1) runCoarseSweep();
   if (initialising() && l == sweep_.level) runSweep();
   for (const Buffer* b : {&L.pd.v, &L.pd.p, &L.pd.q}) backend_.fill(*b, 0.f);
@@ -576,17 +578,16 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
   } else if (initialising()) {
     sweepWork = pixels(levels_[sweep_.level]) * sweep_.params.planes * kSweepWarpsPerPlane;
   }
-  // A warm frame starts at the band sweep's coarse level, initialised by the carried
-  // estimate instead of the coarser levels and the full sweep; its warps still run. Measured
-  // on seqD1 (CUDA, H200, mean tau>1 clean / T265-like, warm against cold 39.37 / 37.16 %):
-  // starting at the band's level with the coarse level only carried gave 39.77 / 34.30 %,
-  // with its 2 warps 39.55 / 33.83 % for 0.16 ms a frame.
+  // A warm frame replaces the full sweep by the carried estimate and solves the levels
+  // above it with Params::warmCoarseWarps warps each (docs/sequences.md has the measurements).
   const bool warm = kind.warm && canWarmStart();
   warmFrame_ = warm;
-  const size_t levels = warm ? sweep_.level + 2 : levels_.size();
+  const size_t levels = warm && params_.warmCoarseWarps == 0 ? sweep_.level + 2 : levels_.size();
   if (warm) coarseSweepWork = 0;
   double total = sweepWork + coarseSweepWork, done = 0;
-  const std::vector<int> warps = warpSchedule(params_, int(levels_.size()));
+  std::vector<int> warps = warpSchedule(params_, int(levels_.size()));
+  if (warm)
+    for (size_t l = sweep_.level + 2; l < levels; ++l) warps[l] = params_.warmCoarseWarps;
   for (size_t l = 0; l < levels; ++l) total += pixels(levels_[l]) * warps[l];
   auto advance = [&](double work) {
     done += work;

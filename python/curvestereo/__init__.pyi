@@ -180,6 +180,7 @@ class Stereo:
         # Sequences (next()): warm start, cold schedule, warm-failure check, temporal filter.
         warm_start: bool = ...,
         warm_band: int = ...,
+        warm_coarse_warps: int = ...,
         cold_every: int = ...,
         warm_fail_ratio: float = ...,
         temporal_strength: float = ...,
