@@ -161,6 +161,7 @@ class Pipeline {
   void issueOrReplay(const std::function<void(double)>& progress, FrameKind kind);
   void buildPyramid(size_t levels);
   void carryIntoCoarseSweep();
+  ConfidenceParams confidenceTerms() const;
   void filterResult();
   void triangulate();
   void finishResult();
