@@ -174,6 +174,8 @@ std::vector<ParamInfo> buildTable() {
                            "hypotheses a pixel of a warm frame's band sweep (0: init_band's)", Shown::Never),
                   intParam("warm_coarse_warps", &Params::warmCoarseWarps, closed(0, 1000),
                            "warps at each level above the carried one in a warm frame (0: skipped)", Shown::Never),
+                  intParam("warm_full_res_warps", &Params::warmFullResWarps, closed(0, 1000),
+                           "warps at full resolution in a warm frame (0: init_warps')", Shown::Never),
                   intParam("cold_every", &Params::coldEvery, closed(0, 1000000),
                            "solve every N-th frame cold (0: only the first and failed ones)", Shown::Never),
                   floatParam("warm_fail_ratio", &Params::warmFailRatio, closed(0, 1),

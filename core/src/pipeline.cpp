@@ -601,8 +601,10 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
   if (warm) coarseSweepWork = 0;
   double total = sweepWork + coarseSweepWork, done = 0;
   std::vector<int> warps = warpSchedule(params_, int(levels_.size()));
-  if (warm)
+  if (warm) {
     for (size_t l = sweep_.level + 2; l < levels; ++l) warps[l] = params_.warmCoarseWarps;
+    if (params_.warmFullResWarps > 0) warps[0] = params_.warmFullResWarps;
+  }
   for (size_t l = 0; l < levels; ++l) total += pixels(levels_[l]) * warps[l];
   auto advance = [&](double work) {
     done += work;

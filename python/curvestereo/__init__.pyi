@@ -181,6 +181,7 @@ class Stereo:
         warm_start: bool = ...,
         warm_band: int = ...,
         warm_coarse_warps: int = ...,
+        warm_full_res_warps: int = ...,
         cold_every: int = ...,
         warm_fail_ratio: float = ...,
         temporal_strength: float = ...,

@@ -165,6 +165,12 @@ struct Params {
   // warm 31.9 % against cold 29.6 % over 16 frames). A short solve suffices there: it needs
   // the coarse shape, not the cold frame's 30 and 20 warps (which cost 1.7 ms on an H200).
   int warmCoarseWarps = 4;
+  // Warps at full resolution in a warm frame (0: initWarps'). The carried estimate arrives
+  // there already refined by the band sweep and the level above, and a second warp changed
+  // little (seqD1, CPU, 16 frames, 1 against 2: T265-like tau>1 30.81 against 30.67 %,
+  // flicker 11.22 against 10.89 %; clean 26.7 both) for 0.2 ms of a 2.8 ms frame on an H200.
+  // One warp at the level above too lost more (T265-like 31.42 %, clean moving box +1.2).
+  int warmFullResWarps = 1;
   float warmFailRatio = 0.8f;
   // The temporal filter of a sequence's result (Backend::temporalFilter): the previous
   // frame's filtered depth, carried into the new view, is averaged with the new estimate
