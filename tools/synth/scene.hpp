@@ -108,8 +108,8 @@ struct SceneSpec {
   // generator's viewpoint is then the body (placed as it places camera 0 otherwise, nearly
   // level) and otherCentresInCam0 is not used. The scene surrounds the rig (urban: the street
   // is closed behind it too, with clutter there) and each camera after camera 0 gets a near
-  // object in its own view, nearest to 1.6 x nearest from it; everything a pair's scene holds
-  // comes first, drawn alike.
+  // object in its own view, nearest to 1.6 x nearest from it (added after the pair scene's
+  // content; pair scenes, without rigCameras, are unchanged by it).
   std::vector<Pose> rigCameras;
   double pixelAngle = 1.0 / 250.0;  // see Scene::setDetail
 };
