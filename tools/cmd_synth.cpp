@@ -42,16 +42,26 @@ struct RenderDefaults {
   int samples = 3;
 };
 
+// --seed and --size, as a pair, a sequence and a rig read them.
+uint32_t seedFromArgs(const Args& args) {
+  const int seed = args.getInt("seed", 1);
+  if (seed < 0) throw Error("option --seed expects a non-negative integer");
+  return uint32_t(seed);
+}
+
+int sizeFromArgs(const Args& args, int fallback) {
+  const int size = args.getInt("size", fallback);
+  if (size < 16 || size > 16384) throw Error("option --size expects 16..16384 pixels");
+  return size;
+}
+
 synth::SynthConfig configFromArgs(const Args& args, RenderDefaults defaults = {}) {
   synth::SynthConfig cfg;
   cfg.scene = args.get("scene", "urban");
-  const int seed = args.getInt("seed", 1);
-  if (seed < 0) throw Error("option --seed expects a non-negative integer");
-  cfg.seed = uint32_t(seed);
+  cfg.seed = seedFromArgs(args);
   cfg.nearest = args.getDouble("nearest", cfg.nearest);
   cfg.samplesPerAxis = args.getInt("samples", defaults.samples);
-  const int size = args.getInt("size", defaults.size);
-  if (size < 16 || size > 16384) throw Error("option --size expects 16..16384 pixels");
+  const int size = sizeFromArgs(args, defaults.size);
   if (args.has("calib")) {
     for (const char* option : kRigOptions)
       if (args.has(option)) throw UsageError(std::string("option --") + option + " cannot be combined with --calib");
@@ -217,16 +227,13 @@ synth::RigConfig rigFromArgs(const Args& args) {
     throw UsageError(e.what());
   }
   cfg.scene = args.get("scene", cfg.scene);
-  const int seed = args.getInt("seed", 1);
-  if (seed < 0) throw Error("option --seed expects a non-negative integer");
-  cfg.seed = uint32_t(seed);
-  cfg.size = args.getInt("size", cfg.size);
-  if (cfg.size < 16 || cfg.size > 16384) throw Error("option --size expects 16..16384 pixels");
+  cfg.seed = seedFromArgs(args);
+  cfg.size = sizeFromArgs(args, cfg.size);
   cfg.samplesPerAxis = args.getInt("samples", cfg.samplesPerAxis);
   cfg.nearest = args.getDouble("nearest", cfg.nearest);
   cfg.panoramaWidth = args.getInt("panorama-width", cfg.panoramaWidth);
   if (cfg.panoramaWidth < 4 || cfg.panoramaWidth > 32768 || cfg.panoramaWidth % 2 != 0)
-    throw UsageError("option --panorama-width expects an even width in 4..32768 pixels");
+    throw UsageError("--panorama-width expects an even width of 4 to 32768 px (the image is W x W/2)");  // as run
   return cfg;
 }
 
@@ -240,8 +247,8 @@ void printRigSummary(const synth::RigConfig& cfg, const synth::SynthRig& r, doub
   for (int k = 0; k < rig.size(); ++k) {
     const DepthRange d = depthRange(r.depths[size_t(k)]);
     const Eigen::Vector3d& p = rig.poses[size_t(k)].p;
-    std::printf("cam%d at (%.3f, %.3f, %.3f) m: depth %.2f .. %.1f m, sky %.1f %%\n", k, p.x(), p.y(), p.z(),
-                d.nearest, d.farthest, 100.0 * d.skyFraction);
+    std::printf("cam%d at (%.3f, %.3f, %.3f) m: depth %.2f .. %.1f m, sky %.1f %%\n", k, p.x(), p.y(), p.z(), d.nearest,
+                d.farthest, 100.0 * d.skyFraction);
   }
   const DepthRange pano = depthRange(r.panoramaRange);
   std::printf("panorama %dx%d: range %.2f .. %.1f m, sky %.1f %%\n", r.panoramaRange.width, r.panoramaRange.height,
