@@ -14,6 +14,7 @@
 #include "cli_util.hpp"
 #include "curvestereo/camera_rig.hpp"
 #include "curvestereo/image_io.hpp"
+#include "curvestereo/rig_fusion.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -290,6 +291,36 @@ Agreement panoramaAgreement(const cs::Camera& cam, const cs::BodyPose& pose, con
   return a;
 }
 
+// Each camera's image and depth in a synth rig folder: the depth agrees with the panorama
+// where both see the same point (body poses: camera-to-body in the panorama's frame), and
+// every camera sees structure, sky, and its own near object.
+void checkAgainstPanorama(const fs::path& rigDir, const cs::CameraRig& rig, const std::vector<cs::BodyPose>& poses,
+                          int panoramaWidth) {
+  const cs::ImageF pano = cs::readExr((rigDir / "panorama_range.exr").string());
+  REQUIRE(pano.width == panoramaWidth);
+  REQUIRE(pano.height == panoramaWidth / 2);
+  for (int k = 0; k < rig.size(); ++k) {
+    const cs::Camera& cam = rig.cameras[size_t(k)];
+    const cs::ImageF depth = cs::readExr((rigDir / ("depth" + std::to_string(k) + ".exr")).string());
+    REQUIRE(depth.width == cam.width);
+    CHECK(cs::readPngGray((rigDir / ("cam" + std::to_string(k) + ".png")).string()).width == cam.width);
+    const Agreement a = panoramaAgreement(cam, poses[size_t(k)], depth, pano);
+    CAPTURE(k);
+    CAPTURE(a.agreeing);
+    CAPTURE(a.compared);
+    // Every camera sees structure (the scene surrounds the rig), near and far.
+    CHECK(a.compared > 300);
+    // 88 to 93 % agree at 96 pixels (a depth edge spans a larger share of a small image);
+    // the panorama's formulas off by half a pixel leave about 42 %.
+    CHECK(a.agreeing > 0.8 * double(a.compared));
+    CHECK(a.skyAgreeing >= 0.97 * double(a.sky));
+    float nearest = INFINITY;
+    for (float d : depth.data)
+      if (d > 0) nearest = std::min(nearest, d);
+    CHECK(nearest < 1.7f);  // its own near object, 1 to 1.6 m away
+  }
+}
+
 }  // namespace
 
 TEST_CASE("synth --rig ring4: the folder eval reads, each camera's truth agreeing with the panorama's") {
@@ -315,28 +346,7 @@ TEST_CASE("synth --rig ring4: the folder eval reads, each camera's truth agreein
   }
   CHECK(rig.cameras[0].params[0] == doctest::Approx(96 / M_PI));  // 180 degrees across the image
 
-  const cs::ImageF pano = cs::readExr((rigDir / "panorama_range.exr").string());
-  REQUIRE(pano.width == 512);
-  REQUIRE(pano.height == 256);
-  for (int k = 0; k < 4; ++k) {
-    const cs::ImageF depth = cs::readExr((rigDir / ("depth" + std::to_string(k) + ".exr")).string());
-    REQUIRE(depth.width == 96);
-    CHECK(cs::readPngGray((rigDir / ("cam" + std::to_string(k) + ".png")).string()).width == 96);
-    const Agreement a = panoramaAgreement(rig.cameras[size_t(k)], expected.poses[size_t(k)], depth, pano);
-    CAPTURE(k);
-    CAPTURE(a.agreeing);
-    CAPTURE(a.compared);
-    // Every camera sees structure (the scene surrounds the rig), near and far.
-    CHECK(a.compared > 300);
-    // About 91 % agree at this size (a depth edge spans a larger share of a 96-pixel image);
-    // the panorama's formulas off by half a pixel leave about 42 %.
-    CHECK(a.agreeing > 0.8 * double(a.compared));
-    CHECK(a.skyAgreeing >= 0.97 * double(a.sky));
-    float nearest = INFINITY;
-    for (float d : depth.data)
-      if (d > 0) nearest = std::min(nearest, d);
-    CHECK(nearest < 1.7f);  // its own near object, 1 to 1.6 m away
-  }
+  checkAgainstPanorama(rigDir, rig, expected.poses, 512);
 
   const CliOutcome e = runCli(rigDir, "eval . --backend cpu --preset fast --csv eval.csv");
   CAPTURE(e.err);
@@ -354,4 +364,31 @@ TEST_CASE("synth --rig ring4: the folder eval reads, each camera's truth agreein
                2);
   checkRefused(runCli(dir, "synth --rig back2 -o bad --motion forward"), "--motion cannot be combined with --rig", 2);
   CHECK(!fs::exists(dir / "bad"));
+}
+
+TEST_CASE("synth --rig back2 and ring6: the truth lies in the panorama frame run and eval derive from the camchain") {
+  const fs::path dir = cs::test::tempDir("cli_synth_rig_layouts");
+  for (const std::string layout : {"back2", "ring6"}) {
+    CAPTURE(layout);
+    const CliOutcome o =
+        runCli(dir, "synth --rig " + layout + " -o " + layout + " --size 96 --samples 1 --panorama-width 512 --quiet");
+    CAPTURE(o.err);
+    REQUIRE(o.exitCode == 0);
+    const cs::CameraRig rig = cs::loadCameraRig((dir / layout / "camchain.yaml").string());
+    REQUIRE(rig.size() == (layout == "back2" ? 2 : 6));
+    // The camchain's rig has camera 0's frame as its body; eval compares in panoramaFrame(rig).
+    const cs::PanoramaFrame frame = cs::panoramaFrame(rig);
+    std::vector<cs::BodyPose> poses;
+    for (const cs::BodyPose& pose : rig.poses)
+      poses.push_back({frame.R.transpose() * pose.R, frame.R.transpose() * (pose.p - frame.centre)});
+    checkAgainstPanorama(dir / layout, rig, poses, 512);
+    if (layout == "back2") {
+      // 220 degrees: depth beyond 90 degrees off the axis (the overlap), none past the circle.
+      const cs::ImageF depth = cs::readExr((dir / layout / "depth0.exr").string());
+      CHECK(depth(2, 48) > 0);
+      CHECK(depth(0, 0) == 0);
+      CHECK((poses[1].p - poses[0].p).norm() == doctest::Approx(0.12));
+      CHECK(poses[1].R.col(2).dot(poses[0].R.col(2)) == doctest::Approx(-1.0));
+    }
+  }
 }
