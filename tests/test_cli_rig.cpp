@@ -14,6 +14,7 @@
 #include "cli_util.hpp"
 #include "curvestereo/camera_rig.hpp"
 #include "curvestereo/image_io.hpp"
+#include "curvestereo/rig_fusion.hpp"
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
@@ -209,4 +210,185 @@ TEST_CASE("calib show prints a rig's cameras and overlaps; bad rigs and rig opti
   text.replace(text.find("cam2:"), 5, "cam7:");
   std::ofstream(dir / "gap.yaml") << text;
   checkRefused(runCli(dir, "calib show gap.yaml"), "has cam7 but no cam2");
+}
+
+namespace {
+
+// ring4 as the README of ../shared/data/rigs and `synth --help` describe it, written out
+// here apart from the renderer: R_body_cam = Ry(yaw) Rx(-5 deg), the centre 8 cm out along
+// the camera's horizontal viewing direction.
+std::vector<cs::BodyPose> ring4Poses() {
+  std::vector<cs::BodyPose> poses;
+  for (int k = 0; k < 4; ++k) {
+    const double yaw = k * M_PI / 2, pitch = -5.0 * M_PI / 180.0;
+    cs::BodyPose pose;
+    pose.R = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+             Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    pose.p = 0.08 * Eigen::Vector3d(std::sin(yaw), 0.0, std::cos(yaw));
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+// The panorama's (fractional) pixel toward body point x, by the README's inverse formulas.
+Eigen::Vector2d panoramaPixelOf(const cs::ImageF& pano, const Eigen::Vector3d& x) {
+  const double lon = std::atan2(x.x(), x.z()), lat = std::atan2(-x.y(), std::hypot(x.x(), x.z()));
+  return {(lon + M_PI) / (2 * M_PI) * pano.width - 0.5, (M_PI / 2 - lat) / M_PI * pano.height - 0.5};
+}
+
+float panoramaValue(const cs::ImageF& pano, int col, int row) {
+  return pano((col % pano.width + pano.width) % pano.width, std::clamp(row, 0, pano.height - 1));
+}
+
+// The panorama's range toward x: the inverse range interpolated bilinearly between the four
+// pixel centres around the direction (exact to second order on a plane, whose inverse range
+// is linear in the direction); NaN where the four are not one surface (within 5 %) or sky.
+double panoramaRange(const cs::ImageF& pano, const Eigen::Vector3d& x) {
+  const Eigen::Vector2d at = panoramaPixelOf(pano, x);
+  const int j = int(std::floor(at.x())), i = int(std::floor(at.y()));
+  const double fx = at.x() - j, fy = at.y() - i;
+  double inverse = 0, lo = INFINITY, hi = 0;
+  for (int v = 0; v < 2; ++v)
+    for (int u = 0; u < 2; ++u) {
+      const double r = panoramaValue(pano, j + u, i + v);
+      lo = std::min(lo, r), hi = std::max(hi, r);
+      inverse += (u ? fx : 1 - fx) * (v ? fy : 1 - fy) / r;
+    }
+  return std::isfinite(hi) && hi < 1.05 * lo ? 1.0 / inverse : NAN;
+}
+
+bool panoramaSky(const cs::ImageF& pano, const Eigen::Vector3d& x) {
+  const Eigen::Vector2d at = panoramaPixelOf(pano, x);
+  return std::isinf(panoramaValue(pano, int(std::lround(at.x())), int(std::lround(at.y()))));
+}
+
+struct Agreement {
+  long long compared = 0, agreeing = 0, sky = 0, skyAgreeing = 0;
+};
+
+// Every 3rd pixel of camera k: its ground-truth point (centre + depth x ray) carried into the
+// body frame must lie at the panorama's range in its direction from the body origin, within
+// 0.5 % (sky: +inf there too), except on depth edges and where the 8 cm between the camera
+// and the centre shows another surface (around near silhouettes).
+Agreement panoramaAgreement(const cs::Camera& cam, const cs::BodyPose& pose, const cs::ImageF& depth,
+                            const cs::ImageF& pano) {
+  const cs::BuiltCamera built(cam);
+  Agreement a;
+  for (int y = 1; y < depth.height; y += 3)
+    for (int x = 1; x < depth.width; x += 3) {
+      const float d = depth(x, y);
+      cs::Vec3<double> ray;
+      if (!(d > 0) || !built.unproject(cs::Vec2<double>(x, y), ray)) continue;
+      if (std::isinf(d)) {
+        ++a.sky;
+        a.skyAgreeing += panoramaSky(pano, pose.R * ray);
+        continue;
+      }
+      const Eigen::Vector3d point = pose.p + pose.R * (double(d) * ray);
+      ++a.compared;
+      a.agreeing += std::abs(panoramaRange(pano, point) - point.norm()) < 0.005 * point.norm();  // NaN: false
+    }
+  return a;
+}
+
+// Each camera's image and depth in a synth rig folder: the depth agrees with the panorama
+// where both see the same point (body poses: camera-to-body in the panorama's frame), and
+// every camera sees structure, sky, and its own near object.
+void checkAgainstPanorama(const fs::path& rigDir, const cs::CameraRig& rig, const std::vector<cs::BodyPose>& poses,
+                          int panoramaWidth) {
+  const cs::ImageF pano = cs::readExr((rigDir / "panorama_range.exr").string());
+  REQUIRE(pano.width == panoramaWidth);
+  REQUIRE(pano.height == panoramaWidth / 2);
+  for (int k = 0; k < rig.size(); ++k) {
+    const cs::Camera& cam = rig.cameras[size_t(k)];
+    const cs::ImageF depth = cs::readExr((rigDir / ("depth" + std::to_string(k) + ".exr")).string());
+    REQUIRE(depth.width == cam.width);
+    CHECK(cs::readPngGray((rigDir / ("cam" + std::to_string(k) + ".png")).string()).width == cam.width);
+    const Agreement a = panoramaAgreement(cam, poses[size_t(k)], depth, pano);
+    CAPTURE(k);
+    CAPTURE(a.agreeing);
+    CAPTURE(a.compared);
+    // Every camera sees structure (the scene surrounds the rig), near and far.
+    CHECK(a.compared > 300);
+    // 88 to 93 % agree at 96 pixels (a depth edge spans a larger share of a small image);
+    // the panorama's formulas off by half a pixel leave about 42 %.
+    CHECK(a.agreeing > 0.8 * double(a.compared));
+    CHECK(a.skyAgreeing >= 0.97 * double(a.sky));
+    float nearest = INFINITY;
+    for (float d : depth.data)
+      if (d > 0) nearest = std::min(nearest, d);
+    CHECK(nearest < 1.7f);  // its own near object, 1 to 1.6 m away
+  }
+}
+
+}  // namespace
+
+TEST_CASE("synth --rig ring4: the folder eval reads, each camera's truth agreeing with the panorama's") {
+  const fs::path dir = cs::test::tempDir("cli_synth_rig");
+  const CliOutcome o = runCli(dir, "synth --rig ring4 -o ring4 --size 96 --samples 1 --panorama-width 512 --quiet");
+  CAPTURE(o.err);
+  REQUIRE(o.exitCode == 0);
+  const fs::path rigDir = dir / "ring4";
+  for (const char* file : {"camchain.yaml", "panorama_range.exr", "panorama.png", "rig.json"})
+    CHECK(fs::exists(rigDir / file));
+
+  // The camchain reads back as the layout: every camera's pose relative to camera 0.
+  const cs::CameraRig rig = cs::loadCameraRig((rigDir / "camchain.yaml").string());
+  REQUIRE(rig.size() == 4);
+  cs::CameraRig expected;
+  expected.cameras = rig.cameras;
+  expected.poses = ring4Poses();
+  for (int k = 1; k < 4; ++k) {
+    const cs::Rig got = cs::pairRig(rig, 0, k), want = cs::pairRig(expected, 0, k);
+    CAPTURE(k);
+    CHECK((got.R - want.R).norm() < 1e-9);
+    CHECK((got.t - want.t).norm() < 1e-9);
+  }
+  CHECK(rig.cameras[0].params[0] == doctest::Approx(96 / M_PI));  // 180 degrees across the image
+
+  checkAgainstPanorama(rigDir, rig, expected.poses, 512);
+
+  const CliOutcome e = runCli(rigDir, "eval . --backend cpu --preset fast --csv eval.csv");
+  CAPTURE(e.err);
+  REQUIRE(e.exitCode == 0);
+  const std::string csv = cs::test::readFile(rigDir / "eval.csv");
+  CAPTURE(csv);
+  const size_t at = csv.find("\npanorama_coverage,");
+  REQUIRE(at != std::string::npos);
+  CHECK(std::stod(csv.substr(at + 19)) > 80.0);  // about 94 %
+  const size_t absrel = csv.find("\npanorama_absrel,");
+  REQUIRE(absrel != std::string::npos);
+  CHECK(std::stod(csv.substr(absrel + 17)) < 25.0);
+
+  checkRefused(runCli(dir, "synth --rig ring5 -o bad"), "unknown rig layout 'ring5' (expected back2, ring4 or ring6)",
+               2);
+  checkRefused(runCli(dir, "synth --rig back2 -o bad --motion forward"), "--motion cannot be combined with --rig", 2);
+  CHECK(!fs::exists(dir / "bad"));
+}
+
+TEST_CASE("synth --rig back2 and ring6: the truth lies in the panorama frame run and eval derive from the camchain") {
+  const fs::path dir = cs::test::tempDir("cli_synth_rig_layouts");
+  for (const std::string layout : {"back2", "ring6"}) {
+    CAPTURE(layout);
+    const CliOutcome o =
+        runCli(dir, "synth --rig " + layout + " -o " + layout + " --size 96 --samples 1 --panorama-width 512 --quiet");
+    CAPTURE(o.err);
+    REQUIRE(o.exitCode == 0);
+    const cs::CameraRig rig = cs::loadCameraRig((dir / layout / "camchain.yaml").string());
+    REQUIRE(rig.size() == (layout == "back2" ? 2 : 6));
+    // The camchain's rig has camera 0's frame as its body; eval compares in panoramaFrame(rig).
+    const cs::PanoramaFrame frame = cs::panoramaFrame(rig);
+    std::vector<cs::BodyPose> poses;
+    for (const cs::BodyPose& pose : rig.poses)
+      poses.push_back({frame.R.transpose() * pose.R, frame.R.transpose() * (pose.p - frame.centre)});
+    checkAgainstPanorama(dir / layout, rig, poses, 512);
+    if (layout == "back2") {
+      // 220 degrees: depth beyond 90 degrees off the axis (the overlap), none past the circle.
+      const cs::ImageF depth = cs::readExr((dir / layout / "depth0.exr").string());
+      CHECK(depth(2, 48) > 0);
+      CHECK(depth(0, 0) == 0);
+      CHECK((poses[1].p - poses[0].p).norm() == doctest::Approx(0.12));
+      CHECK(poses[1].R.col(2).dot(poses[0].R.col(2)) == doctest::Approx(-1.0));
+    }
+  }
 }

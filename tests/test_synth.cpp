@@ -18,6 +18,7 @@
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/rig.hpp"
 #include "synth/random.hpp"
+#include "synth/rig.hpp"
 #include "synth/scene.hpp"
 #include "synth/sequence.hpp"
 #include "test_util.hpp"
@@ -715,5 +716,42 @@ TEST_CASE("synth sequence: bad settings are refused in one line") {
     CHECK(bad.exitCode != 0);
     CHECK(bad.err.find("error: ") != std::string::npos);
     CHECK(std::count(bad.err.begin(), bad.err.end(), '\n') == 1);
+  }
+}
+
+TEST_CASE("a rig's scene surrounds it: the street closed behind, a near object in every camera's view") {
+  const cs::synth::RigLayout layout = cs::synth::rigLayout("ring4", 64);
+  cs::synth::SceneSpec spec;
+  spec.nearest = 1.0;
+  for (const cs::BodyPose& pose : layout.rig.poses) spec.rigCameras.push_back({pose.R, pose.p});
+  const cs::synth::Scene scene = cs::synth::buildScene(spec);
+  const cs::synth::Pose& body = scene.viewpoint;
+  auto find = [&](const std::string& name) -> const cs::synth::Shape* {
+    for (const cs::synth::Shape& shape : scene.shapes())
+      if (shape.name == name) return &shape;
+    return nullptr;
+  };
+  for (int k = 1; k < 4; ++k) {
+    const cs::BodyPose& pose = layout.rig.poses[size_t(k)];
+    const Vector3d centre = body.centre + body.rotation * pose.p, axis = body.rotation * pose.R.col(2);
+    const cs::synth::Shape* near = find("near_cam" + std::to_string(k));
+    CAPTURE(k);
+    REQUIRE(near != nullptr);
+    const double distance = cs::synth::signedDistance(*near, centre);
+    CHECK(distance >= 1.0 - 1e-9);
+    CHECK(distance <= 1.6 + 1e-9);
+    CHECK((near->centre - centre).normalized().dot(axis) > std::cos(60.0 * M_PI / 180.0));  // in its view
+  }
+  // The street's far end ahead of the body (bld_end, world +y) has a counterpart behind it.
+  const cs::synth::Shape* back = find("bld_back");
+  REQUIRE(back != nullptr);
+  CHECK(back->centre.y() < body.centre.y() - 15.0);
+  // A pair's scene of the same seed has none of it.
+  cs::synth::SceneSpec pair;
+  pair.nearest = 1.0;
+  const cs::synth::Scene pairScene = cs::synth::buildScene(pair);
+  for (const cs::synth::Shape& shape : pairScene.shapes()) {
+    CHECK(shape.name.rfind("near_cam", 0) == std::string::npos);
+    CHECK(shape.name != "bld_back");
   }
 }

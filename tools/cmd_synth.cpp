@@ -4,7 +4,8 @@
 // dark, vignetted, noisy, as a real low-cost fisheye camera), which also writes
 // photometry.json. Without camera options the output is the clean renderer's.
 // With --sequence it renders a walking rig's stereo sequence in the EuRoC / ASL layout
-// instead (tools/synth/sequence.hpp).
+// instead (tools/synth/sequence.hpp); with --rig LAYOUT an N-camera rig with each camera's
+// depth and the 360-degree range panorama, in the ../shared/data/rigs layout (tools/synth/rig.hpp).
 #include <unistd.h>
 #include <chrono>
 #include <cmath>
@@ -17,6 +18,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "curvestereo/image_io.hpp"
+#include "synth/rig.hpp"
 #include "synth/scene.hpp"
 #include "synth/sequence.hpp"
 
@@ -40,16 +42,26 @@ struct RenderDefaults {
   int samples = 3;
 };
 
+// --seed and --size, as a pair, a sequence and a rig read them.
+uint32_t seedFromArgs(const Args& args) {
+  const int seed = args.getInt("seed", 1);
+  if (seed < 0) throw Error("option --seed expects a non-negative integer");
+  return uint32_t(seed);
+}
+
+int sizeFromArgs(const Args& args, int fallback) {
+  const int size = args.getInt("size", fallback);
+  if (size < 16 || size > 16384) throw Error("option --size expects 16..16384 pixels");
+  return size;
+}
+
 synth::SynthConfig configFromArgs(const Args& args, RenderDefaults defaults = {}) {
   synth::SynthConfig cfg;
   cfg.scene = args.get("scene", "urban");
-  const int seed = args.getInt("seed", 1);
-  if (seed < 0) throw Error("option --seed expects a non-negative integer");
-  cfg.seed = uint32_t(seed);
+  cfg.seed = seedFromArgs(args);
   cfg.nearest = args.getDouble("nearest", cfg.nearest);
   cfg.samplesPerAxis = args.getInt("samples", defaults.samples);
-  const int size = args.getInt("size", defaults.size);
-  if (size < 16 || size > 16384) throw Error("option --size expects 16..16384 pixels");
+  const int size = sizeFromArgs(args, defaults.size);
   if (args.has("calib")) {
     for (const char* option : kRigOptions)
       if (args.has(option)) throw UsageError(std::string("option --") + option + " cannot be combined with --calib");
@@ -195,16 +207,87 @@ int synthSequence(const Args& args) {
   return 0;
 }
 
+// ---------------------------------------------------------------- --rig
+
+// Options of a pair or a sequence that a rig's layout fixes or that it does not model.
+const char* const kNotForRigs[] = {"calib", "motion", "baseline", "rotation", "fov", "sequence", "image-size"};
+
+synth::RigConfig rigFromArgs(const Args& args) {
+  for (const char* option : kNotForRigs)
+    if (args.has(option)) throw UsageError(std::string("option --") + option + " cannot be combined with --rig");
+  for (const char* option : kSequenceOptions)
+    if (args.has(option)) throw UsageError(std::string("option --") + option + " cannot be combined with --rig");
+  for (const std::string& option : kCameraOptions)
+    if (args.has(option)) throw UsageError("option --" + option + " cannot be combined with --rig (clean images only)");
+  synth::RigConfig cfg;
+  cfg.layout = args.get("rig", "");
+  try {
+    synth::rigLayout(cfg.layout, 16);  // the name checked before anything else
+  } catch (const Error& e) {
+    throw UsageError(e.what());
+  }
+  cfg.scene = args.get("scene", cfg.scene);
+  cfg.seed = seedFromArgs(args);
+  cfg.size = sizeFromArgs(args, cfg.size);
+  cfg.samplesPerAxis = args.getInt("samples", cfg.samplesPerAxis);
+  cfg.nearest = args.getDouble("nearest", cfg.nearest);
+  cfg.panoramaWidth = args.getInt("panorama-width", cfg.panoramaWidth);
+  if (cfg.panoramaWidth < 4 || cfg.panoramaWidth > 32768 || cfg.panoramaWidth % 2 != 0)
+    throw UsageError("--panorama-width expects an even width of 4 to 32768 px (the image is W x W/2)");  // as run
+  return cfg;
+}
+
+void printRigSummary(const synth::RigConfig& cfg, const synth::SynthRig& r, double seconds, const std::string& outDir) {
+  const CameraRig& rig = r.layout.rig;
+  std::printf("%s scene, seed %u, rig %s: %s\n", cfg.scene.c_str(), cfg.seed, r.layout.name.c_str(),
+              r.layout.description.c_str());
+  std::printf("%d cameras %s %dx%d (%g deg), %d x %d samples per pixel\n", rig.size(),
+              rig.cameras.front().modelName().c_str(), cfg.size, cfg.size, r.layout.maxFovDeg, cfg.samplesPerAxis,
+              cfg.samplesPerAxis);
+  for (int k = 0; k < rig.size(); ++k) {
+    const DepthRange d = depthRange(r.depths[size_t(k)]);
+    const Eigen::Vector3d& p = rig.poses[size_t(k)].p;
+    std::printf("cam%d at (%.3f, %.3f, %.3f) m: depth %.2f .. %.1f m, sky %.1f %%\n", k, p.x(), p.y(), p.z(), d.nearest,
+                d.farthest, 100.0 * d.skyFraction);
+  }
+  const DepthRange pano = depthRange(r.panoramaRange);
+  std::printf("panorama %dx%d: range %.2f .. %.1f m, sky %.1f %%\n", r.panoramaRange.width, r.panoramaRange.height,
+              pano.nearest, pano.farthest, 100.0 * pano.skyFraction);
+  std::printf(
+      "rendered in %.1f s; wrote %s/{cam<k>.png,depth<k>.exr} camchain.yaml panorama_range.exr panorama.png "
+      "rig.json\n",
+      seconds, outDir.c_str());
+}
+
+int synthRig(const Args& args) {
+  const synth::RigConfig cfg = rigFromArgs(args);
+  const std::string outDir = args.get("o", args.get("output", ""));
+  if (outDir.empty()) throw UsageError("synth: missing output folder (-o OUTDIR)");
+  const bool quiet = args.has("quiet");
+  Progress progress("rendering rig " + cfg.layout);
+  const auto start = std::chrono::steady_clock::now();
+  const synth::SynthRig rig = synth::renderRig(cfg, [&](double f) {
+    if (!quiet) progress(f);
+  });
+  if (!quiet) progress.done();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  synth::writeRigFolder(rig, cfg, outDir);
+  printRigSummary(cfg, rig, seconds, outDir);
+  return 0;
+}
+
 }  // namespace
 
 int cmdSynth(const Args& given) {
   std::set<std::string> known = kCameraOptions;
   known.insert({"o", "output", "scene", "seed", "size", "calib", "motion", "baseline", "rotation", "nearest", "samples",
-                "fov", "quiet", "sequence", "image-size"});
+                "fov", "quiet", "sequence", "image-size", "rig", "panorama-width"});
   for (const char* option : kSequenceOptions) known.insert(option);
   given.allowOnly(known);
   if (!given.get("sequence", "").empty())
     throw UsageError("option --sequence takes no value, got '" + given.get("sequence", "") + "'");
+  if (given.has("rig")) return synthRig(given);
+  if (given.has("panorama-width")) throw UsageError("option --panorama-width needs --rig");
   if (given.has("sequence")) return synthSequence(given);
   const Args& args = given;
   for (const char* option : kSequenceOptions)

@@ -203,10 +203,13 @@ See docs/calibration.md for every format and an example of each.
     {"synth", "render a synthetic pair or sequence with exact ground truth",
      R"(usage: curvestereo synth -o OUTDIR [--scene urban|indoor] [--motion binocular|forward|sideways] [options]
        curvestereo synth --sequence -o OUTDIR [--frames N] [--fps F] [--speed V] [--turn D] [--mover on|off] [options]
+       curvestereo synth --rig back2|ring4|ring6 -o OUTDIR [--panorama-width W] [options]
 
 A pair: left.png, right.png, camchain.yaml, depth_left.exr, depth_right.exr (radial metres,
 +inf sky, 0 outside the image circle). A sequence: the ASL layout (mav0/cam0, mav0/cam1,
 mav0/depth0, poses_cam0.csv, camchain.yaml) of a walking rig, with a moving object's masks.
+A rig: cam<k>.png, depth<k>.exr, camchain.yaml, panorama_range.exr, panorama.png and rig.json
+(the layout of ../shared/data/rigs, which eval RIGDIR scores; docs/guide.md "synth --rig").
 
   -o, --output DIR       the output folder
   --scene urban|indoor   the procedural scene (default urban)
@@ -224,6 +227,12 @@ mav0/depth0, poses_cam0.csv, camchain.yaml) of a walking rig, with a moving obje
 sequences:
   --sequence             render a sequence instead of a pair
   --frames N (12)  --fps F (30)  --speed M/S (1)  --turn DEG/S (20)  --mover on|off (on)
+rigs (clean images; --size, --samples, --seed, --scene, --nearest as above, --nearest 1 by default):
+  --rig LAYOUT           back2: two 220 deg fisheyes back to back, 12 cm apart;
+                         ring4: four 180 deg fisheyes facing front/right/back/left on a 16 cm
+                         square, 5 deg down; ring6: six 180 deg fisheyes, a triple 30 deg up
+                         (yaw 0/120/240) and a triple 30 deg down (yaw 60/180/300), 8 cm out
+  --panorama-width W     the ground-truth panorama's width, even (default 2048; height W/2)
 )",
      false, true},
 };

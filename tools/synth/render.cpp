@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "curvestereo/camera.hpp"
+#include "curvestereo/rig_fusion.hpp"
 #include "synth/scene.hpp"
 
 namespace cs::synth {
@@ -84,6 +85,50 @@ void renderRow(const Scene& scene, const Rays& rays, int samples, int y, ImageF&
   }
 }
 
+// Every pixel of an equirectangular panorama (rig_fusion.hpp's panoramaRay: longitude 0
+// along the pose's z axis, latitude up towards -y) is a ray from the pose's centre; the
+// sub-pixel rays of the columns at the edges wrap round, as the sphere does.
+class PanoramaRays {
+ public:
+  PanoramaRays(const Pose& pose, int width) : pose_(pose), width_(width) {}
+
+  bool ray(double x, double y, Ray& out) const {
+    out.origin = pose_.centre;
+    out.dir = pose_.rotation * panoramaRay(x, y, width_);
+    return true;
+  }
+
+ private:
+  const Pose& pose_;
+  int width_;
+};
+
+// Renders a width x height image from any ray source (RayGenerator, PanoramaRays). Rows
+// are handed out dynamically, but each row's result depends only on the row, so the images
+// are identical for any number of threads. Only the calling thread reports progress.
+template <class Rays>
+void renderImage(const Scene& scene, const Rays& rays, int width, int height, int samplesPerAxis, ImageF& image,
+                 ImageF& depth, const ProgressCallback& progress, Image<int>* shapeIds) {
+  const int samples = std::max(1, samplesPerAxis);
+  image = ImageF(width, height, 0.f);
+  depth = ImageF(width, height, 0.f);
+  if (shapeIds) *shapeIds = Image<int>(width, height, -1);
+  std::atomic<int> nextRow{0}, rowsDone{0};
+  auto work = [&](bool reports) {
+    for (int y = nextRow++; y < height; y = nextRow++) {
+      renderRow(scene, rays, samples, y, image, depth, shapeIds);
+      const int done = ++rowsDone;
+      if (reports && progress) progress(double(done) / height);
+    }
+  };
+  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> helpers;
+  for (unsigned i = 1; i < threads; ++i) helpers.emplace_back(work, false);
+  work(true);
+  for (auto& t : helpers) t.join();
+  if (progress) progress(1.0);
+}
+
 Vector3d motionCentre(const SynthConfig& cfg) {
   const double b = cfg.baseline;
   if (cfg.motion == "binocular") return Vector3d(b, 0.0, 0.0);
@@ -115,33 +160,21 @@ double pixelAngle(const Camera& cam) {
 void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options, ImageF& image,
                 ImageF& depth, const ProgressCallback& progress, Image<int>* shapeIds) {
   if (camera.width <= 0 || camera.height <= 0) throw Error("synth: the camera has no image size");
-  const int samples = std::max(1, options.samplesPerAxis);
-  image = ImageF(camera.width, camera.height, 0.f);
-  depth = ImageF(camera.width, camera.height, 0.f);
-  if (shapeIds) *shapeIds = Image<int>(camera.width, camera.height, -1);
   camera.validate();
   const BuiltCamera built(camera);
   std::visit(
       [&](const auto& model) {
         const RayGenerator rays(model, pose, options.maxFovDeg);
-        // Rows are handed out dynamically, but each row's result depends only on the row, so
-        // the images are identical for any number of threads. Only the calling thread reports.
-        std::atomic<int> nextRow{0}, rowsDone{0};
-        auto work = [&](bool reports) {
-          for (int y = nextRow++; y < camera.height; y = nextRow++) {
-            renderRow(scene, rays, samples, y, image, depth, shapeIds);
-            const int done = ++rowsDone;
-            if (reports && progress) progress(double(done) / camera.height);
-          }
-        };
-        const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
-        std::vector<std::thread> helpers;
-        for (unsigned i = 1; i < threads; ++i) helpers.emplace_back(work, false);
-        work(true);
-        for (auto& t : helpers) t.join();
+        renderImage(scene, rays, camera.width, camera.height, options.samplesPerAxis, image, depth, progress, shapeIds);
       },
       built.model());
-  if (progress) progress(1.0);
+}
+
+void renderPanorama(const Scene& scene, const Pose& pose, int width, int samplesPerAxis, ImageF& image, ImageF& range,
+                    const ProgressCallback& progress) {
+  if (width < 4 || width % 2 != 0) throw Error("synth: a panorama's width must be even and at least 4");
+  const PanoramaRays rays(pose, width);
+  renderImage(scene, rays, width, width / 2, samplesPerAxis, image, range, progress, nullptr);
 }
 
 Camera defaultFisheye(int size) {

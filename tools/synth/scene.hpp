@@ -88,7 +88,7 @@ class Scene {
 
   const std::vector<Shape>& shapes() const { return shapes_; }
   Eigen::Vector3d lightDir = Eigen::Vector3d(0.3, -0.4, 0.866).normalized();  // unit, world
-  Pose viewpoint;                                                             // where the generator put camera 0
+  Pose viewpoint;  // where the generator put camera 0 (a rig: the body, SceneSpec::rigCameras)
 
  private:
   std::vector<Shape> shapes_;
@@ -104,6 +104,13 @@ struct SceneSpec {
   double nearest = 2.0;  // distance (m) from camera 0 to the nearest object (not walls / floor)
   // Camera centres besides camera 0 (in camera-0 coordinates) that objects must keep clear of.
   std::vector<Eigen::Vector3d> otherCentresInCam0;
+  // A rig: every camera's pose (camera-to-body, camera 0 first) in the body frame. The
+  // generator's viewpoint is then the body (placed as it places camera 0 otherwise, nearly
+  // level) and otherCentresInCam0 is not used. The scene surrounds the rig (urban: the street
+  // is closed behind it too, with clutter there) and each camera after camera 0 gets a near
+  // object in its own view, nearest to 1.6 x nearest from it (added after the pair scene's
+  // content; pair scenes, without rigCameras, are unchanged by it).
+  std::vector<Pose> rigCameras;
   double pixelAngle = 1.0 / 250.0;  // see Scene::setDetail
 };
 
@@ -126,6 +133,13 @@ struct RenderOptions {
 // sky and invalid pixels (e.g. to mask one object exactly where the depth shows it).
 void renderView(const Scene& scene, const Camera& camera, const Pose& pose, const RenderOptions& options, ImageF& image,
                 ImageF& depth, const ProgressCallback& progress = {}, Image<int>* shapeIds = nullptr);
+
+// An equirectangular panorama width x width/2 around pose.centre in pose.rotation's frame,
+// pixel (j, i) along rig_fusion.hpp's panoramaRay(j, i, width): image as renderView's (every
+// pixel traced), range the distance to the surface hit by the pixel-centre ray (+inf sky).
+// Throws cs::Error for a width that is odd or below 4.
+void renderPanorama(const Scene& scene, const Pose& pose, int width, int samplesPerAxis, ImageF& image, ImageF& range,
+                    const ProgressCallback& progress = {});
 
 // Equidistant Kannala-Brandt (k = 0), size x size, f = size / pi, c = (size - 1) / 2:
 // a 180 deg image circle touching the borders, like the dev data set.

@@ -44,6 +44,7 @@ class Builder {
     } else {
       throw Error("unknown scene kind '" + spec_.kind + "' (expected urban or indoor)");
     }
+    if (!spec_.rigCameras.empty()) addSurround();
     scene_.setDetail(scene_.viewpoint.centre, spec_.pixelAngle);
     return std::move(scene_);
   }
@@ -52,13 +53,25 @@ class Builder {
   const SceneSpec& spec_;
   Random random_;
   Scene scene_;
-  std::vector<Vector3d> cameras_;  // world centres of all cameras
+  std::vector<Vector3d> cameras_;      // world centres of all cameras
+  std::vector<Eigen::Matrix3d> axes_;  // their camera-to-world rotations (known for a rig)
+  double streetHalf_ = 0.0;            // urban: half the street's width
 
   void placeCameras(const Vector3d& centre0, double yaw, double pitch) {
     scene_.viewpoint.centre = centre0;
     scene_.viewpoint.rotation = cameraRotation(yaw, pitch);
+    const Eigen::Matrix3d& R = scene_.viewpoint.rotation;
+    if (!spec_.rigCameras.empty()) {  // the viewpoint is the rig's body
+      cameras_.clear(), axes_.clear();
+      for (const Pose& cam : spec_.rigCameras) {
+        cameras_.push_back(centre0 + R * cam.centre);
+        axes_.push_back(R * cam.rotation);
+      }
+      return;
+    }
     cameras_ = {centre0};
-    for (const Vector3d& c : spec_.otherCentresInCam0) cameras_.push_back(centre0 + scene_.viewpoint.rotation * c);
+    for (const Vector3d& c : spec_.otherCentresInCam0) cameras_.push_back(centre0 + R * c);
+    axes_ = {R};
   }
 
   // z = 0 out to a finite horizon around camera 0: beyond it the sky, as in the dev
@@ -103,24 +116,24 @@ class Builder {
       }
   }
 
-  // Moves `shape` along dir until its distance from camera 0 is exactly `distance`
+  // Moves `shape` along dir until its distance from camera `cam` is exactly `distance`
   // (distance grows monotonically as a convex solid slides away along dir).
-  void slideToDistance(Shape& shape, const Vector3d& dir, double distance) {
+  void slideToDistance(Shape& shape, const Vector3d& dir, double distance, size_t cam) {
     for (int i = 0; i < 50; ++i) {
-      const double error = distance - signedDistance(shape, cameras_[0]);
+      const double error = distance - signedDistance(shape, cameras_[cam]);
       if (std::abs(error) < 1e-12 * distance) break;
       shape.centre += error * dir;
     }
   }
 
-  // A direction in camera 0's view, 20-55 deg off axis, mostly beside or below the
-  // axis (so the object stands in front of the camera rather than hanging above it).
-  Vector3d nearDirection() {
+  // A direction in a camera's view (axes: camera-to-world), 20-55 deg off axis, mostly beside
+  // or below the axis (so the object stands in front of the camera rather than hanging above it).
+  Vector3d nearDirection(const Eigen::Matrix3d& axes) {
     const double offAxis = degrees(random_.uniform(20.0, 55.0));
     const double around = degrees(random_.uniform(-30.0, 210.0));  // image angle, y down
     const Vector3d inCamera(std::sin(offAxis) * std::cos(around), std::sin(offAxis) * std::sin(around),
                             std::cos(offAxis));
-    return scene_.viewpoint.rotation * inCamera;
+    return axes * inCamera;
   }
 
   Shape nearShape(bool box, const std::string& name) {
@@ -135,15 +148,17 @@ class Builder {
     return makeCylinder(Vector3d::Zero(), radius, height, material(0.08 * n), name);
   }
 
-  void addNearObject(bool box, double distance, const std::string& name) {
+  // A near object `distance` from camera `cam`, in its view.
+  void addNearObject(bool box, double distance, const std::string& name, size_t cam = 0) {
     const double n = spec_.nearest;
     for (int attempt = 0; attempt < 100; ++attempt) {
-      const Vector3d dir = nearDirection();
+      const Vector3d dir = nearDirection(axes_[cam]);
       Shape shape = nearShape(box, name);
-      shape.centre = cameras_[0] + dir * (distance + shape.halfSize.maxCoeff());
-      slideToDistance(shape, dir, distance);
-      bool clearOfOthers = true;  // camera 1 may be nearer, but never inside or grazing it
-      for (size_t c = 1; c < cameras_.size(); ++c) clearOfOthers &= signedDistance(shape, cameras_[c]) > 0.4 * n;
+      shape.centre = cameras_[cam] + dir * (distance + shape.halfSize.maxCoeff());
+      slideToDistance(shape, dir, distance, cam);
+      bool clearOfOthers = true;  // another camera may be nearer, but never inside or grazing it
+      for (size_t c = 0; c < cameras_.size(); ++c)
+        if (c != cam) clearOfOthers &= signedDistance(shape, cameras_[c]) > 0.4 * n;
       if (clearOfOthers) {
         scene_.add(shape);
         return;
@@ -182,10 +197,13 @@ class Builder {
 
   void buildUrban();
   void buildIndoor();
+  void addSurround();
+  void closeStreetBehind();
 };
 
 void Builder::buildUrban() {
   const double half = random_.uniform(4.0, 6.5);  // half width of the street
+  streetHalf_ = half;
   const Vector3d centre0{random_.uniform(-0.4, 0.4) * half, 0.0, random_.uniform(1.3, 1.7)};
   const double cameraYaw = degrees(random_.uniform(-12.0, 12.0)), cameraPitch = degrees(random_.uniform(-6.0, 4.0));
   placeCameras(centre0, cameraYaw, cameraPitch);
@@ -298,6 +316,39 @@ void Builder::buildIndoor() {
     return makeCylinder(base, radius, height, material(0.04), "pole" + std::to_string(i));
   });
   addNearObjects();
+}
+
+// A rig looks all around: behind camera 0 the urban street gets an end of its own and some
+// clutter (a pair's scene has both only ahead), and every other camera a near object in its
+// view, so that each camera sees structure near and far.
+void Builder::addSurround() {
+  if (spec_.kind == "urban") closeStreetBehind();
+  for (size_t cam = 1; cam < cameras_.size(); ++cam) {
+    const double distance = spec_.nearest * random_.uniform(1.0, 1.6);
+    addNearObject(cam % 2 == 1, distance, "near_cam" + std::to_string(cam), cam);
+  }
+}
+
+void Builder::closeStreetBehind() {
+  // The building rows start 30 m behind the street's origin: the end stands within them.
+  const double half = streetHalf_;
+  const double backY = -random_.uniform(18.0, 27.0), height = random_.uniform(8.0, 25.0);
+  scene_.add(makeBox(Vector3d(0.0, backY - 5.0, 0.5 * height), Vector3d(half + 16.0, 5.0, 0.5 * height), 0.0,
+                     material(0.6), "bld_back"));
+  const double y0 = std::max(backY + 1.0, -15.0);
+  auto behind = [&](double margin) {
+    return Vector3d{random_.uniform(-half + margin, half - margin), random_.uniform(y0, -1.0), 0.0};
+  };
+  addClutter(random_.integer(3, 5), [&](int i) {
+    const Vector3d size = uniform3(0.2, 1.0), base = behind(0.5);
+    const double yaw = random_.uniform(0.0, M_PI);
+    return makeBox(base + Vector3d(0, 0, size.z()), size, yaw, material(0.1), "box_back" + std::to_string(i));
+  });
+  addClutter(random_.integer(2, 4), [&](int i) {
+    const Vector3d base = behind(0.2);
+    const double radius = random_.uniform(0.03, 0.08), height = random_.uniform(2.5, 5.0);
+    return makeCylinder(base, radius, height, material(0.05), "pole_back" + std::to_string(i));
+  });
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "curvestereo/image_io.hpp"
+#include "synth/json_text.hpp"
 #include "synth/random.hpp"
 #include "synth/sequence.hpp"
 
@@ -21,38 +22,11 @@ namespace {
 namespace fs = std::filesystem;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
-
-// Shortest text that reads back as the same double ("0.1", "2.942900057068167"); the
-// program never changes the C locale, so the decimal point is '.'.
-std::string num(double v) {
-  char text[64];
-  for (int precision = 1; precision <= 17; ++precision) {
-    std::snprintf(text, sizeof text, "%.*g", precision, v);
-    if (std::strtod(text, nullptr) == v) break;
-  }
-  return text;
-}
-
-std::string list(const std::vector<double>& values) {
-  std::string s = "[";
-  for (size_t i = 0; i < values.size(); ++i) s += (i ? ", " : "") + num(values[i]);
-  return s + "]";
-}
-
-std::string vec(const Vector3d& v) { return list({v.x(), v.y(), v.z()}); }
-
-// A 4 x 4 rigid transform as JSON rows.
-std::string matrix4(const Matrix3d& R, const Vector3d& t) {
-  std::string s = "[";
-  for (int r = 0; r < 3; ++r) s += list({R(r, 0), R(r, 1), R(r, 2), t(r)}) + ", ";
-  return s + "[0, 0, 0, 1]]";
-}
-
-void writeText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  if (!out) throw Error("cannot write '" + path.string() + "'");
-}
+using json::list;
+using json::matrix4;
+using json::num;
+using json::vec;
+using json::writeText;
 
 std::string readText(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
