@@ -99,10 +99,14 @@ void parallelFor(int count, const std::function<void(int)>& body) {
   pool().run(count, body);
 }
 
+int copyPieces(size_t bytes) {
+  return int(std::max<size_t>(1, std::min<size_t>(kMaxCopyThreads, bytes / kPieceBytes)));
+}
+
 void copyHost(const std::vector<HostCopy>& copies) {
   size_t total = 0;
   for (const HostCopy& c : copies) total += c.bytes;
-  const int threads = int(std::min<size_t>(size_t(kMaxCopyThreads), total / kPieceBytes));
+  const int threads = copyPieces(total);
   if (threads < 2) {
     for (const HostCopy& c : copies) std::memcpy(c.dst, c.src, c.bytes);
     return;

@@ -19,6 +19,9 @@ struct HostCopy {
   const void* src;
   size_t bytes;
 };
+// How many contiguous pieces a host copy of `bytes` bytes is split into over the pool (1:
+// the calling thread alone, where waking threads would cost more than they save).
+int copyPieces(size_t bytes);
 // Every copy of the list, large ones split into contiguous pieces over the pool: a single
 // thread's memcpy does not reach the memory's bandwidth (a 2.7 MB image is ~0.25 ms on
 // one core), and a frame's downloads are several such images. The bytes are the same as
