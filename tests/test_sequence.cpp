@@ -120,7 +120,8 @@ TEST_CASE("temporalFilter: agreeing estimates average, a jump resets at once") {
       prior[2 * i] = x < kSize / 2 ? 1.f / 2.02f : 1.f / 1.2f;
       prior[2 * i + 1] = 0.05f;
     }
-  Buffer state = g.b->create(kSize, kSize, 2), u = g.make(1, constant(1, {nan})), w = g.make(2, constant(2, {nan, nan}));
+  Buffer state = g.b->create(kSize, kSize, 2), u = g.make(1, constant(1, {nan})),
+         w = g.make(2, constant(2, {nan, nan}));
   Buffer mask = g.make(1, constant(1, {1.f})), radial = g.make(1, constant(1, {2.f}));
   TemporalParams p{cam, {tPrime[0], tPrime[1], tPrime[2]}, 0.8f, 3.f, 0.5f, 0.1f, 0.1f};
   Buffer points = g.b->create(kSize, kSize, 3);
@@ -201,6 +202,24 @@ TEST_CASE("Stereo::next: the cold schedule, and --cold is the pair solve every f
       REQUIRE((a == b || (std::isnan(a) && std::isnan(b))));
     }
   }
+}
+
+// The shares come back with the frame's outputs (Pipeline::download, one downloadAll): the
+// first frame after a pose downloads the mask to count it, later ones reuse the count, and
+// both give the same share of the same cold solve.
+TEST_CASE("Stereo::next: the warm check's consistent share comes back with the frame") {
+  const synth::SynthPair pair = smallPair(9);
+  Params p = sequenceParams();
+  Stereo stereo(pair.rig, p, "cpu");
+  const double first = stereo.next(pair.left, pair.right).consistentShare;  // cold, the mask counted
+  CHECK(first > 0.5);
+  CHECK(first <= 1.0);
+  stereo.resetSequence();
+  CHECK(stereo.next(pair.left, pair.right).consistentShare == first);  // cold again, the count reused
+  CHECK(std::isnan(stereo.compute(pair.left, pair.right).consistentShare));
+  p.warmFailRatio = 0.f;  // no check: nothing read
+  Stereo unchecked(pair.rig, p, "cpu");
+  CHECK(std::isnan(unchecked.next(pair.left, pair.right).consistentShare));
 }
 
 TEST_CASE("Stereo::next: a warm frame whose scene changed is solved again cold") {
