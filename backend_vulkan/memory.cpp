@@ -135,7 +135,8 @@ Addr VulkanBackend::paramBlock(const void* data, size_t bytes) {
 // Room for `bytes` in the persistently mapped staging buffer, after what the immediate
 // command buffer's copies already use: their offset (256-aligned). Where the room is not
 // there, or a frame is being recorded, the queued work runs first and the buffer starts
-// over (grown if needed, 16 MiB at least: two 848x800 images' uploads share it).
+// over (grown if needed, with 16 MiB to spare: a frame's uploads, still queued when its
+// downloads claim their room, need not be waited for first).
 VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
   VkDeviceSize offset = (stagingUsed_ + 255) & ~VkDeviceSize(255);
   if (recordingFrame() || offset + bytes > staging_.size) {
@@ -144,7 +145,7 @@ VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
   }
   if (staging_.size < bytes) {
     destroyBuffer(staging_);
-    staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(16) << 20), Memory::Staging);
+    staging_ = makeBuffer(bytes + (VkDeviceSize(16) << 20), Memory::Staging);
   }
   stagingUsed_ = offset + bytes;
   return offset;
