@@ -120,8 +120,7 @@ TEST_CASE("temporalFilter: agreeing estimates average, a jump resets at once") {
       prior[2 * i] = x < kSize / 2 ? 1.f / 2.02f : 1.f / 1.2f;
       prior[2 * i + 1] = 0.05f;
     }
-  Buffer state = g.b->create(kSize, kSize, 2), u = g.make(1, constant(1, {nan})),
-         w = g.make(2, constant(2, {nan, nan}));
+  Buffer state = g.b->create(kSize, kSize, 2), u = g.make(1, constant(1, {nan})), w = g.make(2, constant(2, {nan, nan}));
   Buffer mask = g.make(1, constant(1, {1.f})), radial = g.make(1, constant(1, {2.f}));
   TemporalParams p{cam, {tPrime[0], tPrime[1], tPrime[2]}, 0.8f, 3.f, 0.5f, 0.1f, 0.1f};
   Buffer points = g.b->create(kSize, kSize, 3);

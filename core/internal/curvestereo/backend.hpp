@@ -73,7 +73,8 @@ struct Download {
 // naming the kernel and the problem; then it calls the protected virtual of the same
 // name with a "do" prefix, which a backend implements knowing its arguments are valid.
 // The backends' upload copy: n floats from src to dst; with `finite`, also whether all of
-// them were finite, in the same pass (vectorised: no extra read of a large image).
+// them were finite, in the same pass (vectorised: no extra read of a large image); a large
+// image in copyHost's pieces over the host's threads (host_threads.hpp).
 void copyFloats(float* dst, const float* src, size_t n, bool* finite);
 // The byte upload's conversion on the host: dst[i] = unitFromByte(src[i]).
 void floatsFromBytes(float* dst, const uint8_t* src, size_t n);
