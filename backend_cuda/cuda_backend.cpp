@@ -7,7 +7,6 @@
 #include <cstring>
 
 #include "curvestereo/camera.hpp"
-#include "curvestereo/host_threads.hpp"
 #include "curvestereo/image.hpp"
 #include "kernels.hpp"
 
@@ -281,29 +280,21 @@ void CudaBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
   if (!s.bytes) ok(cudaMalloc(&s.bytes, n), "cudaMalloc (byte upload)");
   uint8_t* staging = reinterpret_cast<uint8_t*>(pinnedFor(s));
   ok(cudaEventSynchronize(s.staged), "cudaEventSynchronize");  // the previous upload left the staging area
-  copyHost({{staging, host, n}});
+  std::memcpy(staging, host, n);
   ok(cudaMemcpyAsync(s.bytes, staging, n, cudaMemcpyHostToDevice, stream_), "upload");
   ok(cudaEventRecord(s.staged, stream_), "cudaEventRecord");
   check(cudak::launchFloatsFromBytes(stream_, s.dev, s.bytes, n), "upload (bytes to floats)");
 }
 
-// Every copy into its buffer's pinned staging, the stream waited for once, then the host's
-// copies out of the staging on a few threads (copyHost).
-void CudaBackend::doDownloadAll(const std::vector<Download>& list) {
+void CudaBackend::doDownload(const Buffer& src, float* host) {
   flush();
-  std::vector<HostCopy> copies;
-  for (const Download& d : list) {
-    Slot& s = slots_[size_t(slot(d.src).buffer.id)];
-    float* staging = pinnedFor(s);
-    const size_t bytes = d.src.count() * sizeof(float);
-    ok(cudaMemcpyAsync(staging, s.dev, bytes, cudaMemcpyDeviceToHost, stream_), "download");
-    copies.push_back({d.host, staging, bytes});
-  }
+  Slot& s = slots_[size_t(slot(src).buffer.id)];
+  float* staging = pinnedFor(s);
+  const size_t bytes = src.count() * sizeof(float);
+  ok(cudaMemcpyAsync(staging, s.dev, bytes, cudaMemcpyDeviceToHost, stream_), "download");
   ok(cudaStreamSynchronize(stream_), "download (synchronize)");
-  copyHost(copies);
+  std::memcpy(host, staging, bytes);
 }
-
-void CudaBackend::doDownload(const Buffer& src, float* host) { doDownloadAll({{src, host}}); }
 
 void CudaBackend::copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes) {
   flush();

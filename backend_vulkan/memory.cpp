@@ -1,10 +1,8 @@
 // The Vulkan backend's memory: device-local arenas that buffers sit in back to back,
 // host-visible parameter blocks, the staging buffer of transfers, and the transfers.
 #include <algorithm>
-#include <array>
 #include <cstring>
 
-#include "curvestereo/host_threads.hpp"
 #include "curvestereo/image.hpp"
 #include "vulkan_impl.hpp"
 
@@ -135,8 +133,7 @@ Addr VulkanBackend::paramBlock(const void* data, size_t bytes) {
 // Room for `bytes` in the persistently mapped staging buffer, after what the immediate
 // command buffer's copies already use: their offset (256-aligned). Where the room is not
 // there, or a frame is being recorded, the queued work runs first and the buffer starts
-// over (grown if needed, with 16 MiB to spare: a frame's uploads, still queued when its
-// downloads claim their room, need not be waited for first).
+// over (grown if needed, 16 MiB at least: two 848x800 images' uploads share it).
 VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
   VkDeviceSize offset = (stagingUsed_ + 255) & ~VkDeviceSize(255);
   if (recordingFrame() || offset + bytes > staging_.size) {
@@ -145,7 +142,7 @@ VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
   }
   if (staging_.size < bytes) {
     destroyBuffer(staging_);
-    staging_ = makeBuffer(bytes + (VkDeviceSize(16) << 20), Memory::Staging);
+    staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(16) << 20), Memory::Staging);
   }
   stagingUsed_ = offset + bytes;
   return offset;
@@ -173,66 +170,31 @@ void VulkanBackend::doUpload(const Buffer& dst, const float* host, bool* finite)
   copyFromStaging(dst, [&](float* staged) { copyFloats(staged, host, dst.count(), finite); });
 }
 
-namespace {
-struct PcFloatsFromBytes {
-  Addr dst, bytes, table;
-  int32_t rowLength, rows;
-};
-}  // namespace
-
-// The bytes cross the bus as they are, a quarter of the floats' copy into the staging
-// memory and of the transfer, and floats_from_bytes.comp converts them where the buffer
-// is, by a table of unitFromByte's 256 values (bit for bit; GLSL's division is not exact
-// enough to compute them). The shader reads the staging memory directly: each byte once.
+// Converted on the host as they are written into the mapped staging memory: the bytes are
+// read once either way, and GLSL's division is not exact enough to give unitFromByte's bits.
 void VulkanBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
-  static const std::array<float, 256> table = [] {
-    std::array<float, 256> t{};
-    for (int v = 0; v < 256; ++v) t[size_t(v)] = unitFromByte(uint8_t(v));
-    return t;
-  }();
-  // The table's block first: a full parameter memory flushes, which must not come between
-  // staging the bytes and recording the shader that reads them.
-  const Addr tableBlock = paramBlock(table.data(), sizeof(table));
-  const size_t count = dst.count();
-  const VkDeviceSize offset = claimStaging((count + 3) & ~size_t(3));  // the shader reads whole words
-  copyHost({{static_cast<char*>(staging_.mapped) + offset, host, count}});
-  const int rowLength = dst.width * dst.channels;
-  PcFloatsFromBytes pc{addr(dst), staging_.address + offset, tableBlock, rowLength, dst.height};
-  dispatch(kFloatsFromBytes, pc, rowLength, dst.height);
+  copyFromStaging(dst, [&](float* staged) { floatsFromBytes(staged, host, dst.count()); });
 }
 
-// The copies join the immediate command buffer (after any uploads still there, in the
-// staging buffer beyond theirs), one barrier makes them visible to the host, and one
-// flush waits for the frame and all of them together; the host then copies them out on a
-// few threads.
-void VulkanBackend::doDownloadAll(const std::vector<Download>& list) {
-  std::vector<VkDeviceSize> offsets(list.size());
-  VkDeviceSize total = 0;
-  for (size_t i = 0; i < list.size(); ++i) {
-    offsets[i] = total;
-    total += (list[i].src.count() * sizeof(float) + 255) & ~VkDeviceSize(255);
-  }
-  const VkDeviceSize base = claimStaging(total);
+// One submission and one wait: the copy joins the immediate command buffer (after any
+// uploads still there, in the staging buffer beyond theirs) and the flush waits for the
+// frame and the copy together.
+void VulkanBackend::doDownload(const Buffer& src, float* host) {
+  const Alloc& a = alloc(src);
+  const VkDeviceSize bytes = src.count() * sizeof(float);
+  const VkDeviceSize offset = claimStaging(bytes);
   VkCommandBuffer cb = recorder();
   barrier(cb, Cmd::Transfer);
-  std::vector<HostCopy> copies;
-  for (size_t i = 0; i < list.size(); ++i) {
-    const Alloc& a = alloc(list[i].src);
-    const VkDeviceSize bytes = list[i].src.count() * sizeof(float);
-    VkBufferCopy region{a.offset, base + offsets[i], bytes};
-    inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(a.arena)].buffer, staging_.buffer, 1, &region);
-    copies.push_back({list[i].host, static_cast<const char*>(staging_.mapped) + base + offsets[i], size_t(bytes)});
-  }
+  VkBufferCopy region{a.offset, offset, bytes};
+  inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(a.arena)].buffer, staging_.buffer, 1, &region);
   auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
   mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
   mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
   inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr,
                                 0, nullptr);
   flush();
-  copyHost(copies);
+  std::memcpy(host, static_cast<const char*>(staging_.mapped) + offset, bytes);
 }
-
-void VulkanBackend::doDownload(const Buffer& src, float* host) { doDownloadAll({{src, host}}); }
 
 void VulkanBackend::doFill(const Buffer& dst, float value) {
   const Alloc& a = alloc(dst);

@@ -54,7 +54,6 @@ class VulkanBackend final : public Backend {
   void doUpload(const Buffer& dst, const float* host, bool* finite) override;
   void doUploadBytes(const Buffer& dst, const uint8_t* host) override;
   void doDownload(const Buffer& src, float* host) override;
-  void doDownloadAll(const std::vector<Download>& list) override;
   void doFill(const Buffer& dst, float value) override;
   void doCopy(const Buffer& dst, const Buffer& src) override;
 

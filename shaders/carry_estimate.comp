@@ -16,7 +16,7 @@
 #include "camera_models.glsl"
 
 // Mirrors VkCarryParams<S> in backend_vulkan/kernels.cpp.
-layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer CarryParamsRef {
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer CarryParamsRef {
   Cam srcCam;  // src's grid
   Cam dstCam;  // dst's grid
   real extraT[3];

@@ -10,7 +10,7 @@
 #include "camera_models.glsl"
 
 // Mirrors VkFieldsParams<S> in backend_vulkan/vulkan_backend.cpp.
-layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer FieldsParamsRef {
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer FieldsParamsRef {
   Cam cam0, cam1;
   real R[9];        // row-major, X1 = R X0 + t
   real tPrime[3];   // R^T t

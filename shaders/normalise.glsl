@@ -6,7 +6,7 @@
 #include "common.glsl"
 
 // Mirrors vk::NormaliseBlock in backend_vulkan/normalise.hpp (NormaliseParams).
-layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer NormaliseParamsRef {
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer NormaliseParamsRef {
   int radius;     // taps[0 .. 2 radius]
   float epsilon;  // contrast floor
   float taps[49];

@@ -7,7 +7,7 @@
 #include "camera_models.glsl"
 
 // Mirrors VkSweepParams<S> in backend_vulkan/vulkan_backend.cpp.
-layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer SweepParamsRef {
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer SweepParamsRef {
   Cam cam;    // the level's camera
   real t[3];  // the other view's centre as seen from the reference: X -> X + t
   real qMax;  // inverse depth of the nearest sphere

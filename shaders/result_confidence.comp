@@ -7,7 +7,7 @@
 #include "common.glsl"
 
 // Mirrors VkConfidenceParams in backend_vulkan/kernels.cpp.
-layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer ConfidenceParamsRef {
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer ConfidenceParamsRef {
   int radius;
   float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow, maxDeviationPx;
 };

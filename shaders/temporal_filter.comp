@@ -16,7 +16,7 @@
 #include "camera_models.glsl"
 
 // Mirrors VkTemporalParams<S> in backend_vulkan/kernels.cpp.
-layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer TemporalParamsRef {
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer TemporalParamsRef {
   Cam cam;         // level 0's camera 0
   real tPrime[3];  // t' (triangulate's)
 };

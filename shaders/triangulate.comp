@@ -10,7 +10,7 @@
 #include "camera_models.glsl"
 
 // Mirrors VkTriangulateParams<S> in backend_vulkan/vulkan_backend.cpp.
-layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer TriangulateParamsRef {
+layout(buffer_reference, std430, buffer_reference_align = 8) buffer TriangulateParamsRef {
   Cam cam0;
   real tPrime[3];
 };

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <new>
 
 #include "curvestereo/backend.hpp"
@@ -65,8 +66,10 @@ const Params& Stereo::params() const { return core_->params(); }
 template <class Img>
 void Stereo::computeImages(const Img& left, const Img& right, DepthResult& result) {
   timedSolve(core_->rig(), left, right, result, [&] {
-    core_->pipeline().run(left, right, profiling_, progress_, result);  // with lrPassShare; consistentShare NaN
+    core_->pipeline().run(left, right, profiling_, progress_, result);
+    result.lrPassShare = core_->pipeline().roundTripShare();
     result.warm = result.redone = false;
+    result.consistentShare = std::numeric_limits<double>::quiet_NaN();
   });
 }
 
@@ -75,10 +78,14 @@ void Stereo::nextImages(const Img& left, const Img& right, DepthResult& result, 
   timedSolve(core_->rig(), left, right, result, [&] {
     Pipeline& pipeline = core_->pipeline();
     detail::StereoCore::SequenceFrame frame = core_->beginSequenceFrame(pose);
-    // warmFailRatio 0 turns the check off, and with it the read of the sweep's confidence
-    // (consistentShare NaN); run() reads both shares with the outputs.
-    const bool checked = core_->params().warmFailRatio > 0.f;
-    auto solve = [&] { pipeline.run(left, right, profiling_, progress_, result, {frame.warm, frame.filter, checked}); };
+    auto solve = [&] {
+      pipeline.run(left, right, profiling_, progress_, result, {frame.warm, frame.filter});
+      result.lrPassShare = pipeline.roundTripShare();
+      // warmFailRatio 0 turns the check off, and with it the read of the sweep's confidence.
+      result.consistentShare = core_->params().warmFailRatio > 0.f
+                                   ? pipeline.consistentShare(core_->params().initAccept)
+                                   : std::numeric_limits<double>::quiet_NaN();
+    };
     solve();
     result.redone = false;
     if (frame.warm && core_->warmFailed(result.consistentShare)) {

@@ -78,10 +78,6 @@ TEST_CASE("a kernel called with a wrong shape is refused with the kernel and the
     });
     checkRefused(b, "accumulate", "w has 1 channel, expected 2",
                  [&] { b.accumulate(one, other, one, two, mask, 0.2f); });
-    std::vector<float> room(size_t(w) * h * 4);
-    checkRefused(b, "downloadAll", "src is not a buffer of this backend (id 9999)", [&] {
-      b.downloadAll({{one, room.data()}, {Buffer{9999, w, h, 1}, room.data()}});
-    });
     const PrimalDualBuffers pd{one, other, two, two2, b.create(w, h, 2), two};  // q: 2 channels
     const DataTermBuffers data{b.create(w, h, 1), b.create(w, h, 1), b.create(w, h, 1)};
     const PrimalDualParams prm{20.f, 17.f, 1.2f, {{1.f, 1.f, 1.f}}};

@@ -203,24 +203,6 @@ TEST_CASE("Stereo::next: the cold schedule, and --cold is the pair solve every f
   }
 }
 
-// The shares come back with the frame's outputs (Pipeline::download, one downloadAll): the
-// first frame after a pose downloads the mask to count it, later ones reuse the count, and
-// both give the same share of the same cold solve.
-TEST_CASE("Stereo::next: the warm check's consistent share comes back with the frame") {
-  const synth::SynthPair pair = smallPair(9);
-  Params p = sequenceParams();
-  Stereo stereo(pair.rig, p, "cpu");
-  const double first = stereo.next(pair.left, pair.right).consistentShare;  // cold, the mask counted
-  CHECK(first > 0.5);
-  CHECK(first <= 1.0);
-  stereo.resetSequence();
-  CHECK(stereo.next(pair.left, pair.right).consistentShare == first);  // cold again, the count reused
-  CHECK(std::isnan(stereo.compute(pair.left, pair.right).consistentShare));
-  p.warmFailRatio = 0.f;  // no check: nothing read
-  Stereo unchecked(pair.rig, p, "cpu");
-  CHECK(std::isnan(unchecked.next(pair.left, pair.right).consistentShare));
-}
-
 TEST_CASE("Stereo::next: a warm frame whose scene changed is solved again cold") {
   const synth::SynthPair first = smallPair(7), other = test::smallSynthPair(128, "binocular", 0.12, 8, 0.3, 1);
   // At 128 px a band of 32 spans every hypothesis, so no warm frame can miss: a band of 4

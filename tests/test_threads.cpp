@@ -1,15 +1,10 @@
 // Thread safety (issue 6): Stereo objects share nothing a caller can see, so two of them
 // used from two threads at once give bit-identical results to using them one after the
-// other. (One Stereo object is not thread-safe; see docs/guide.md "Thread safety".) And the
-// host pool that backends share: copyHost and copyFloats split over it give memcpy's bytes.
-#include <algorithm>
+// other. (One Stereo object is not thread-safe; see docs/guide.md "Thread safety".)
 #include <cstring>
-#include <limits>
 #include <thread>
 #include <vector>
 
-#include "curvestereo/backend.hpp"
-#include "curvestereo/host_threads.hpp"
 #include "curvestereo/stereo.hpp"
 #include "synth/scene.hpp"
 #include "test_util.hpp"
@@ -86,54 +81,4 @@ TEST_CASE("four threads on the same rig agree bit for bit") {
     });
   for (auto& t : threads) t.join();
   for (const DepthResult& r : got) CHECK(sameBits(r, ref));
-}
-
-// The GPU backends' downloads (copyHost): copies of odd sizes, empty ones among them, whose
-// pieces over the pool's threads cross from one copy into the next: every byte lands where
-// memcpy would put it, and nothing beyond.
-TEST_CASE("copyHost copies every byte of every copy, split over threads or not") {
-  for (const std::vector<size_t>& sizes :
-       std::vector<std::vector<size_t>>{{1, 0, 17}, {3000001, 0, 777777, 5, 1 << 20}, {600000}}) {
-    std::vector<std::vector<unsigned char>> sources, targets;
-    std::vector<HostCopy> copies;
-    for (size_t k = 0; k < sizes.size(); ++k) {
-      sources.emplace_back(sizes[k]);
-      for (size_t i = 0; i < sizes[k]; ++i) sources.back()[i] = (unsigned char)((i * 131 + k * 7) % 251);
-      targets.emplace_back(sizes[k] + 8, (unsigned char)0xAB);  // 8 guard bytes after each
-    }
-    for (size_t k = 0; k < sizes.size(); ++k) copies.push_back({targets[k].data(), sources[k].data(), sizes[k]});
-    copyHost(copies);
-    for (size_t k = 0; k < sizes.size(); ++k) {
-      INFO("copy " << k << " of " << sizes[k] << " bytes");
-      CHECK(std::equal(sources[k].begin(), sources[k].end(), targets[k].begin()));
-      CHECK(std::all_of(targets[k].end() - 8, targets[k].end(), [](unsigned char v) { return v == 0xAB; }));
-    }
-  }
-}
-
-// Backend::upload's copy of a large image goes in pieces over the threads, each with its
-// own answer: a NaN or infinity in any piece, at either end of one, is found, and the
-// floats (the NaN's bits too) arrive as they were.
-TEST_CASE("copyFloats finds a non-finite value in any piece of a large copy") {
-  const size_t n = size_t(1) << 20;  // 4 MiB: the most pieces copyPieces makes
-  std::vector<float> src(n);
-  for (size_t i = 0; i < n; ++i) src[i] = float(i % 9973) * 0.25f - 7.f;
-  std::vector<float> dst(n);
-  bool finite = false;
-  copyFloats(dst.data(), src.data(), n, &finite);
-  CHECK(finite);
-  CHECK(std::memcmp(dst.data(), src.data(), n * sizeof(float)) == 0);
-  const int pieces = copyPieces(n * sizeof(float));
-  const size_t lastOfFirstPiece = n / size_t(pieces) - 1;
-  for (size_t at : {size_t(0), lastOfFirstPiece, lastOfFirstPiece + 1, n / 2, n - 1}) {
-    for (float bad : {std::numeric_limits<float>::quiet_NaN(), -std::numeric_limits<float>::infinity()}) {
-      std::vector<float> with = src;
-      with[at] = bad;
-      finite = true;
-      copyFloats(dst.data(), with.data(), n, &finite);
-      INFO("value " << bad << " at " << at << " of " << n << " in " << pieces << " pieces");
-      CHECK(!finite);
-      CHECK(std::memcmp(dst.data(), with.data(), n * sizeof(float)) == 0);
-    }
-  }
 }

@@ -4,13 +4,13 @@
 
 #include "curvestereo/camera.hpp"
 #include "curvestereo/camera_models.hpp"
-#include "curvestereo/host_threads.hpp"
 #include "curvestereo/image.hpp"
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 namespace cs {
 
@@ -41,10 +41,11 @@ void floatsFromBytes(float* dst, const uint8_t* src, size_t n) {
   for (size_t i = 0; i < n; ++i) dst[i] = table[src[i]];
 }
 
-namespace {
-
-// Whether all n floats copied were finite.
-bool copyFloatsChecked(float* dst, const float* src, size_t n) {
+void copyFloats(float* dst, const float* src, size_t n, bool* finite) {
+  if (!finite) {
+    std::memcpy(dst, src, n * sizeof(float));
+    return;
+  }
   // Branch-free within a block, so the compiler vectorises it: v - v is 0 for a finite v
   // and NaN for NaN or +-inf, which compares unequal to 0. (A float sum of v - v would not
   // vectorise: without -ffast-math the additions must stay in order.)
@@ -58,25 +59,7 @@ bool copyFloatsChecked(float* dst, const float* src, size_t n) {
       bad |= !(v - v == 0.f);
     }
   }
-  return !bad;
-}
-
-}  // namespace
-
-// A large image in contiguous pieces over the host's threads (copyHost's), each with its
-// own answer: all finite is the same conjunction in any order.
-void copyFloats(float* dst, const float* src, size_t n, bool* finite) {
-  if (!finite) {
-    copyHost({{dst, src, n * sizeof(float)}});
-    return;
-  }
-  const int pieces = copyPieces(n * sizeof(float));
-  std::vector<char> ok(size_t(pieces), 0);  // char, not vector<bool>: each piece writes its own byte
-  parallelFor(pieces, [&](int t) {
-    const size_t begin = n * size_t(t) / size_t(pieces), end = n * size_t(t + 1) / size_t(pieces);
-    ok[size_t(t)] = copyFloatsChecked(dst + begin, src + begin, end - begin);
-  });
-  *finite = std::all_of(ok.begin(), ok.end(), [](char v) { return v != 0; });
+  *finite = !bad;
 }
 
 std::vector<float> gaussianTaps(float sigma) {

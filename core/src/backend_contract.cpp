@@ -156,16 +156,6 @@ void Backend::download(const Buffer& src, float* host) {
   doDownload(src, host);
 }
 
-void Backend::downloadAll(const std::vector<Download>& list) {
-  const BackendContract contract(*this, "downloadAll");
-  for (const Download& d : list) contract.buffer(d.src, "src");
-  doDownloadAll(list);
-}
-
-void Backend::doDownloadAll(const std::vector<Download>& list) {
-  for (const Download& d : list) doDownload(d.src, d.host);
-}
-
 void Backend::fill(const Buffer& dst, float value) {
   BackendContract(*this, "fill").buffer(dst, "dst");
   doFill(dst, value);

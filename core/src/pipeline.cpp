@@ -226,21 +226,32 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   backend_.synchronize();
 }
 
-// The count of a mask's valid pixels is read once per pose, by the first frame that needs
-// it, not by every setPose (a pair without lrCheck never does).
-void Pipeline::ShareRead::queue(std::vector<Download>& list, const Buffer& valuesBuffer, const Buffer& maskBuffer,
-                                long long maskPixels) {
-  values.resize(valuesBuffer.count());
-  list.push_back({valuesBuffer, values.data()});
-  if (maskPixels >= 0) return;
-  mask.resize(maskBuffer.count());
-  list.push_back({maskBuffer, mask.data()});
+// The count of valid pixels is read once per pose, by the first sequence frame that needs
+// it, not by every setPose (a pair never does).
+double Pipeline::consistentShare(float accept) {
+  if (!initialising()) return std::numeric_limits<double>::quiet_NaN();
+  const Level& S = levels_[sweep_.level];
+  return shareOf(
+      S.confidence, [&](float c) { return c >= accept; }, S.mask, sweepMaskPixels_);
 }
 
+double Pipeline::roundTripShare() {
+  if (!reverse_) return std::numeric_limits<double>::quiet_NaN();
+  const float limit = params_.lrCheckPx;
+  return shareOf(
+      roundTripError_, [&](float e) { return e <= limit; }, levels_[0].mask, maskPixels_);
+}
+
+// Both shares download one buffer a frame; the mask's count is downloaded once per pose.
 template <class Predicate>
-double Pipeline::ShareRead::share(Predicate passes, long long& maskPixels) const {
-  if (maskPixels < 0) maskPixels = (long long)std::count_if(mask.begin(), mask.end(), [](float m) { return m != 0.f; });
-  const long long counted = (long long)std::count_if(values.begin(), values.end(), passes);
+double Pipeline::shareOf(const Buffer& values, Predicate counts, const Buffer& mask, long long& maskPixels) {
+  auto countDownloaded = [&](const Buffer& b, auto predicate) {
+    hostScratch_.resize(b.count());
+    backend_.download(b, hostScratch_.data());
+    return (long long)std::count_if(hostScratch_.begin(), hostScratch_.end(), predicate);
+  };
+  if (maskPixels < 0) maskPixels = countDownloaded(mask, [](float m) { return m != 0.f; });
+  const long long counted = countDownloaded(values, counts);
   return maskPixels ? double(counted) / double(maskPixels) : 0.0;
 }
 
@@ -626,43 +637,31 @@ static void validFromRadial(DepthResult& out) {
   for (size_t i = 0; i < n; ++i) valid[i] = uint8_t(radial[i] == radial[i]);
 }
 
-// Every output selected and the frame's checks in one Backend::downloadAll: one wait for
-// the device, not one per buffer.
-void Pipeline::download(DepthResult& out, FrameKind kind) {
+void Pipeline::download(DepthResult& out) {
   stage("download");
   const Level& L0 = levels_[0];
   const int w = L0.size.width, h = L0.size.height;
-  std::vector<Download> list{{radial_, fitImage(out.depth.radial, w, h)}};
+  backend_.download(radial_, fitImage(out.depth.radial, w, h));
+  validFromRadial(out);
   if (selection_.confidence)
-    list.push_back({confidence_, fitImage(out.confidence, w, h)});
+    backend_.download(confidence_, fitImage(out.confidence, w, h));
   else
     out.confidence = ImageF();
   if (selection_.disparity)
-    list.push_back({L0.pd.u, fitImage(out.disparity, w, h)});
+    backend_.download(L0.pd.u, fitImage(out.disparity, w, h));
   else
     out.disparity = ImageF();
   if (selection_.warp)
-    list.push_back({L0.w, reinterpret_cast<float*>(fitImage(out.warp, w, h))});
+    backend_.download(L0.w, reinterpret_cast<float*>(fitImage(out.warp, w, h)));
   else
     out.warp = FlowImage();
   if (selection_.points) {
-    list.push_back({points_, reinterpret_cast<float*>(fitImage(out.depth.points, w, h))});
-    list.push_back({z_, fitImage(out.depth.z, w, h)});
+    backend_.download(points_, reinterpret_cast<float*>(fitImage(out.depth.points, w, h)));
+    backend_.download(z_, fitImage(out.depth.z, w, h));
   } else {
     out.depth.points = Image<Point3f>();
     out.depth.z = ImageF();
   }
-  const Level& S = levels_[sweep_.level];
-  const bool consistency = kind.checked && initialising();
-  if (reverse_) roundTripRead_.queue(list, roundTripError_, L0.mask, maskPixels_);
-  if (consistency) consistencyRead_.queue(list, S.confidence, S.mask, sweepMaskPixels_);
-  backend_.downloadAll(list);
-  validFromRadial(out);
-  const float limit = params_.lrCheckPx, accept = params_.initAccept;
-  const double none = std::numeric_limits<double>::quiet_NaN();
-  out.lrPassShare = reverse_ ? roundTripRead_.share([&](float e) { return e <= limit; }, maskPixels_) : none;
-  out.consistentShare =
-      consistency ? consistencyRead_.share([&](float c) { return c >= accept; }, sweepMaskPixels_) : none;
 }
 
 void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
@@ -713,7 +712,7 @@ void Pipeline::run(const InputImage& left, const InputImage& right, bool profile
   }
   const bool replay = !profiling_ && backend_.canReplayFrame(slotBase_ + kind.slot());
   issueOrReplay(progress, kind);
-  download(out, kind);
+  download(out);
   if (replay && progress) progress(1.0);
   if (profiling_)
     out.stages = backend_.takeStageTimes();

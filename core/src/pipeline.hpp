@@ -42,9 +42,6 @@ struct InputImage {
 
 struct FrameKind {
   bool warm = false, filter = false;
-  // A sequence's warm check reads the frame's consistent share (Params::warmFailRatio > 0):
-  // run() downloads the sweep level's confidence with the outputs.
-  bool checked = false;
   int slot() const { return (warm ? 2 : 0) + (filter ? 1 : 0); }
 };
 
@@ -78,13 +75,7 @@ class Pipeline {
   // unless `profile`: time each stage, synchronising at each boundary, instead of
   // replaying). Images of the right size keep their storage, so a caller reusing `out`
   // allocates nothing. The valid mask is not downloaded: finishResult leaves radial NaN
-  // exactly where it is 0. The frame's checks come back with the outputs, in the same
-  // round trip: out.lrPassShare (Params::lrCheck, else NaN), the share of the valid pixels
-  // (the mask at full resolution) whose round trip passed, the figure a real pair has
-  // without ground truth; out.consistentShare (kind.checked with the initialiser, else NaN),
-  // the share of the sweep level's valid pixels whose left-right check passed, a warm
-  // frame's health read at the sweep's resolution (a sixteenth of the full frame's
-  // transfer with realtime).
+  // exactly where it is 0.
   void run(const InputImage& left, const InputImage& right, bool profile, const std::function<void(double)>& progress,
            DepthResult& out, FrameKind kind = {});
 
@@ -101,6 +92,14 @@ class Pipeline {
   // Makes the frame just solved the one the next frame carries (a failed warm frame is not
   // committed: it is solved again cold from the same state).
   void commitSequenceFrame();
+  // The share of the sweep level's valid pixels whose left-right check passed in the frame
+  // just solved (NaN without the initialiser): a warm frame's health, read at the sweep's
+  // resolution (a sixteenth of the full frame's transfer with realtime).
+  double consistentShare(float accept);
+  // Params::lrCheck: the share of the valid pixels (the mask at full resolution) whose round
+  // trip passed in the frame just solved (NaN without lrCheck): the figure a real pair has
+  // without ground truth. Downloads the round trip's error.
+  double roundTripShare();
 
   // For callers whose images are already on the backend's device (cs::cuda::DeviceStereo):
   // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
@@ -152,16 +151,10 @@ class Pipeline {
   bool normalising() const { return params_.dataTerm == Params::DataTerm::Normalised; }
   bool initialising() const { return params_.init == Params::Init::PlaneSweep; }
 
-  // A check's buffer read back with the frame's outputs (download), and its mask's with
-  // it while the mask's valid pixels are not counted (once per pose).
-  struct ShareRead {
-    std::vector<float> values, mask;
-    void queue(std::vector<Download>& list, const Buffer& valuesBuffer, const Buffer& maskBuffer, long long maskPixels);
-    // The share of the mask's pixels (counted into maskPixels when it is negative) whose
-    // value passes.
-    template <class Predicate>
-    double share(Predicate passes, long long& maskPixels) const;
-  };
+  // The share of mask's pixels (counted into maskPixels when it is negative) whose value in
+  // `values` (same grid) satisfies `counts`.
+  template <class Predicate>
+  double shareOf(const Buffer& values, Predicate counts, const Buffer& mask, long long& maskPixels);
   void upload(const InputImage& left, const InputImage& right);
   void uploadImage(const Buffer& dst, const InputImage& image, const char* side);
   void issueFrame(const std::function<void(double)>& progress, FrameKind kind);
@@ -178,7 +171,7 @@ class Pipeline {
   void initialiseLevel(size_t l);
   void solveLevel(Level& level, int warps, const std::function<void(int)>& warpDone);
   PrimalDualParams primalDualParams() const;
-  void download(DepthResult& out, FrameKind kind);
+  void download(DepthResult& out);
 
   Backend& backend_;
   Params params_;
@@ -202,8 +195,8 @@ class Pipeline {
   // frame's view; `motion` the kMotionFloats of camera 0's motion. Created by resetSequence.
   Buffer state_, next_, prior_, motion_;
   long long sweepMaskPixels_ = -1;  // valid pixels at the sweep's level (-1: not counted since setPose)
-  long long maskPixels_ = -1;       // valid pixels at level 0 (lrPassShare; -1: not counted since setPose)
-  ShareRead roundTripRead_, consistencyRead_;
+  long long maskPixels_ = -1;       // valid pixels at level 0 (roundTripShare; -1: not counted since setPose)
+  std::vector<float> hostScratch_;  // shareOf's downloads
 };
 
 }  // namespace cs

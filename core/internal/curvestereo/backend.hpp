@@ -61,20 +61,13 @@ struct WarpBuffers {
   float weightFloor;
 };
 
-// One buffer's download in a list of them (Backend::downloadAll): src.count() floats to host.
-struct Download {
-  Buffer src;
-  float* host;
-};
-
 // The kernels. Each public method checks its arguments against the contract written
 // beside it (every buffer created by this backend and used no larger than created, the
 // channels and sizes named, parameters in range) and throws cs::Error with one line
 // naming the kernel and the problem; then it calls the protected virtual of the same
 // name with a "do" prefix, which a backend implements knowing its arguments are valid.
 // The backends' upload copy: n floats from src to dst; with `finite`, also whether all of
-// them were finite, in the same pass (vectorised: no extra read of a large image); a large
-// image in copyHost's pieces over the host's threads (host_threads.hpp).
+// them were finite, in the same pass (vectorised: no extra read of a large image).
 void copyFloats(float* dst, const float* src, size_t n, bool* finite);
 // The byte upload's conversion on the host: dst[i] = unitFromByte(src[i]).
 void floatsFromBytes(float* dst, const uint8_t* src, size_t n);
@@ -101,9 +94,6 @@ class Backend {
   // as it is, a quarter of the floats' bytes, converted where the backend's memory is.
   void uploadBytes(const Buffer& dst, const uint8_t* host);
   void download(const Buffer& src, float* host);
-  // Every download of the list, each as download() gives it, the device waited for once:
-  // a frame's outputs and its checks' buffers in one round trip, not one each.
-  void downloadAll(const std::vector<Download>& list);
   void fill(const Buffer& dst, float value);
   void copy(const Buffer& dst, const Buffer& src);  // the same number of floats
 
@@ -367,8 +357,6 @@ class Backend {
   virtual void doUpload(const Buffer& dst, const float* host, bool* finite) = 0;  // finite: see copyFloats
   virtual void doUploadBytes(const Buffer& dst, const uint8_t* host) = 0;
   virtual void doDownload(const Buffer& src, float* host) = 0;
-  // Default: doDownload for each, in order (the CPU backend waits for nothing).
-  virtual void doDownloadAll(const std::vector<Download>& list);
   virtual void doFill(const Buffer& dst, float value) = 0;
   virtual void doCopy(const Buffer& dst, const Buffer& src) = 0;
   virtual void doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
