@@ -68,10 +68,14 @@ def test_panorama_matches_the_cli_and_the_truth(ring4, solved):
     assert same_bits(p.range, cs.read_image(ring4 / "out" / "panorama_range.exr"))
     assert same_bits(p.confidence, cs.read_image(ring4 / "out" / "panorama_confidence.exr"))
     truth = cs.read_image(ring4 / "panorama_range.exr")
-    both = np.isfinite(p.range) & np.isfinite(truth)
-    assert both.mean() > 0.8  # test_cli_rig's eval sees about 94 % coverage
+    # Where the truth has a finite range (the sky is +inf), the panorama mostly has one too
+    # (about 92 %), close to it: at 96 px a pixel of disparity is a large share of the depth
+    # (median about 9 %; test_cli_rig's eval allows a mean abs-rel of 25 %).
+    finite = np.isfinite(truth)
+    both = np.isfinite(p.range) & finite
+    assert both.sum() > 0.85 * finite.sum()
     rel = np.abs(p.range[both] - truth[both]) / truth[both]
-    assert np.median(rel) < 0.1, np.median(rel)
+    assert np.median(rel) < 0.15 and rel.mean() < 0.25, (np.median(rel), rel.mean())
     # Another centre moves every range: the panorama is not cached from the first call.
     moved = r.panorama(width=PANORAMA, centre=p.centre + [0.0, 0.0, 0.5])
     assert not same_bits(moved.range, p.range)
