@@ -62,8 +62,9 @@ std::vector<PairInfo> pairsFrom(const CameraRig& rig, pb::handle obj, int partne
   if (pb::isinstance<pb::str>(obj)) return parsePairs(rig, obj.cast<std::string>());
   std::string text;
   for (pb::handle item : obj) {
-    if (!pb::isinstance<pb::sequence>(item) || pb::len(item) != 2)
-      throw Error("pairs must be a string such as '0-1,1-2' or a list of (i, j) camera indexes");
+    const bool twoInts = pb::isinstance<pb::sequence>(item) && pb::len(item) == 2 &&
+                         pb::isinstance<pb::int_>(item[pb::int_(0)]) && pb::isinstance<pb::int_>(item[pb::int_(1)]);
+    if (!twoInts) throw Error("pairs must be a string such as '0-1,1-2' or a list of (i, j) camera indexes");
     const auto pair = pb::reinterpret_borrow<pb::sequence>(item);
     text += (text.empty() ? "" : ",") + std::to_string(pair[0].cast<int>()) + "-" + std::to_string(pair[1].cast<int>());
   }

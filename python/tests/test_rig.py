@@ -104,6 +104,8 @@ def test_bad_input_raises(ring4, solved):
         stereo.compute(images[0])
     with pytest.raises(cs.Error, match="0-7"):
         cs.RigStereo(rig, "fast", "cpu", pairs="0-7")
+    with pytest.raises(cs.Error, match="list of \\(i, j\\) camera indexes"):
+        cs.RigStereo(rig, "fast", "cpu", pairs=[(0, "1")])
     with pytest.raises(cs.Error, match="cam3 is in none of the pairs"):
         cs.RigStereo(rig, "fast", "cpu", pairs=[(0, 1), (1, 2)])
     with pytest.raises(cs.Error, match="cross-check"):
