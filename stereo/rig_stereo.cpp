@@ -1,12 +1,22 @@
 // RigStereo (rig_stereo.hpp): a rig's pairs through Stereo, then the per-camera fusion.
 #include "curvestereo/rig_stereo.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "curvestereo/rig_fusion.hpp"
 #include "curvestereo/stereo.hpp"
 
 namespace cs {
+
+Params rigParams(const CameraRig& rig, Params params) {
+  double widest = 0;
+  for (const Camera& cam : rig.cameras) widest = std::max(widest, viewHalfAngle(cam));
+  // Rounded down to a micro-degree: never wider than the widest lens.
+  params.maxFovDeg = std::max(params.maxFovDeg, std::floor(2.0 * widest * 180.0 / M_PI * 1e6) / 1e6);
+  return params;
+}
 
 RigStereo::RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, const Params& params,
                      const std::string& backend)

@@ -66,12 +66,9 @@ std::vector<PairInfo> rigPairsFromArgs(const Args& args, const CameraRig& rig) {
 // A lens wider than 180 degrees shows its whole image circle: unless the user sets the field
 // of view, the solve uses the widest camera's.
 Params rigParamsFromArgs(const Args& args, const CameraRig& rig) {
-  Params params = paramsFromArgs(args);
+  const Params params = paramsFromArgs(args);
   if (args.has("max-fov") || args.has("max-fov-deg")) return params;
-  double widest = 0;
-  for (const Camera& cam : rig.cameras) widest = std::max(widest, viewHalfAngle(cam));
-  params.maxFovDeg = std::max(params.maxFovDeg, std::floor(2.0 * widest * 180.0 / M_PI * 1e6) / 1e6);
-  return params;
+  return rigParams(rig, params);
 }
 
 double crossCheckFromArgs(const Args& args) {

@@ -15,6 +15,15 @@ A recording, frame after frame (warm start and temporal filter; poses optional):
         r = stereo.next(f.left, f.right, pose=f.pose)   # pose: 4 x 4 T_world_cam0 or None
         print(f.timestamp_ns, r.warm, r.consistent_share)
 
+A rig of N cameras (a Kalibr camchain or Basalt calibration with N cameras): each
+camera's depth from its pairs, and the panorama around the rig:
+
+    rig = cs.load_rig("camchain.yaml")        # rig.overlaps(): as `calib show` prints
+    stereo = cs.RigStereo(rig)                # pairs: rig.pairs(), or pairs="0-1,1-2"
+    r = stereo.compute([cs.read_image(f"cam{k}.png") for k in range(len(rig))])
+    r.cameras[0].depth                        # a Result per camera
+    p = r.panorama(width=2048)                # p.range, p.grey, p.confidence: W/2 x W
+
 Every failure raises curvestereo.Error (a RuntimeError) with the library's one-line
 message. See help(curvestereo.Stereo) and docs/guide.md, "Python".
 """
@@ -31,11 +40,15 @@ except ImportError as e:  # e.g. python/curvestereo itself on sys.path, not the 
     ) from e
 
 from ._curvestereo import (  # noqa: F401
+    CameraRig,
     DepthLogWriter,
     Error,
     Frame,
+    Panorama,
     Result,
     Rig,
+    RigResult,
+    RigStereo,
     Sequence,
     Stereo,
     __version__,
@@ -44,6 +57,7 @@ from ._curvestereo import (  # noqa: F401
     colorize,
     depth_picture,
     load_calibration,
+    load_rig,
     log_info,
     preset_params,
     presets,
@@ -54,11 +68,15 @@ from ._curvestereo import (  # noqa: F401
 )
 
 __all__ = [
+    "CameraRig",
     "DepthLogWriter",
     "Error",
     "Frame",
+    "Panorama",
     "Result",
     "Rig",
+    "RigResult",
+    "RigStereo",
     "Sequence",
     "Stereo",
     "available_backends",
@@ -66,6 +84,7 @@ __all__ = [
     "colorize",
     "depth_picture",
     "load_calibration",
+    "load_rig",
     "log_info",
     "preset_params",
     "presets",

@@ -237,6 +237,85 @@ class Stereo:
     @property
     def outputs(self) -> list[str]: ...
 
+class CameraRig:
+    """A rig of N >= 2 cameras, each with its pose in one body frame (load_rig)."""
+
+    def __len__(self) -> int: ...
+    @property
+    def cameras(self) -> list[dict[str, Any]]:
+        """Each camera as {'model', 'width', 'height', 'params'} (as Rig.cam0)."""
+    @property
+    def poses(self) -> list[npt.NDArray[np.float64]]:
+        """Each camera's 4 x 4 T_body_cam."""
+    @property
+    def centre(self) -> npt.NDArray[np.float64]:
+        """The mean of the camera centres, body frame (3,)."""
+    def pairs(self, partners: int = 2) -> list[dict[str, Any]]:
+        """The pairs RigStereo solves by default: {'i', 'j', 'overlap_ij', 'overlap_ji', 'baseline'}."""
+    def overlaps(self) -> list[dict[str, Any]]:
+        """Every pair i < j with its overlaps and baseline (as `calib show` prints them)."""
+    def pair(self, i: int, j: int) -> Rig:
+        """The stereo Rig of cameras i (cam0) and j (cam1)."""
+
+class Panorama:
+    """Equirectangular, W x W/2: longitude -180..180 left to right, +90 latitude at the top."""
+
+    @property
+    def range(self) -> _F32:
+        """Metres from the centre; +inf at infinity, NaN where no camera gave a depth."""
+    @property
+    def grey(self) -> _F32: ...
+    @property
+    def confidence(self) -> _F32: ...
+    @property
+    def width(self) -> int: ...
+    @property
+    def centre(self) -> npt.NDArray[np.float64]: ...
+
+class RigResult:
+    """One frame of a rig: a Result per camera, and the panorama on request."""
+
+    @property
+    def cameras(self) -> list[Result]: ...
+    @property
+    def solves(self) -> list[dict[str, Any]]:
+        """{'reference', 'other', 'ms', 'cross_check_invalidated'} per pair direction."""
+    @property
+    def total_ms(self) -> float: ...
+    def panorama(
+        self, width: int = 2048, centre: npt.ArrayLike | None = None, min_confidence: float = 0.0
+    ) -> Panorama:
+        """The cameras' depths fused around the rig, as `curvestereo run --calib rig.yaml` does."""
+
+class RigStereo:
+    """The solver for a rig of N cameras: every pair both ways, fused per camera. Not for two
+    threads at once (raises Error if used so)."""
+
+    def __init__(
+        self,
+        rig: CameraRig,
+        preset: str = "realtime",
+        backend: str = "auto",
+        *,
+        pairs: str | _Sequence[tuple[int, int]] | None = None,
+        partners: int = 2,
+        cross_check: float = 0.0,
+        device: int | str = ...,
+        **params: Any,
+    ) -> None: ...
+    def compute(self, images: _Sequence[_HostImage]) -> RigResult:
+        """One image per camera, in order, each at its camera's size."""
+    @property
+    def rig(self) -> CameraRig: ...
+    @property
+    def pairs(self) -> list[dict[str, Any]]: ...
+    @property
+    def params(self) -> dict[str, Any]: ...
+    @property
+    def cross_check(self) -> float: ...
+    @property
+    def backend(self) -> str: ...
+
 class Frame:
     """One stereo frame of a Sequence; left / right are read on first use, then kept."""
 
@@ -350,6 +429,9 @@ def load_calibration(path: _Path) -> Rig:
     """Read a stereo calibration: Kalibr / OpenVINS camchain, Basalt calibration.json, OpenCV
     FileStorage YAML / XML, ORB-SLAM3 settings or VINS-Fusion config (the format told from
     the keys; docs/calibration.md)."""
+
+def load_rig(path: _Path) -> CameraRig:
+    """Read an N-camera calibration (Kalibr camchain cam0..camN-1, or Basalt), validated."""
 
 def read_image(path: _Path) -> _F32:
     """PNG (8/16-bit; colour -> Rec. 601 luma) scaled to [0, 1], EXR, or .flo (H x W x 2)."""

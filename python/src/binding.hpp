@@ -148,6 +148,10 @@ std::vector<std::string> paramNames();
 
 void bindDevice(pb::module_& m);    // DeviceArray (an empty stub without CUDA)
 void bindSequence(pb::module_& m);  // Sequence and Frame (sequence.cpp)
+void bindRigs(pb::module_& m);      // CameraRig, RigStereo, RigResult, Panorama (rig.cpp)
+
+// {'model', 'width', 'height', 'params'}: a camera as Rig.cam0 and CameraRig.cameras show it.
+pb::dict cameraDict(const Camera& c);
 
 // A frame's pose for Stereo.next (T_world_cam0): None (nullopt), a 4 x 4 array, or an
 // (R, t) pair. Throws cs::Error naming the accepted forms on anything else.

@@ -22,6 +22,15 @@
 
 namespace cs::py {
 
+pb::dict cameraDict(const Camera& c) {
+  pb::dict d;
+  d["model"] = c.modelName();
+  d["width"] = c.width;
+  d["height"] = c.height;
+  d["params"] = c.params;
+  return d;
+}
+
 namespace {
 
 // ---------------------------------------------------------------- calibration
@@ -37,15 +46,6 @@ void saveRig(const Rig& rig, const Path& path, const std::string& format) {
        {CalibFormat::Kalibr, CalibFormat::Basalt, CalibFormat::OpenCv, CalibFormat::OrbSlam3, CalibFormat::VinsFusion})
     if (format == calibFormatName(f)) return saveCalibration(rig, path.string(), f);
   throw Error("unknown calibration format '" + format + "' (known: kalibr, basalt, opencv, orbslam3, vins)");
-}
-
-pb::dict cameraDict(const Camera& c) {
-  pb::dict d;
-  d["model"] = c.modelName();
-  d["width"] = c.width;
-  d["height"] = c.height;
-  d["params"] = c.params;
-  return d;
 }
 
 pb::array matrixArray(const double* data, std::vector<pb::ssize_t> shape) {
@@ -706,4 +706,5 @@ sequence.)doc")
       "What this build contains: version, backends, whether GPU arrays are accepted, parameter names.");
   bindDevice(m);
   bindSequence(m);
+  bindRigs(m);
 }

@@ -18,6 +18,12 @@ namespace cs {
 
 class Stereo;
 
+// The parameters for a rig's solves: a lens wider than 180 degrees shows its whole image
+// circle, so the field of view is widened to the widest camera's (viewHalfAngle) where
+// `params` asks for less. The CLI and the Python module apply it unless the user set the
+// field of view.
+Params rigParams(const CameraRig& rig, Params params);
+
 struct RigResult {
   std::vector<DepthResult> cameras;  // per camera, radial depth from that camera
   struct Solve {

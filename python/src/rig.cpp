@@ -1,0 +1,335 @@
+// Rigs of N cameras (issue 32): load_rig, CameraRig, RigStereo, RigResult and its Panorama.
+// The solves, the per-camera fusion and the panorama are the library's (RigStereo and
+// rig_fusion.hpp), the same calls `curvestereo run --calib rig.yaml cam0.png ...` makes, so
+// the module and the CLI give the same numbers for the same inputs.
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "binding.hpp"
+#include "curvestereo/camera_rig.hpp"
+#include "curvestereo/rig_fusion.hpp"
+#include "curvestereo/rig_stereo.hpp"
+
+namespace cs::py {
+
+namespace {
+
+using Path = std::filesystem::path;
+
+CameraRig loadRigFile(const Path& path) { return loadCameraRig(path.string()); }
+
+// T_body_cam as a 4 x 4 float64 array (X_body = R X_cam + p), as Sequence poses are given.
+pb::array bodyPoseArray(const BodyPose& pose) {
+  pb::array_t<double> a({4, 4});
+  double* o = a.mutable_data();
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) o[4 * r + c] = r == 3 ? (c == 3 ? 1.0 : 0.0) : (c == 3 ? pose.p(r) : pose.R(r, c));
+  return std::move(a);
+}
+
+pb::dict pairDict(const PairInfo& p) {
+  pb::dict d;
+  d["i"] = p.i;
+  d["j"] = p.j;
+  d["overlap_ij"] = p.overlapIJ;
+  d["overlap_ji"] = p.overlapJI;
+  d["baseline"] = p.baseline;
+  return d;
+}
+
+pb::list pairList(const std::vector<PairInfo>& pairs) {
+  pb::list out;
+  for (const PairInfo& p : pairs) out.append(pairDict(p));
+  return out;
+}
+
+std::vector<PairInfo> chosenPairs(const CameraRig& rig, int partners) {
+  if (partners < 1 || partners > 8) throw Error("partners must be 1 to 8");
+  return choosePairs(rig, partners);
+}
+
+// pairs=: None (each camera's best partners), the CLI's "0-1,1-2", or [(0, 1), (1, 2)]. The
+// list is written as the CLI's text so that both are checked by the library's parsePairs.
+std::vector<PairInfo> pairsFrom(const CameraRig& rig, pb::handle obj, int partners) {
+  if (obj.is_none()) return chosenPairs(rig, partners);
+  if (pb::isinstance<pb::str>(obj)) return parsePairs(rig, obj.cast<std::string>());
+  std::string text;
+  for (pb::handle item : obj) {
+    const bool twoInts = pb::isinstance<pb::sequence>(item) && pb::len(item) == 2 &&
+                         pb::isinstance<pb::int_>(item[pb::int_(0)]) && pb::isinstance<pb::int_>(item[pb::int_(1)]);
+    if (!twoInts) throw Error("pairs must be a string such as '0-1,1-2' or a list of (i, j) camera indexes");
+    const auto pair = pb::reinterpret_borrow<pb::sequence>(item);
+    text += (text.empty() ? "" : ",") + std::to_string(pair[0].cast<int>()) + "-" + std::to_string(pair[1].cast<int>());
+  }
+  return parsePairs(rig, text);
+}
+
+Eigen::Vector3d centreFrom(pb::handle obj) {
+  const auto a = pb::array_t<double, pb::array::c_style | pb::array::forcecast>::ensure(obj);
+  if (!a || a.size() != 3 || a.ndim() != 1) throw Error("centre must hold 3 values (metres, in the body frame)");
+  return {a.data()[0], a.data()[1], a.data()[2]};
+}
+
+pb::array vectorArray(const Eigen::Vector3d& v) {
+  pb::array_t<double> a(3);
+  std::copy(v.data(), v.data() + 3, a.mutable_data());
+  return std::move(a);
+}
+
+std::string sizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+
+// camera k's image as the library's float gray, at its camera's size.
+ImageF cameraImage(pb::handle obj, const CameraRig& rig, int k) {
+  const std::string which = "cam" + std::to_string(k) + " image";
+  ImageF img = imageFromArray(obj, which.c_str());
+  const Camera& cam = rig.cameras[size_t(k)];
+  if (img.width != cam.width || img.height != cam.height)
+    throw Error(which + " is " + sizeText(img.width, img.height) + ", its camera is " +
+                sizeText(cam.width, cam.height));
+  return img;
+}
+
+// ---------------------------------------------------------------- results
+
+struct PyPanorama {
+  pb::object range, grey, confidence;
+  int width = 0;
+  pb::object centre;  // float64 (3,)
+};
+
+// What the panorama is fused from: the per-camera results and images as the library has them
+// (Result's arrays own moved copies; these stay for any number of panorama() calls).
+struct RigFusionInput {
+  CameraRig rig;
+  std::vector<DepthResult> cameras;
+  std::vector<ImageF> images;
+};
+
+struct PyRigResult {
+  pb::list cameras;  // Result, one per camera
+  pb::list solves;
+  double totalMs = 0;
+  std::shared_ptr<const RigFusionInput> input;
+
+  PyPanorama panorama(int width, pb::handle centre, float minConfidence) const {
+    if (!(minConfidence >= 0.f && minConfidence <= 1.f)) throw Error("min_confidence must be in [0, 1]");
+    PanoramaFrame frame = panoramaFrame(input->rig);
+    if (!centre.is_none()) frame.centre = centreFrom(centre);
+    Panorama p;
+    {
+      pb::gil_scoped_release nogil;  // a forward projection of every camera's pixels
+      p = fusePanorama(input->rig, input->cameras, input->images, frame, width, minConfidence);
+    }
+    return {floatArray(std::move(p.range)), floatArray(std::move(p.grey)), floatArray(std::move(p.confidence)), width,
+            vectorArray(frame.centre)};
+  }
+};
+
+pb::dict solveDict(const RigResult::Solve& s) {
+  pb::dict d;
+  d["reference"] = s.reference;
+  d["other"] = s.other;
+  d["ms"] = s.ms;
+  d["cross_check_invalidated"] = s.crossCheckInvalidated;
+  return d;
+}
+
+// ---------------------------------------------------------------- the solver
+
+// Keyword names that set the field of view themselves (dashes read as underscores).
+bool setsFieldOfView(std::string key) {
+  for (char& c : key)
+    if (c == '-') c = '_';
+  return key == "max_fov" || key == "max_fov_deg";
+}
+
+class PyRigStereo {
+ public:
+  PyRigStereo(const CameraRig& rig, const std::string& presetName, const std::string& backend, pb::handle pairs,
+              int partners, double crossCheck, pb::kwargs kwargs)
+      : rig_(rig) {
+    std::string backendSpec = backend;
+    pb::dict overrides;
+    bool fovGiven = false;
+    for (auto item : kwargs) {
+      const std::string key = pb::str(item.first);
+      if (key == "device")  // as Stereo's: an index or a name substring
+        backendSpec += ":" + std::string(pb::str(item.second));
+      else
+        overrides[item.first] = item.second;
+      fovGiven = fovGiven || setsFieldOfView(key);
+    }
+    params_ = paramsFrom(presetName, overrides);
+    // As the CLI: a lens wider than 180 degrees is solved over its whole image circle.
+    if (!fovGiven) params_ = rigParams(rig_, params_);
+    pairs_ = pairsFrom(rig_, pairs, partners);
+    pb::gil_scoped_release nogil;  // one Stereo per direction of each pair: backends set up
+    stereo_ = std::make_unique<RigStereo>(rig_, pairs_, params_, backendSpec);
+    stereo_->setCrossCheck(crossCheck);
+    crossCheck_ = crossCheck;
+  }
+
+  PyRigResult compute(pb::handle imagesObj) {
+    std::unique_lock<std::mutex> lock(busy_, std::try_to_lock);
+    if (!lock.owns_lock()) throw Error("this RigStereo object is in use by another thread (use one per thread)");
+    std::vector<ImageF> images = imagesFrom(imagesObj);
+    RigResult r;
+    {
+      pb::gil_scoped_release nogil;
+      r = stereo_->compute(images);
+    }
+    PyRigResult out;
+    out.totalMs = r.totalMs;
+    for (const RigResult::Solve& s : r.solves) out.solves.append(solveDict(s));
+    auto input = std::make_shared<RigFusionInput>(RigFusionInput{rig_, r.cameras, std::move(images)});
+    for (DepthResult& camera : r.cameras) out.cameras.append(pb::cast(resultFromDepth(std::move(camera))));
+    out.input = std::move(input);
+    return out;
+  }
+
+  const CameraRig& rig() const { return rig_; }
+  const Params& params() const { return params_; }
+  const std::vector<PairInfo>& pairs() const { return pairs_; }
+  double crossCheck() const { return crossCheck_; }
+  std::string backendName() const { return stereo_->backendName(); }
+
+ private:
+  // One image per camera, in order, each at its camera's size.
+  std::vector<ImageF> imagesFrom(pb::handle obj) const {
+    const std::string count = std::to_string(rig_.size());
+    if (pb::isinstance<pb::str>(obj) || !pb::isinstance<pb::sequence>(obj) || pb::isinstance<pb::array>(obj))
+      throw Error("compute() takes a list of " + count + " images, one per camera in order");
+    const auto seq = pb::reinterpret_borrow<pb::sequence>(obj);
+    if (int(seq.size()) != rig_.size())
+      throw Error("the rig has " + count + " cameras: compute() needs " + count +
+                  " images, one per camera in order, got " + std::to_string(seq.size()));
+    std::vector<ImageF> images;
+    for (int k = 0; k < rig_.size(); ++k) images.push_back(cameraImage(seq[size_t(k)], rig_, k));
+    return images;
+  }
+
+  CameraRig rig_;
+  Params params_;
+  std::vector<PairInfo> pairs_;
+  double crossCheck_ = 0;
+  std::unique_ptr<RigStereo> stereo_;
+  std::mutex busy_;
+};
+
+void bindCameraRig(pb::module_& m) {
+  pb::class_<CameraRig>(m, "CameraRig",
+                        "A rig of N >= 2 cameras, each with its pose in one body frame (load_rig). Solve it with "
+                        "RigStereo; rig.pair(i, j) is the stereo Rig of two of its cameras.")
+      .def("__len__", &CameraRig::size, "The number of cameras.")
+      .def_property_readonly(
+          "cameras",
+          [](const CameraRig& r) {
+            pb::list out;
+            for (const Camera& c : r.cameras) out.append(cameraDict(c));
+            return out;
+          },
+          "Each camera as {'model', 'width', 'height', 'params'} (as Rig.cam0).")
+      .def_property_readonly(
+          "poses",
+          [](const CameraRig& r) {
+            pb::list out;
+            for (const BodyPose& p : r.poses) out.append(bodyPoseArray(p));
+            return out;
+          },
+          "Each camera's pose T_body_cam, 4 x 4 float64 (a point X in the camera's frame is R X + p in the body's).")
+      .def_property_readonly(
+          "centre", [](const CameraRig& r) { return vectorArray(r.centre()); },
+          "The mean of the camera centres in the body frame (the panorama's default centre).")
+      .def(
+          "pairs", [](const CameraRig& r, int partners) { return pairList(chosenPairs(r, partners)); },
+          pb::arg("partners") = 2,
+          "The pairs RigStereo solves by default: each camera with its `partners` best partners (overlap times "
+          "baseline). A list of {'i', 'j', 'overlap_ij', 'overlap_ji', 'baseline'}, i < j.")
+      .def(
+          "overlaps", [](const CameraRig& r) { return pairList(pairTable(r)); },
+          "Every pair i < j with its overlaps (the share of camera i's view camera j sees, and the converse) and "
+          "baseline in metres, as `curvestereo calib show` prints them; same dicts as pairs().")
+      .def("pair", &pairRig, pb::arg("i"), pb::arg("j"),
+           "The stereo Rig of cameras i (as cam0) and j (as cam1), for Stereo.")
+      .def("__repr__", [](const CameraRig& r) {
+        return "<curvestereo.CameraRig of " + std::to_string(r.size()) + " cameras, " +
+               sizeText(r.cameras.front().width, r.cameras.front().height) + " " + r.cameras.front().modelName() + ">";
+      });
+}
+
+}  // namespace
+
+void bindRigs(pb::module_& m) {
+  bindCameraRig(m);
+  m.def("load_rig", &loadRigFile, pb::arg("path"),
+        "Read an N-camera calibration as a CameraRig: a Kalibr camchain with cam0..camN-1 or a Basalt "
+        "calibration.json with N cameras. The rig is validated (every camera overlaps another). Raises "
+        "curvestereo.Error naming the file and the problem.");
+
+  pb::class_<PyPanorama>(m, "Panorama",
+                         "The equirectangular panorama around a rig, W x W/2: longitude -180 to +180 degrees left to "
+                         "right, latitude +90 (up) at the top, longitude 0 along camera 0's axis.")
+      .def_readonly("range", &PyPanorama::range,
+                    "Metres from the centre, float32 H x W; +inf at infinity, NaN where no camera gave a depth.")
+      .def_readonly("grey", &PyPanorama::grey, "The images' grey level in [0, 1], float32 H x W; NaN where no range.")
+      .def_readonly("confidence", &PyPanorama::confidence,
+                    "The best confidence among the fused estimates, float32 H x W; NaN where no range.")
+      .def_readonly("width", &PyPanorama::width, "W (the height is W / 2).")
+      .def_readonly("centre", &PyPanorama::centre, "The panorama's centre in the body frame, metres.");
+
+  pb::class_<PyRigResult>(m, "RigResult", "One frame of a rig: every camera's depth, and the panorama on request.")
+      .def_readonly("cameras", &PyRigResult::cameras,
+                    "One Result per camera, in order: its radial depth from its own centre, fused from its pairs.")
+      .def_readonly("solves", &PyRigResult::solves,
+                    "Each pair direction solved: {'reference', 'other', 'ms', 'cross_check_invalidated'}.")
+      .def_readonly("total_ms", &PyRigResult::totalMs, "The solves and the per-camera fusion, milliseconds.")
+      .def("panorama", &PyRigResult::panorama, pb::arg("width") = 2048, pb::arg("centre") = pb::none(),
+           pb::arg("min_confidence") = 0.0f,
+           R"doc(Fuse the cameras' depths into an equirectangular Panorama, width x width/2.
+
+The same fusion as `curvestereo run --calib rig.yaml ...`'s panorama_range.exr (width:
+--panorama-width, even, 4 to 32768; min_confidence: --panorama-min-confidence, samples
+below it are left out). centre: 3 values in the body frame, default the rig's centre. The
+GIL is released while it runs.)doc");
+
+  pb::class_<PyRigStereo>(m, "RigStereo",
+                          R"doc(The solver for a rig of N cameras: every pair solved both ways by Stereo,
+each camera's estimates fused into its depth; panoramas from the RigResult.
+
+RigStereo(rig, preset="realtime", backend="auto", *, pairs=None, partners=2,
+cross_check=0.0, **params). rig: a CameraRig (load_rig). pairs: None (each camera's
+`partners` best partners, as rig.pairs()), "0-1,1-2", or [(0, 1), (1, 2)]. cross_check:
+a tolerance in [0, 1] for the round trip between a pair's two directions (0: off), as
+the CLI's --cross-check. params: as Stereo's; unless max_fov is given, the field of view
+widens to the widest lens, as the CLI does. Raises curvestereo.Error for a bad preset,
+parameter, pair or backend.)doc")
+      .def(pb::init<const CameraRig&, const std::string&, const std::string&, pb::handle, int, double, pb::kwargs>(),
+           pb::arg("rig"), pb::arg("preset") = "realtime", pb::arg("backend") = "auto", pb::kw_only(),
+           pb::arg("pairs") = pb::none(), pb::arg("partners") = 2, pb::arg("cross_check") = 0.0)
+      .def("compute", &PyRigStereo::compute, pb::arg("images"),
+           "Solve one frame: images is a list with one 2-D image per camera, in order (uint8, uint16 or float32 "
+           "in [0, 1], each at its camera's size; colour is converted as read_image does). Returns a RigResult. "
+           "The GIL is released while the pairs are solved.")
+      .def_property_readonly("rig", &PyRigStereo::rig, "The CameraRig.")
+      .def_property_readonly(
+          "pairs", [](const PyRigStereo& s) { return pairList(s.pairs()); },
+          "The pairs solved, as rig.pairs() lists them.")
+      .def_property_readonly(
+          "params", [](const PyRigStereo& s) { return paramsToDict(s.params()); },
+          "Every solver parameter in use, by the names RigStereo() takes.")
+      .def_property_readonly("cross_check", &PyRigStereo::crossCheck, "The cross-check tolerance (0: off).")
+      .def_property_readonly("backend", &PyRigStereo::backendName, "The backend in use: 'cpu', 'cuda' or 'vulkan'.")
+      .def("__repr__", [](const PyRigStereo& s) {
+        return "<curvestereo.RigStereo of " + std::to_string(s.rig().size()) + " cameras, " +
+               std::to_string(s.pairs().size()) + " pairs, on " + s.backendName() + ">";
+      });
+}
+
+}  // namespace cs::py

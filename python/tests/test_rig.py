@@ -1,0 +1,127 @@
+"""Rigs of N cameras: load_rig, RigStereo and the panorama, against `curvestereo synth --rig`'s
+ground truth and `curvestereo run`'s outputs for the same images (CPU backend)."""
+import numpy as np
+import pytest
+
+import curvestereo as cs
+from conftest import run_cli, same_bits
+
+# Small enough for a test: the settings test_cli_rig.cpp uses for ring4 at 96 px.
+SIZE, PANORAMA = 96, 256
+SOLVE = ("--backend", "cpu", "--preset", "fast")
+
+
+@pytest.fixture(scope="module")
+def ring4(cli, tmp_path_factory):
+    """ring4 rendered at 96 px (cam<k>.png, camchain.yaml, panorama_range.exr), and `run`'s
+    outputs for it in out/."""
+    d = tmp_path_factory.mktemp("ring4")
+    run_cli(cli, "synth", "--rig", "ring4", "-o", d, "--size", SIZE, "--samples", 1,
+            "--panorama-width", PANORAMA, "--quiet")
+    images = [d / f"cam{k}.png" for k in range(4)]
+    run_cli(cli, "run", "--calib", d / "camchain.yaml", *images, "-o", d / "out", *SOLVE,
+            "--panorama-width", PANORAMA)
+    return d
+
+
+@pytest.fixture(scope="module")
+def solved(ring4):
+    rig = cs.load_rig(ring4 / "camchain.yaml")
+    stereo = cs.RigStereo(rig, preset="fast", backend="cpu")
+    images = [cs.read_image(ring4 / f"cam{k}.png") for k in range(len(rig))]
+    return rig, stereo, images, stereo.compute(images)
+
+
+def test_load_rig(ring4):
+    rig = cs.load_rig(ring4 / "camchain.yaml")
+    assert len(rig) == 4 and "4 cameras" in repr(rig)
+    assert [(c["width"], c["height"]) for c in rig.cameras] == [(SIZE, SIZE)] * 4
+    assert len(rig.poses) == 4 and rig.poses[0].shape == (4, 4)
+    # A ring: the centre lies between the cameras, not at camera 0.
+    assert np.linalg.norm(rig.centre - rig.poses[0][:3, 3]) > 0.01
+    table = rig.overlaps()
+    assert len(table) == 6 and all(p["i"] < p["j"] for p in table)
+    chosen = rig.pairs()
+    assert chosen and {(p["i"], p["j"]) for p in chosen} <= {(p["i"], p["j"]) for p in table}
+    assert {k for p in chosen for k in (p["i"], p["j"])} == {0, 1, 2, 3}  # every camera in a pair
+    pair = rig.pair(0, 1)
+    first = next(p for p in table if (p["i"], p["j"]) == (0, 1))
+    assert isinstance(pair, cs.Rig) and pair.baseline == pytest.approx(first["baseline"])
+    with pytest.raises(cs.Error, match="nope.yaml"):
+        cs.load_rig(ring4 / "nope.yaml")
+
+
+def test_cameras_match_the_cli_bit_for_bit(ring4, solved):
+    rig, stereo, _, r = solved
+    assert stereo.backend == "cpu"
+    assert len(r.cameras) == 4 and len(r.solves) == 2 * len(stereo.pairs)
+    for k, cam in enumerate(r.cameras):
+        assert cam.depth.shape == (SIZE, SIZE) and cam.depth.dtype == np.float32
+        assert cam.valid.mean() > 0.5, k
+        assert same_bits(cam.depth, cs.read_image(ring4 / "out" / f"cam{k}" / "depth.exr")), k
+
+
+def test_panorama_matches_the_cli_and_the_truth(ring4, solved):
+    _, _, _, r = solved
+    p = r.panorama(width=PANORAMA)
+    assert p.range.shape == p.grey.shape == p.confidence.shape == (PANORAMA // 2, PANORAMA)
+    assert same_bits(p.range, cs.read_image(ring4 / "out" / "panorama_range.exr"))
+    assert same_bits(p.confidence, cs.read_image(ring4 / "out" / "panorama_confidence.exr"))
+    truth = cs.read_image(ring4 / "panorama_range.exr")
+    # Where the truth has a finite range (the sky is +inf), the panorama mostly has one too
+    # (about 92 %), close to it: at 96 px a pixel of disparity is a large share of the depth
+    # (median about 9 %; test_cli_rig's eval allows a mean abs-rel of 25 %).
+    finite = np.isfinite(truth)
+    both = np.isfinite(p.range) & finite
+    assert both.sum() > 0.85 * finite.sum()
+    rel = np.abs(p.range[both] - truth[both]) / truth[both]
+    assert np.median(rel) < 0.15 and rel.mean() < 0.25, (np.median(rel), rel.mean())
+    # Another centre moves every range: the panorama is not cached from the first call.
+    moved = r.panorama(width=PANORAMA, centre=p.centre + [0.0, 0.0, 0.5])
+    assert not same_bits(moved.range, p.range)
+    # Leaving the less confident samples out leaves more holes, never fewer.
+    strict = r.panorama(width=PANORAMA, min_confidence=0.9)
+    assert np.isfinite(strict.range).sum() < np.isfinite(p.range).sum()
+
+
+def test_uint8_images_and_chosen_pairs(ring4, solved):
+    rig, _, images, r = solved
+    as_bytes = [np.round(im * 255).astype(np.uint8) for im in images]
+    again = cs.RigStereo(rig, "fast", "cpu", pairs=[(p["i"], p["j"]) for p in rig.pairs()]).compute(as_bytes)
+    for k in range(4):
+        assert same_bits(again.cameras[k].depth, r.cameras[k].depth), k
+    ring = cs.RigStereo(rig, "fast", "cpu", pairs="0-1,1-2,2-3,0-3")
+    assert sorted((p["i"], p["j"]) for p in ring.pairs) == [(0, 1), (0, 3), (1, 2), (2, 3)]
+
+
+def test_bad_input_raises(ring4, solved):
+    rig, stereo, images, r = solved
+    with pytest.raises(cs.Error, match="the rig has 4 cameras: compute\\(\\) needs 4 images.*got 3"):
+        stereo.compute(images[:3])
+    with pytest.raises(cs.Error, match="cam2 image is 96x80, its camera is 96x96"):
+        stereo.compute(images[:2] + [images[2][:80]] + images[3:])
+    with pytest.raises(cs.Error, match="list of 4 images"):
+        stereo.compute(images[0])
+    with pytest.raises(cs.Error, match="0-7"):
+        cs.RigStereo(rig, "fast", "cpu", pairs="0-7")
+    with pytest.raises(cs.Error, match="list of \\(i, j\\) camera indexes"):
+        cs.RigStereo(rig, "fast", "cpu", pairs=[(0, "1")])
+    with pytest.raises(cs.Error, match="cam3 is in none of the pairs"):
+        cs.RigStereo(rig, "fast", "cpu", pairs=[(0, 1), (1, 2)])
+    with pytest.raises(cs.Error, match="cross-check"):
+        cs.RigStereo(rig, "fast", "cpu", cross_check=2.0)
+    with pytest.raises(cs.Error, match="width"):
+        r.panorama(width=255)
+    with pytest.raises(cs.Error, match="centre"):
+        r.panorama(centre=[0.0, 1.0])
+
+
+def test_field_of_view_as_the_cli(cli, tmp_path):
+    """back2's 220-degree lenses: the preset's 180 degrees widen to the lenses', as `run` does,
+    unless the field of view is given."""
+    run_cli(cli, "synth", "--rig", "back2", "-o", tmp_path, "--size", 64, "--samples", 1,
+            "--panorama-width", 64, "--quiet")
+    rig = cs.load_rig(tmp_path / "camchain.yaml")
+    assert cs.preset_params("fast")["max_fov_deg"] == 180
+    assert cs.RigStereo(rig, "fast", "cpu").params["max_fov_deg"] > 200
+    assert cs.RigStereo(rig, "fast", "cpu", max_fov=120).params["max_fov_deg"] == 120
