@@ -8,6 +8,7 @@
 //
 //   curvestereo_cuda_bench --calib CAMCHAIN LEFT.png RIGHT.png [--preset NAME]
 //                          [--levels L] [--warps N] [--iterations K] [--runs R] [--sequence N]
+//                          [--param NAME=NUMBER ...]   (any numeric parameter, e.g. warm_band=8)
 //
 // The pair comes from files, as a robot's would, so that the bench needs the library alone;
 // a synthetic one of any size is `curvestereo synth -o DIR --size N --samples 1` (or
@@ -24,6 +25,7 @@
 
 #include "curvestereo/cuda.hpp"
 #include "curvestereo/image_io.hpp"
+#include "curvestereo/param_table.hpp"
 #include "curvestereo/rig.hpp"
 
 namespace {
@@ -37,6 +39,7 @@ void ok(cudaError_t e, const char* what) {
 int main(int argc, char** argv) try {
   std::string preset = "realtime", calib, leftPath, rightPath;
   int levels = -1, warps = -1, iterations = -1, runs = 50, sequence = 0;
+  std::vector<std::string> overrides;  // --param NAME=NUMBER, any numeric parameter of the table
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -55,6 +58,8 @@ int main(int argc, char** argv) try {
       runs = std::stoi(next());
     else if (a == "--sequence")
       sequence = std::stoi(next());
+    else if (a == "--param")
+      overrides.push_back(next());
     else if (a == "--calib") {
       calib = next();
       leftPath = next();
@@ -66,6 +71,12 @@ int main(int argc, char** argv) try {
   if (levels > 0) params.levels = levels;
   if (warps > 0) params.warps = warps;
   if (iterations > 0) params.iterations = iterations;
+  for (const std::string& o : overrides) {
+    const size_t eq = o.find('=');
+    if (eq == std::string::npos) throw cs::Error("--param needs NAME=VALUE, got '" + o + "'");
+    cs::paramInfo(o.substr(0, eq)).setNumber(params, std::stod(o.substr(eq + 1)));
+  }
+  params.validate();
 
   if (calib.empty())
     throw cs::Error("needs --calib CAMCHAIN LEFT.png RIGHT.png (a synthetic pair: curvestereo synth -o DIR --size N)");

@@ -110,6 +110,7 @@ CudaBackend::~CudaBackend() {
     cudaFree(s.bytes);
     if (s.staged) cudaEventDestroy(s.staged);
   }
+  for (cudaEvent_t e : downloadEvents_) cudaEventDestroy(e);
   for (auto& kv : scratch_) cudaFree(kv.second);
   for (auto& kv : pdScratch_) {
     cudaFree(kv.second.uBar);
@@ -294,6 +295,28 @@ void CudaBackend::doDownload(const Buffer& src, float* host) {
   ok(cudaMemcpyAsync(staging, s.dev, bytes, cudaMemcpyDeviceToHost, stream_), "download");
   ok(cudaStreamSynchronize(stream_), "download (synchronize)");
   std::memcpy(host, staging, bytes);
+}
+
+// Every transfer queued at once, each followed by an event: the host copies one buffer out
+// of its staging memory while the next is still crossing the bus.
+void CudaBackend::doDownloadAll(const std::vector<Download>& downloads) {
+  flush();
+  while (downloadEvents_.size() < downloads.size()) {
+    cudaEvent_t e = nullptr;
+    ok(cudaEventCreateWithFlags(&e, cudaEventDisableTiming), "cudaEventCreate");
+    downloadEvents_.push_back(e);
+  }
+  for (size_t i = 0; i < downloads.size(); ++i) {
+    Slot& s = slots_[size_t(slot(downloads[i].src).buffer.id)];
+    ok(cudaMemcpyAsync(pinnedFor(s), s.dev, downloads[i].src.count() * sizeof(float), cudaMemcpyDeviceToHost, stream_),
+       "download");
+    ok(cudaEventRecord(downloadEvents_[i], stream_), "cudaEventRecord");
+  }
+  for (size_t i = 0; i < downloads.size(); ++i) {
+    ok(cudaEventSynchronize(downloadEvents_[i]), "download (synchronize)");
+    const Slot& s = slots_[size_t(slot(downloads[i].src).buffer.id)];
+    std::memcpy(downloads[i].host, s.pinned, downloads[i].src.count() * sizeof(float));
+  }
 }
 
 void CudaBackend::copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes) {

@@ -79,6 +79,7 @@ class CudaBackend final : public Backend {
   void doUpload(const Buffer& dst, const float* host, bool* finite) override;
   void doUploadBytes(const Buffer& dst, const uint8_t* host) override;
   void doDownload(const Buffer& src, float* host) override;
+  void doDownloadAll(const std::vector<Download>& downloads) override;
   void doFill(const Buffer& dst, float value) override;
   void doCopy(const Buffer& dst, const Buffer& src) override;
 
@@ -184,6 +185,7 @@ class CudaBackend final : public Backend {
   std::string description_;
   unsigned long long memoryBytes_ = 0;
   std::vector<Slot> slots_;
+  std::vector<CUevent_st*> downloadEvents_;  // doDownloadAll's, one per buffer of the largest call
   std::map<std::pair<int, size_t>, float*> scratch_;  // (role, floats) -> device memory
   std::map<int, PrimalDualScratch> pdScratch_;        // by the id of pd.p
   std::vector<PendingOp> pending_;

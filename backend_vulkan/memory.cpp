@@ -196,6 +196,36 @@ void VulkanBackend::doDownload(const Buffer& src, float* host) {
   std::memcpy(host, static_cast<const char*>(staging_.mapped) + offset, bytes);
 }
 
+// Every copy in the one immediate command buffer, into one claim of the staging buffer,
+// then one submission and one wait for the frame and all of them.
+void VulkanBackend::doDownloadAll(const std::vector<Download>& downloads) {
+  auto aligned = [](VkDeviceSize b) { return (b + 255) & ~VkDeviceSize(255); };
+  VkDeviceSize total = 0;
+  for (const Download& d : downloads) total += aligned(d.src.count() * sizeof(float));
+  const VkDeviceSize base = claimStaging(total);
+  VkCommandBuffer cb = recorder();
+  barrier(cb, Cmd::Transfer);
+  VkDeviceSize offset = base;
+  for (const Download& d : downloads) {
+    const Alloc& a = alloc(d.src);
+    const VkBufferCopy region{a.offset, offset, d.src.count() * sizeof(float)};
+    inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(a.arena)].buffer, staging_.buffer, 1, &region);
+    offset += aligned(region.size);
+  }
+  auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
+  mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr,
+                                0, nullptr);
+  flush();
+  offset = base;
+  for (const Download& d : downloads) {
+    const VkDeviceSize bytes = d.src.count() * sizeof(float);
+    std::memcpy(d.host, static_cast<const char*>(staging_.mapped) + offset, bytes);
+    offset += aligned(bytes);
+  }
+}
+
 void VulkanBackend::doFill(const Buffer& dst, float value) {
   const Alloc& a = alloc(dst);
   uint32_t bits;

@@ -54,6 +54,7 @@ class VulkanBackend final : public Backend {
   void doUpload(const Buffer& dst, const float* host, bool* finite) override;
   void doUploadBytes(const Buffer& dst, const uint8_t* host) override;
   void doDownload(const Buffer& src, float* host) override;
+  void doDownloadAll(const std::vector<Download>& downloads) override;
   void doFill(const Buffer& dst, float value) override;
   void doCopy(const Buffer& dst, const Buffer& src) override;
 

@@ -79,12 +79,11 @@ void Stereo::nextImages(const Img& left, const Img& right, DepthResult& result, 
     Pipeline& pipeline = core_->pipeline();
     detail::StereoCore::SequenceFrame frame = core_->beginSequenceFrame(pose);
     auto solve = [&] {
-      pipeline.run(left, right, profiling_, progress_, result, {frame.warm, frame.filter});
-      result.lrPassShare = pipeline.roundTripShare();
       // warmFailRatio 0 turns the check off, and with it the read of the sweep's confidence.
-      result.consistentShare = core_->params().warmFailRatio > 0.f
-                                   ? pipeline.consistentShare(core_->params().initAccept)
-                                   : std::numeric_limits<double>::quiet_NaN();
+      const bool checked = core_->params().warmFailRatio > 0.f;
+      pipeline.run(left, right, profiling_, progress_, result, {frame.warm, frame.filter}, checked);
+      result.lrPassShare = pipeline.roundTripShare();
+      result.consistentShare = pipeline.consistentShare();
     };
     solve();
     result.redone = false;

@@ -20,6 +20,7 @@ class ForwardingBackend : public Backend {
   void doUpload(const Buffer& d, const float* h, bool* f) override { b_.upload(d, h, f); }
   void doUploadBytes(const Buffer& d, const uint8_t* h) override { b_.uploadBytes(d, h); }
   void doDownload(const Buffer& s, float* h) override { b_.download(s, h); }
+  void doDownloadAll(const std::vector<Download>& d) override { b_.downloadAll(d); }
   void doFill(const Buffer& d, float v) override { b_.fill(d, v); }
   void doCopy(const Buffer& d, const Buffer& s) override { b_.copy(d, s); }
   void doFields(const Buffer& m, const Buffer& c, const Buffer& t, const FieldsParams& p) override {

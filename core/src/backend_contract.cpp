@@ -156,6 +156,16 @@ void Backend::download(const Buffer& src, float* host) {
   doDownload(src, host);
 }
 
+void Backend::downloadAll(const std::vector<Download>& downloads) {
+  const BackendContract c(*this, "downloadAll");
+  for (const Download& d : downloads) c.buffer(d.src, "src");
+  doDownloadAll(downloads);
+}
+
+void Backend::doDownloadAll(const std::vector<Download>& downloads) {
+  for (const Download& d : downloads) doDownload(d.src, d.host);
+}
+
 void Backend::fill(const Buffer& dst, float value) {
   BackendContract(*this, "fill").buffer(dst, "dst");
   doFill(dst, value);

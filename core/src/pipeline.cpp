@@ -226,32 +226,23 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
   backend_.synchronize();
 }
 
-// The count of valid pixels is read once per pose, by the first sequence frame that needs
-// it, not by every setPose (a pair never does).
-double Pipeline::consistentShare(float accept) {
-  if (!initialising()) return std::numeric_limits<double>::quiet_NaN();
-  const Level& S = levels_[sweep_.level];
-  return shareOf(
-      S.confidence, [&](float c) { return c >= accept; }, S.mask, sweepMaskPixels_);
+// The shares of the frame just solved, counted from the copies download() brought back
+// with the results (one wait for all of them); the mask's count is read once per pose.
+double Pipeline::consistentShare() const { return consistentShare_; }
+double Pipeline::roundTripShare() const { return roundTripShare_; }
+
+long long Pipeline::countMask(const Buffer& mask, long long& counted) {
+  if (counted < 0) {
+    std::vector<float> values(mask.count());
+    backend_.download(mask, values.data());
+    counted = (long long)std::count_if(values.begin(), values.end(), [](float m) { return m != 0.f; });
+  }
+  return counted;
 }
 
-double Pipeline::roundTripShare() {
-  if (!reverse_) return std::numeric_limits<double>::quiet_NaN();
-  const float limit = params_.lrCheckPx;
-  return shareOf(
-      roundTripError_, [&](float e) { return e <= limit; }, levels_[0].mask, maskPixels_);
-}
-
-// Both shares download one buffer a frame; the mask's count is downloaded once per pose.
 template <class Predicate>
-double Pipeline::shareOf(const Buffer& values, Predicate counts, const Buffer& mask, long long& maskPixels) {
-  auto countDownloaded = [&](const Buffer& b, auto predicate) {
-    hostScratch_.resize(b.count());
-    backend_.download(b, hostScratch_.data());
-    return (long long)std::count_if(hostScratch_.begin(), hostScratch_.end(), predicate);
-  };
-  if (maskPixels < 0) maskPixels = countDownloaded(mask, [](float m) { return m != 0.f; });
-  const long long counted = countDownloaded(values, counts);
+static double shareOf(const std::vector<float>& values, Predicate counts, long long maskPixels) {
+  const long long counted = (long long)std::count_if(values.begin(), values.end(), counts);
   return maskPixels ? double(counted) / double(maskPixels) : 0.0;
 }
 
@@ -637,31 +628,45 @@ static void validFromRadial(DepthResult& out) {
   for (size_t i = 0; i < n; ++i) valid[i] = uint8_t(radial[i] == radial[i]);
 }
 
-void Pipeline::download(DepthResult& out) {
+// One downloadAll for the frame: the selected results and, where asked, the buffers its
+// shares are counted from.
+void Pipeline::download(DepthResult& out, bool countConsistent) {
   stage("download");
   const Level& L0 = levels_[0];
   const int w = L0.size.width, h = L0.size.height;
-  backend_.download(radial_, fitImage(out.depth.radial, w, h));
-  validFromRadial(out);
-  if (selection_.confidence)
-    backend_.download(confidence_, fitImage(out.confidence, w, h));
-  else
-    out.confidence = ImageF();
-  if (selection_.disparity)
-    backend_.download(L0.pd.u, fitImage(out.disparity, w, h));
-  else
-    out.disparity = ImageF();
-  if (selection_.warp)
-    backend_.download(L0.w, reinterpret_cast<float*>(fitImage(out.warp, w, h)));
-  else
-    out.warp = FlowImage();
-  if (selection_.points) {
-    backend_.download(points_, reinterpret_cast<float*>(fitImage(out.depth.points, w, h)));
-    backend_.download(z_, fitImage(out.depth.z, w, h));
-  } else {
-    out.depth.points = Image<Point3f>();
-    out.depth.z = ImageF();
+  std::vector<Backend::Download> list{{radial_, fitImage(out.depth.radial, w, h)}};
+  auto select = [&](bool selected, const Buffer& src, auto& image, float* host) {
+    if (selected)
+      list.push_back({src, host});
+    else
+      image = std::decay_t<decltype(image)>();
+  };
+  const bool conf = selection_.confidence, disp = selection_.disparity, warp = selection_.warp;
+  select(conf, confidence_, out.confidence, conf ? fitImage(out.confidence, w, h) : nullptr);
+  select(disp, L0.pd.u, out.disparity, disp ? fitImage(out.disparity, w, h) : nullptr);
+  select(warp, L0.w, out.warp, warp ? reinterpret_cast<float*>(fitImage(out.warp, w, h)) : nullptr);
+  const bool points = selection_.points;
+  select(points, points_, out.depth.points, points ? reinterpret_cast<float*>(fitImage(out.depth.points, w, h)) : nullptr);
+  select(points, z_, out.depth.z, points ? fitImage(out.depth.z, w, h) : nullptr);
+  countConsistent = countConsistent && initialising();
+  if (countConsistent) {
+    const Level& S = levels_[sweep_.level];
+    countMask(S.mask, sweepMaskPixels_);
+    sweepConfidence_.resize(S.confidence.count());
+    list.push_back({S.confidence, sweepConfidence_.data()});
   }
+  if (reverse_) {
+    countMask(L0.mask, maskPixels_);
+    roundTripErrors_.resize(roundTripError_.count());
+    list.push_back({roundTripError_, roundTripErrors_.data()});
+  }
+  backend_.downloadAll(list);
+  validFromRadial(out);
+  const float accept = params_.initAccept, limit = params_.lrCheckPx;
+  consistentShare_ = countConsistent ? shareOf(sweepConfidence_, [&](float c) { return c >= accept; }, sweepMaskPixels_)
+                                     : std::numeric_limits<double>::quiet_NaN();
+  roundTripShare_ = reverse_ ? shareOf(roundTripErrors_, [&](float e) { return e <= limit; }, maskPixels_)
+                             : std::numeric_limits<double>::quiet_NaN();
 }
 
 void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
@@ -701,7 +706,8 @@ void Pipeline::setMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
 void Pipeline::commitSequenceFrame() { backend_.copy(state_, next_); }
 
 void Pipeline::run(const InputImage& left, const InputImage& right, bool profile,
-                   const std::function<void(double)>& progress, DepthResult& out, FrameKind kind) {
+                   const std::function<void(double)>& progress, DepthResult& out, FrameKind kind,
+                   bool countConsistent) {
   profiling_ = profile;
   upload(left, right);
   if (reverse_) {
@@ -712,7 +718,7 @@ void Pipeline::run(const InputImage& left, const InputImage& right, bool profile
   }
   const bool replay = !profiling_ && backend_.canReplayFrame(slotBase_ + kind.slot());
   issueOrReplay(progress, kind);
-  download(out);
+  download(out, countConsistent);
   if (replay && progress) progress(1.0);
   if (profiling_)
     out.stages = backend_.takeStageTimes();

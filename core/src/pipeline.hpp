@@ -1,6 +1,7 @@
 // The per-frame algorithm (docs/design.md "Per frame"), written once against Backend.
 #pragma once
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -77,7 +78,7 @@ class Pipeline {
   // allocates nothing. The valid mask is not downloaded: finishResult leaves radial NaN
   // exactly where it is 0.
   void run(const InputImage& left, const InputImage& right, bool profile, const std::function<void(double)>& progress,
-           DepthResult& out, FrameKind kind = {});
+           DepthResult& out, FrameKind kind = {}, bool countConsistent = false);
 
   // --- sequences ---
   // Whether warm frames are possible: the band sweep's coarse level is where the carried
@@ -95,11 +96,13 @@ class Pipeline {
   // The share of the sweep level's valid pixels whose left-right check passed in the frame
   // just solved (NaN without the initialiser): a warm frame's health, read at the sweep's
   // resolution (a sixteenth of the full frame's transfer with realtime).
-  double consistentShare(float accept);
+  // Counted by run() when it was asked to (countConsistent), else NaN.
+  double consistentShare() const;
   // Params::lrCheck: the share of the valid pixels (the mask at full resolution) whose round
   // trip passed in the frame just solved (NaN without lrCheck): the figure a real pair has
-  // without ground truth. Downloads the round trip's error.
-  double roundTripShare();
+  // without ground truth. Counted by run(), from the round trip's error brought back with
+  // the results.
+  double roundTripShare() const;
 
   // For callers whose images are already on the backend's device (cs::cuda::DeviceStereo):
   // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
@@ -151,10 +154,8 @@ class Pipeline {
   bool normalising() const { return params_.dataTerm == Params::DataTerm::Normalised; }
   bool initialising() const { return params_.init == Params::Init::PlaneSweep; }
 
-  // The share of mask's pixels (counted into maskPixels when it is negative) whose value in
-  // `values` (same grid) satisfies `counts`.
-  template <class Predicate>
-  double shareOf(const Buffer& values, Predicate counts, const Buffer& mask, long long& maskPixels);
+  // The count of the mask's valid pixels, downloaded into `counted` when it is negative.
+  long long countMask(const Buffer& mask, long long& counted);
   void upload(const InputImage& left, const InputImage& right);
   void uploadImage(const Buffer& dst, const InputImage& image, const char* side);
   void issueFrame(const std::function<void(double)>& progress, FrameKind kind);
@@ -171,7 +172,7 @@ class Pipeline {
   void initialiseLevel(size_t l);
   void solveLevel(Level& level, int warps, const std::function<void(int)>& warpDone);
   PrimalDualParams primalDualParams() const;
-  void download(DepthResult& out);
+  void download(DepthResult& out, bool countConsistent);
 
   Backend& backend_;
   Params params_;
@@ -196,7 +197,9 @@ class Pipeline {
   Buffer state_, next_, prior_, motion_;
   long long sweepMaskPixels_ = -1;  // valid pixels at the sweep's level (-1: not counted since setPose)
   long long maskPixels_ = -1;       // valid pixels at level 0 (roundTripShare; -1: not counted since setPose)
-  std::vector<float> hostScratch_;  // shareOf's downloads
+  std::vector<float> sweepConfidence_, roundTripErrors_;  // download()'s copies the shares are counted from
+  double consistentShare_ = std::numeric_limits<double>::quiet_NaN();
+  double roundTripShare_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace cs

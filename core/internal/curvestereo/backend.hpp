@@ -94,6 +94,13 @@ class Backend {
   // as it is, a quarter of the floats' bytes, converted where the backend's memory is.
   void uploadBytes(const Buffer& dst, const uint8_t* host);
   void download(const Buffer& src, float* host);
+  // Several downloads with one wait: a frame's results come back together, where one
+  // download() each waits once each (a round trip to the device per buffer).
+  struct Download {
+    Buffer src;
+    float* host;
+  };
+  void downloadAll(const std::vector<Download>& downloads);
   void fill(const Buffer& dst, float value);
   void copy(const Buffer& dst, const Buffer& src);  // the same number of floats
 
@@ -357,6 +364,8 @@ class Backend {
   virtual void doUpload(const Buffer& dst, const float* host, bool* finite) = 0;  // finite: see copyFloats
   virtual void doUploadBytes(const Buffer& dst, const uint8_t* host) = 0;
   virtual void doDownload(const Buffer& src, float* host) = 0;
+  // By default one doDownload each; a GPU backend overrides it with one wait.
+  virtual void doDownloadAll(const std::vector<Download>& downloads);
   virtual void doFill(const Buffer& dst, float value) = 0;
   virtual void doCopy(const Buffer& dst, const Buffer& src) = 0;
   virtual void doFields(const Buffer& mask, const Buffer& calibration, const Buffer& trajectory,
