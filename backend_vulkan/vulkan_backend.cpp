@@ -33,8 +33,15 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
   phys_ = c->device;
   props_ = c->props;
   queueFamily_ = c->queueFamily;
-  const char* forceFloat = std::getenv("CURVESTEREO_VULKAN_FLOAT_MODELS");
-  float64_ = c->float64 && !(forceFloat && *forceFloat && std::string(forceFloat) != "0");
+  // The camera models run in float unless CURVESTEREO_VULKAN_DOUBLE_MODELS asks for double
+  // (where the device has shaderFloat64: the oracle's precision, for the tests). GLSL has no
+  // double sin, cos or atan, so real.glsl writes them out as long polynomials: in double the
+  // geometry shaders (sweep warps and checks, carry, triangulation, the temporal filter) took
+  // 3 to 4 times as long even on an H200's full-rate float64 (a warm frame 4.07 against
+  // 3.28 ms), and a consumer GPU's float64 runs at 1/32 to 1/64 of its float rate. Float
+  // rays are good to ~1e-4 px at 848x800, three orders below the solver's accuracy.
+  const char* doubleModels = std::getenv("CURVESTEREO_VULKAN_DOUBLE_MODELS");
+  float64_ = c->float64 && doubleModels && *doubleModels && std::string(doubleModels) != "0";
   // primal_dual.comp's tile: the largest of 32 x 32, 32 x 16 and 16 x 16 cells whose
   // invocations and kPrimalDualCellBytes a cell of shared memory the device holds
   // (CURVESTEREO_VULKAN_SHARED_MEMORY lowers the device's limit, as on a device with less,
