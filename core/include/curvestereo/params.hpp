@@ -155,8 +155,16 @@ struct Params {
   int coldEvery = 30;
   // Hypotheses a pixel of a warm frame's band sweep (0: initBand's). The carried estimate is
   // the previous frame's solution, so the band needs to span only a frame's change of depth
-  // plus its coarse neighbourhood's spread, not a cold coarse sweep's errors.
-  int warmBand = 16;
+  // plus its coarse neighbourhood's spread, not a cold coarse sweep's errors: 8 hypotheses
+  // reach 4 planes either way, up to 8 px of disparity at full resolution with realtime's
+  // spacing (a plane is at most initPxPerPlane px at level 1), where a walking rig's surfaces
+  // move well under a pixel a frame. A pixel whose change is larger lands on the
+  // band's edge, is refused and keeps the fresh coarse solve. Measured on seqD1 (CUDA = CPU
+  // oracle, 16 frames, warm against cold, with 3 coarse warps), band 8 / 16: clean tau>1
+  // -2.54 / -2.18 points, flicker x0.36 / x0.40; T265-like -1.68 / -5.68, flicker x0.24 /
+  // x0.43, moving box -8.6 / -10.9; band 6 gave the T265-like render only -0.93, so 8 is the
+  // narrowest with margin. 0.1 ms less of a 2.5 ms warm frame on an H200.
+  int warmBand = 8;
   // Warps at each level above the carried one in a warm frame, solved from zero as in a cold
   // frame (0: those levels are skipped). They give the pixels whose carried estimate fails
   // the left-right check a fresh start from this frame's images; without them such pixels
@@ -164,7 +172,9 @@ struct Params {
   // it, the error grew by about half a point of tau>1 a frame (seqD1, clean renders, CPU:
   // warm 31.9 % against cold 29.6 % over 16 frames). A short solve suffices there: it needs
   // the coarse shape, not the cold frame's 30 and 20 warps (which cost 1.7 ms on an H200).
-  int warmCoarseWarps = 4;
+  // 3 against 4 (seqD1, band 16): clean -2.18 against -2.91 points, T265-like -5.68 against
+  // -6.00; 2 drifts again (CPU: 30.1 % against cold 29.3 % over 11 frames with 2 / 1).
+  int warmCoarseWarps = 3;
   // Warps at full resolution in a warm frame (0: initWarps'). The carried estimate arrives
   // there already refined by the band sweep and the level above, and a second warp changed
   // little (seqD1, CPU, 16 frames, 1 against 2: T265-like tau>1 30.81 against 30.67 %,
