@@ -122,8 +122,9 @@ TEST_CASE("run --sequence: a missing or resized frame stops the run in one line,
 // where no data corrects a carried error): warm frames as accurate as cold ones (+0.3 points
 // of mean tau>1 at most) and at most half the flicker. A warm start that let the carried
 // estimate drift lost half a point a frame there (+0.8 over 6 frames). 8 frames: the
-// filter needs a few to settle, and over the first 6 alone flicker is x0.51 (x0.47 over
-// 8, x0.43 over all 16; the CPU oracle gives the same figures on every run).
+// filter needs a few to settle (with band 16 and 4 coarse warps, x0.51 over the first 6
+// frames, x0.47 over 8). Now -2.38 points, x0.40 over 8; the CPU oracle gives the same
+// figures on every run.
 TEST_CASE("eval --sequence --compare: warm frames no worse than cold on seqD1's plain surfaces, half the flicker") {
   if (CS_SANITIZED) {
     // A measure of accuracy, about ten times slower under the sanitizers; the code paths it
