@@ -41,6 +41,7 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
   // 3.28 ms), and a consumer GPU's float64 runs at 1/32 to 1/64 of its float rate. Float
   // rays are good to ~1e-4 px at 848x800, three orders below the solver's accuracy.
   const char* doubleModels = std::getenv("CURVESTEREO_VULKAN_DOUBLE_MODELS");
+  deviceFloat64_ = c->float64;
   float64_ = c->float64 && doubleModels && *doubleModels && std::string(doubleModels) != "0";
   // primal_dual.comp's tile: the largest of 32 x 32, 32 x 16 and 16 x 16 cells whose
   // invocations and kPrimalDualCellBytes a cell of shared memory the device holds
@@ -90,7 +91,7 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
   f12.bufferDeviceAddress = VK_TRUE;
   auto f2 = vkStruct<VkPhysicalDeviceFeatures2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2);
   f2.pNext = &f12;
-  f2.features.shaderFloat64 = float64_ ? VK_TRUE : VK_FALSE;
+  f2.features.shaderFloat64 = deviceFloat64_ ? VK_TRUE : VK_FALSE;  // triangulate.comp uses it
   f2.features.shaderInt64 = c->int64 ? VK_TRUE : VK_FALSE;
   auto dci = vkStruct<VkDeviceCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO);
   dci.pNext = &f2;
