@@ -91,7 +91,8 @@ TEST_CASE("the shared logs give the sequence's frames bit for bit, and the same 
     const cs::Sequence log = cs::Sequence::openLog(logs + "/" + file, left, right);
     CHECK(log.frames().size() == images.frames().size());
     CHECK(log.warnings().empty());
-    requireSameImages(log, images, images.frames().size());
+    // Under the sanitizers the first 4 frames: every frame takes the same reader code.
+    requireSameImages(log, images, CS_SANITIZED ? 4 : images.frames().size());
   }
   // The same depth from either source through Stereo::next (a short solve on the CPU
   // oracle: the images are already bit-identical, this checks they reach the solver so; two
