@@ -61,12 +61,22 @@ static Params reverseParams(Params p) {
 // (planes each) and two sweep results (2 + 2) at the sweep level; with a band, those at the coarser level and, at the
 // sweep's, a volume and costs of band channels each, two results and `first` (1), and a warm frame's volume and
 // costs of warmBand channels where narrower. A sequence adds 6 more at level 0 (resetSequence: three states).
-unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
-  const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
+static unsigned long long levelFloats(const std::vector<LevelSize>& plan, const Params& params) {
   auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
   unsigned long long floats = (params.lrCheck ? 11ull : 10ull) * pixels(plan[0]);
   const unsigned long long perPixel = params.dataTerm == Params::DataTerm::Normalised ? 39 : 34;
   for (const LevelSize& size : plan) floats += perPixel * pixels(size);
+  return floats;
+}
+
+unsigned long long Pipeline::bufferBytesBeforeSweep(const Rig& rig, const Params& params) {
+  return levelFloats(pyramidPlan(rig.cam0.width, rig.cam0.height, params), params) * sizeof(float);
+}
+
+unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
+  const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
+  auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
+  unsigned long long floats = levelFloats(plan, params);
   if (params.init == Params::Init::PlaneSweep) {
     const size_t level = size_t(sweepLevel(params, int(plan.size())));
     const bool banded = sweepBanded(params, int(plan.size()));

@@ -56,6 +56,10 @@ class Pipeline {
   Pipeline(Backend& backend, const Rig& rig, const Params& params, const ImageU8& userMask, bool finishes = true);
   // What the constructor allocates on the backend for the rig's frame.
   static unsigned long long bufferBytes(const Rig& rig, const Params& params);
+  // A lower bound of bufferBytes without the sweep's volumes, whose size needs a scan of the
+  // camera (seconds for a frame of tens of thousands of pixels a side): refuses such a frame
+  // at once.
+  static unsigned long long bufferBytesBeforeSweep(const Rig& rig, const Params& params);
 
   // Recomputes the per-rig fields of every level on the backend (a moving camera calls
   // this whenever the relative pose changes).

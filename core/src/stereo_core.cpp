@@ -32,11 +32,15 @@ StereoCore::StereoCore(const Rig& rig, const Params& params,
   backend_ = makeBackend();
   backendName_ = backend_->name();
   const std::string frame = sizeText(rig_.cam0.width, rig_.cam0.height);
-  const unsigned long long need = Pipeline::bufferBytes(rig_, params_);
   const unsigned long long have = backend_->memoryBytes();
-  if (have && need > have)
-    throw Error("out of memory: a " + frame + " frame needs " + std::to_string(need) + " bytes of buffers on backend " +
-                backendName_ + ", which has " + std::to_string(have) + " bytes");
+  auto refuse = [&](const char* needs, unsigned long long need) {
+    throw Error("out of memory: a " + frame + " frame needs " + needs + std::to_string(need) +
+                " bytes of buffers on backend " + backendName_ + ", which has " + std::to_string(have) + " bytes");
+  };
+  const unsigned long long atLeast = Pipeline::bufferBytesBeforeSweep(rig_, params_);
+  if (have && atLeast > have) refuse("at least ", atLeast);
+  const unsigned long long need = Pipeline::bufferBytes(rig_, params_);
+  if (have && need > have) refuse("", need);
   try {
     pipeline_ = std::make_unique<Pipeline>(*backend_, rig_, params_, mask_);
     pipeline_->setPose(rig_.R, rig_.t);
