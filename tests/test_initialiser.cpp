@@ -485,18 +485,12 @@ Accuracy accuracyOn(const NearScene& s, const DepthResult& r, const ImageU8& whe
   return a;
 }
 
-// Under the sanitizers (about ten times slower) the near scene is solved with 5 warps a
-// level instead of 30: the same code, a sixth of the work (the three solves took over 5
-// minutes of the sanitizer stage), and the accuracy cases below measure nothing there.
+// Under the sanitizers the near scene is solved with 5 warps a level instead of 30 (the
+// three solves took over 5 minutes of the sanitizer stage).
 Params nearPreset(const std::string& name) {
   Params p = preset(name);
-  if (CS_SANITIZED) p.warps = std::min(p.warps, 5);
+  p.warps = test::shortUnderSanitizers(p.warps);
   return p;
-}
-
-bool accuracyMeasured() {
-  if (CS_SANITIZED) MESSAGE("accuracy not measured in the sanitizer build (short solves)");
-  return !CS_SANITIZED;
 }
 
 const NearScene& nearScene() {
@@ -534,7 +528,7 @@ const NearScene& nearScene() {
 
 TEST_CASE("a near object ~100 px away is recovered with the initialiser (preset quality) and lost without it") {
   const NearScene& s = nearScene();
-  if (!accuracyMeasured()) return;
+  if (!test::accuracyMeasured()) return;
   const Accuracy plain = accuracyOn(s, s.plain, s.nearObject), init = accuracyOn(s, s.initialised, s.nearObject);
   const Metrics all0 = evaluate(s.pair.rig, s.plain.warp, s.plain.depth.radial, s.pair.depthLeft, &s.pair.depthRight);
   const Metrics all1 =
@@ -562,7 +556,7 @@ TEST_CASE("a near object ~100 px away is recovered with the initialiser (preset 
 TEST_CASE("the band sweep (preset realtime) reaches the near object ~100 px away too") {
   const NearScene& s = nearScene();
   REQUIRE(preset("realtime").initBand > 0);
-  if (!accuracyMeasured()) return;
+  if (!test::accuracyMeasured()) return;
   const Accuracy banded = accuracyOn(s, s.banded, s.nearObject);
   MESSAGE("realtime: near tau>1 " << banded.tau1 << " %, EPE " << banded.epe << " px (" << s.banded.totalMs << " ms)");
   CHECK(banded.tau1 < 65);

@@ -23,7 +23,8 @@ struct Solved {
   Metrics metrics;
 };
 
-Solved solve(const synth::SynthPair& pair, const Params& params) {
+Solved solve(const synth::SynthPair& pair, Params params) {
+  params.warps = test::shortUnderSanitizers(params.warps);
   Stereo stereo(pair.rig, params, "cpu");
   Solved s{stereo.compute(pair.left, pair.right), {}};
   s.metrics = evaluate(pair.rig, s.result.warp, s.result.depth.radial, pair.depthLeft, &pair.depthRight);
@@ -54,6 +55,7 @@ TEST_CASE("binocular fisheye pair: accurate over the whole 180 degree image") {
   Solved s = solve(pair, preset("variational"));
   checkFiniteWhereValid(s.result);
   CHECK(s.metrics.evaluated > 20000);
+  if (!test::accuracyMeasured()) return;
   // Measured 0.6 % / 0.3 % (2026-11, 224x224, seed 3); the bounds leave room for
   // renderer changes, not for a broken solver (which lands far above 10 %).
   CHECK(s.metrics.tau1 < 2.5);
@@ -65,6 +67,7 @@ TEST_CASE("binocular fisheye pair: accurate over the whole 180 degree image") {
 }
 
 TEST_CASE("more warps help: 5 warps without the initialiser are worse than the default's 30") {
+  if (!test::accuracyMeasured()) return;
   synth::SynthPair pair = renderSmall("binocular", 0.25, 5);
   Params five = preset("variational");
   five.warps = 5;
@@ -81,7 +84,7 @@ TEST_CASE("forward motion: finite wherever valid, the epipole region masked") {
   Vec2<double> epipole;
   REQUIRE(BuiltCamera(pair.rig.cam0).project(Vec3<double>(-pair.rig.tPrime().normalized()), epipole));
   CHECK(s.result.valid(int(std::lround(epipole.x())), int(std::lround(epipole.y()))) == 0);
-  CHECK(s.metrics.tau1Noc < 5.0);  // measured 1.8 % (all pixels: 8 %, mostly occlusions)
+  if (test::accuracyMeasured()) CHECK(s.metrics.tau1Noc < 5.0);  // measured 1.8 % (all: 8 %, mostly occlusions)
 }
 
 TEST_CASE("bad input is a cs::Error with a clear message, never a crash") {

@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -29,6 +30,14 @@ inline std::string sharedData(const std::string& rel) {
 }
 
 inline std::string goldenDir() { return CS_GOLDEN_DIR; }
+
+// Accuracy is measured in the Release build. The sanitizer build, about ten times slower,
+// runs the same code with short solves (shortUnderSanitizers) and skips the bounds.
+inline bool accuracyMeasured() {
+  if (CS_SANITIZED) MESSAGE("accuracy not measured in the sanitizer build (short solves)");
+  return !CS_SANITIZED;
+}
+inline int shortUnderSanitizers(int warps) { return CS_SANITIZED ? std::min(warps, 5) : warps; }
 
 // The folders tempDir() made, removed (with everything in them) when the test program
 // ends, pass or fail, so that a test run leaves nothing in the temp folder. Set
