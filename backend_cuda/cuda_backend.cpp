@@ -297,25 +297,37 @@ void CudaBackend::doDownload(const Buffer& src, float* host) {
   std::memcpy(host, staging, bytes);
 }
 
-// Every transfer queued at once, each followed by an event: the host copies one buffer out
-// of its staging memory while the next is still crossing the bus.
+// Every transfer queued at once, in pieces of at most kDownloadPiece floats each followed by
+// an event: the host copies a piece out of the pinned staging memory while the next ones
+// are still crossing the bus, so the frame's copies out and its transfers overlap.
+constexpr size_t kDownloadPiece = size_t(1) << 18;  // 1 MiB
+
 void CudaBackend::doDownloadAll(const std::vector<Download>& downloads) {
   flush();
-  while (downloadEvents_.size() < downloads.size()) {
-    cudaEvent_t e = nullptr;
-    ok(cudaEventCreateWithFlags(&e, cudaEventDisableTiming), "cudaEventCreate");
-    downloadEvents_.push_back(e);
+  struct Piece {
+    float* host;
+    const float* staged;
+    size_t floats;
+  };
+  std::vector<Piece> pieces;
+  for (const Download& d : downloads) {
+    Slot& s = slots_[size_t(slot(d.src).buffer.id)];
+    float* staging = pinnedFor(s);
+    for (size_t at = 0; at < d.src.count(); at += kDownloadPiece) {
+      const size_t n = std::min(kDownloadPiece, d.src.count() - at);
+      ok(cudaMemcpyAsync(staging + at, s.dev + at, n * sizeof(float), cudaMemcpyDeviceToHost, stream_), "download");
+      if (downloadEvents_.size() <= pieces.size()) {
+        cudaEvent_t e = nullptr;
+        ok(cudaEventCreateWithFlags(&e, cudaEventDisableTiming), "cudaEventCreate");
+        downloadEvents_.push_back(e);
+      }
+      ok(cudaEventRecord(downloadEvents_[pieces.size()], stream_), "cudaEventRecord");
+      pieces.push_back({d.host + at, staging + at, n});
+    }
   }
-  for (size_t i = 0; i < downloads.size(); ++i) {
-    Slot& s = slots_[size_t(slot(downloads[i].src).buffer.id)];
-    ok(cudaMemcpyAsync(pinnedFor(s), s.dev, downloads[i].src.count() * sizeof(float), cudaMemcpyDeviceToHost, stream_),
-       "download");
-    ok(cudaEventRecord(downloadEvents_[i], stream_), "cudaEventRecord");
-  }
-  for (size_t i = 0; i < downloads.size(); ++i) {
+  for (size_t i = 0; i < pieces.size(); ++i) {
     ok(cudaEventSynchronize(downloadEvents_[i]), "download (synchronize)");
-    const Slot& s = slots_[size_t(slot(downloads[i].src).buffer.id)];
-    std::memcpy(downloads[i].host, s.pinned, downloads[i].src.count() * sizeof(float));
+    std::memcpy(pieces[i].host, pieces[i].staged, pieces[i].floats * sizeof(float));
   }
 }
 
