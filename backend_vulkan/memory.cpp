@@ -179,22 +179,7 @@ void VulkanBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
 // One submission and one wait: the copy joins the immediate command buffer (after any
 // uploads still there, in the staging buffer beyond theirs) and the flush waits for the
 // frame and the copy together.
-void VulkanBackend::doDownload(const Buffer& src, float* host) {
-  const Alloc& a = alloc(src);
-  const VkDeviceSize bytes = src.count() * sizeof(float);
-  const VkDeviceSize offset = claimStaging(bytes);
-  VkCommandBuffer cb = recorder();
-  barrier(cb, Cmd::Transfer);
-  VkBufferCopy region{a.offset, offset, bytes};
-  inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(a.arena)].buffer, staging_.buffer, 1, &region);
-  auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
-  mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-  mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-  inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr,
-                                0, nullptr);
-  flush();
-  std::memcpy(host, static_cast<const char*>(staging_.mapped) + offset, bytes);
-}
+void VulkanBackend::doDownload(const Buffer& src, float* host) { doDownloadAll({{src, host}}); }
 
 // Every copy in the one immediate command buffer, into one claim of the staging buffer,
 // then one submission and one wait for the frame and all of them.

@@ -612,6 +612,12 @@ TEST_CASE("warp schedule: the taper from the coarsest level, the sweep's levels 
   CHECK(sweepBanded(p, 5));
   CHECK(warpSchedule(p, 5) == std::vector<int>{2, 2, 2, 20, 30});
   CHECK(warpSchedule(preset("realtime"), 5) == std::vector<int>{2, 2, 2, 20, 30});
+  // A warm frame: the levels above the carried one (2) briefly, one warp at full resolution.
+  CHECK(warpSchedule(preset("realtime"), 5, true) == std::vector<int>{1, 2, 2, 3, 3});
+  Params skipped = preset("realtime");
+  skipped.warmCoarseWarps = 0;
+  skipped.warmFullResWarps = 0;
+  CHECK(warpSchedule(skipped, 5, true) == std::vector<int>{2, 2, 2, 0, 0});
   CHECK(!sweepBanded(p, 2));                            // no level above the sweep's: a full sweep
   CHECK(warpSchedule(p, 2) == std::vector<int>{2, 2});  // the sweep at the coarsest, both refine
   p.initBand = 0;

@@ -155,7 +155,7 @@ bool sweepBanded(const Params& p, int levels) {
   return p.init == Params::Init::PlaneSweep && p.initBand > 0 && sweepLevel(p, levels) + 1 < levels;
 }
 
-std::vector<int> warpSchedule(const Params& p, int levels) {
+std::vector<int> warpSchedule(const Params& p, int levels, bool warm) {
   std::vector<int> warps(size_t(std::max(0, levels)));
   const int sweep = sweepLevel(p, levels) + (sweepBanded(p, levels) ? 1 : 0);
   for (int l = 0; l < levels; ++l) {
@@ -163,6 +163,10 @@ std::vector<int> warpSchedule(const Params& p, int levels) {
       warps[size_t(l)] = p.initWarps;
     else
       warps[size_t(l)] = std::max(1, p.warps - p.warpsTaper * (levels - 1 - l));
+  }
+  if (warm) {
+    for (int l = sweep + 1; l < levels; ++l) warps[size_t(l)] = p.warmCoarseWarps;
+    if (p.warmFullResWarps > 0 && levels > 0) warps[0] = p.warmFullResWarps;
   }
   return warps;
 }

@@ -310,6 +310,27 @@ void Pipeline::buildPyramid(size_t count) {
 constexpr float kEdgeUpsamplePx = 1.f;
 constexpr int kEdgeUpsampleRadius = 2;
 
+// Level l's estimate from the level above (zero at the coarsest), resampled without blending
+// surfaces across depth edges (Params::edgeUpsample), and the sweep's confidence below it.
+void Pipeline::startFromCoarser(size_t l) {
+  Level& L = levels_[l];
+  if (l + 1 == levels_.size()) {
+    backend_.fill(L.pd.u, 0.f);
+    backend_.fill(L.w, 0.f);
+    return;
+  }
+  const Level& coarse = levels_[l + 1];
+  const float s = float(params_.scale);
+  if (params_.edgeUpsample) {
+    backend_.upsampleEstimate(L.pd.u, L.w, coarse.pd.u, coarse.w, L.n0, L.n1, L.mask,
+                              {s, kEdgeUpsamplePx, kEdgeUpsampleRadius});
+  } else {
+    backend_.upsample(L.pd.u, coarse.pd.u, s, s);
+    backend_.upsample(L.w, coarse.w, s, s);
+  }
+  if (initialising() && l < sweep_.level) backend_.upsample(L.confidence, coarse.confidence, s, 1.f);
+}
+
 void Pipeline::initialiseLevel(size_t l) {
   Level& L = levels_[l];
   stage("structure tensor");
@@ -320,23 +341,10 @@ void Pipeline::initialiseLevel(size_t l) {
   // where a warm frame solved them (Params::warmCoarseWarps).
   const bool carried = warmFrame_ && sweep_.banded && l == sweep_.level + 1;
   stage("upsample");
-  if (carried && params_.warmCoarseWarps == 0) {
-    // The coarser levels were skipped: rejected pixels keep the last frame's values here.
-  } else if (l + 1 == levels_.size()) {
-    backend_.fill(L.pd.u, 0.f);
-    backend_.fill(L.w, 0.f);
-  } else {
-    const Level& coarse = levels_[l + 1];
-    const float s = float(params_.scale);
-    if (params_.edgeUpsample) {
-      backend_.upsampleEstimate(L.pd.u, L.w, coarse.pd.u, coarse.w, L.n0, L.n1, L.mask,
-                                {s, kEdgeUpsamplePx, kEdgeUpsampleRadius});
-    } else {
-      backend_.upsample(L.pd.u, coarse.pd.u, s, s);
-      backend_.upsample(L.w, coarse.w, s, s);
-    }
-    if (initialising() && l < sweep_.level) backend_.upsample(L.confidence, coarse.confidence, s, 1.f);
-  }
+  // With the coarser levels skipped (warmCoarseWarps 0), rejected pixels keep the last
+  // frame's values here.
+  const bool coarserSkipped = carried && params_.warmCoarseWarps == 0;
+  if (!coarserSkipped) startFromCoarser(l);
   if (carried) carryIntoCoarseSweep();
   if (!carried && initialising() && sweep_.banded && l == sweep_.level + 1) runCoarseSweep();
   if (initialising() && l == sweep_.level) runSweep();
@@ -601,11 +609,7 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
   const size_t levels = warm && params_.warmCoarseWarps == 0 ? sweep_.level + 2 : levels_.size();
   if (warm) coarseSweepWork = 0;
   double total = sweepWork + coarseSweepWork, done = 0;
-  std::vector<int> warps = warpSchedule(params_, int(levels_.size()));
-  if (warm) {
-    for (size_t l = sweep_.level + 2; l < levels; ++l) warps[l] = params_.warmCoarseWarps;
-    if (params_.warmFullResWarps > 0) warps[0] = params_.warmFullResWarps;
-  }
+  const std::vector<int> warps = warpSchedule(params_, int(levels_.size()), warm);
   for (size_t l = 0; l < levels; ++l) total += pixels(levels_[l]) * warps[l];
   auto advance = [&](double work) {
     done += work;

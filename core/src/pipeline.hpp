@@ -174,6 +174,7 @@ class Pipeline {
   void swapIntoReverse();
   void stage(const char* name);
   void initialiseLevel(size_t l);
+  void startFromCoarser(size_t l);
   void solveLevel(Level& level, int warps, const std::function<void(int)>& warpDone);
   PrimalDualParams primalDualParams() const;
   void download(DepthResult& out, bool countConsistent);

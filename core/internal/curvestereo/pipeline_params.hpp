@@ -23,6 +23,8 @@ bool sweepBanded(const Params& p, int levels);
 // Warps at each of `levels` pyramid levels (level 0 first): warps at the coarsest, warpsTaper
 // fewer at each finer one (at least 1), initWarps from the first level a sweep initialises
 // down when set (sweepLevel, or the one above it with a band: its full sweep initialises it).
-std::vector<int> warpSchedule(const Params& p, int levels);
+// warm: a sequence's warm frame (band sweep only): warmCoarseWarps at the levels above the
+// carried one (0: those levels are skipped) and warmFullResWarps (when > 0) at level 0.
+std::vector<int> warpSchedule(const Params& p, int levels, bool warm = false);
 
 }  // namespace cs
