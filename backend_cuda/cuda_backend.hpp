@@ -185,7 +185,7 @@ class CudaBackend final : public Backend {
   std::string description_;
   unsigned long long memoryBytes_ = 0;
   std::vector<Slot> slots_;
-  std::vector<CUevent_st*> downloadEvents_;  // doDownloadAll's, one per piece of the largest call
+  std::vector<CUevent_st*> downloadEvents_;           // doDownloadAll's, one per piece of the largest call
   std::map<std::pair<int, size_t>, float*> scratch_;  // (role, floats) -> device memory
   std::map<int, PrimalDualScratch> pdScratch_;        // by the id of pd.p
   std::vector<PendingOp> pending_;

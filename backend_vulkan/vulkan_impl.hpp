@@ -178,8 +178,8 @@ class VulkanBackend final : public Backend {
   VkPhysicalDevice phys_ = VK_NULL_HANDLE;
   VkPhysicalDeviceProperties props_{};
   VkPhysicalDeviceMemoryProperties memProps_{};
-  bool float64_ = false;        // the camera models in double (CURVESTEREO_VULKAN_DOUBLE_MODELS)
-  bool deviceFloat64_ = false;  // the device has shaderFloat64 (triangulate always uses it)
+  bool float64_ = false;             // the camera models in double (CURVESTEREO_VULKAN_DOUBLE_MODELS)
+  bool deviceFloat64_ = false;       // the device has shaderFloat64 (triangulate always uses it)
   PdTile pdTile_ = PdTile::Narrow;   // the largest tile of primal_dual.comp the device holds
   bool subgroupArithmetic_ = false;  // subgroup arithmetic and shuffles in compute shaders
   uint32_t subgroupSize_ = 1;        // the device's subgroup size (VkPhysicalDeviceSubgroupProperties)

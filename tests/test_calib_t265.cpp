@@ -22,8 +22,10 @@ fs::path dataDir() { return fs::path(cs::test::goldenDir()).parent_path() / "dat
 // The Kalibr reference and the hand-written restatements, with the format each must be read as.
 const std::vector<std::pair<std::string, cs::CalibFormat>>& fixtures() {
   static const std::vector<std::pair<std::string, cs::CalibFormat>> f = {
-      {"t265_camchain.yaml", cs::CalibFormat::Kalibr},     {"t265_basalt.json", cs::CalibFormat::Basalt},
-      {"t265_opencv.yaml", cs::CalibFormat::OpenCv},       {"t265_opencv.xml", cs::CalibFormat::OpenCv},
+      {"t265_camchain.yaml", cs::CalibFormat::Kalibr},
+      {"t265_basalt.json", cs::CalibFormat::Basalt},
+      {"t265_opencv.yaml", cs::CalibFormat::OpenCv},
+      {"t265_opencv.xml", cs::CalibFormat::OpenCv},
   };
   return f;
 }
@@ -92,8 +94,8 @@ static std::string halfSize(const std::string& from, const fs::path& to) {
   cs::ImageF half(full.width / 2, full.height / 2);
   for (int y = 0; y < half.height; ++y)
     for (int x = 0; x < half.width; ++x)
-      half(x, y) = 0.25f * (full(2 * x, 2 * y) + full(2 * x + 1, 2 * y) + full(2 * x, 2 * y + 1) +
-                           full(2 * x + 1, 2 * y + 1));
+      half(x, y) =
+          0.25f * (full(2 * x, 2 * y) + full(2 * x + 1, 2 * y) + full(2 * x, 2 * y + 1) + full(2 * x + 1, 2 * y + 1));
   cs::writePngGray(to.string(), half);
   return to.string();
 }
@@ -117,9 +119,9 @@ TEST_CASE("curvestereo run gives the same depth with each T265 calibration file"
   for (const auto& [name, format] : fixtures()) {
     CAPTURE(name);
     const fs::path out = dir / name;
-    const cs::test::CliOutcome o = cs::test::runCli(dir, "run --calib '" + (dataDir() / name).string() + "' '" +
-                                                             halfLeft + "' '" + halfRight + "' -o '" + out.string() +
-                                                             "'" + solver);
+    const cs::test::CliOutcome o =
+        cs::test::runCli(dir, "run --calib '" + (dataDir() / name).string() + "' '" + halfLeft + "' '" + halfRight +
+                                  "' -o '" + out.string() + "'" + solver);
     REQUIRE_MESSAGE(o.exitCode == 0, o.err);
     depth.push_back(cs::readExr((out / "depth.exr").string()));
     pinhole.push_back(cs::readExr((out / "depth_pinhole.exr").string()));

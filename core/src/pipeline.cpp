@@ -660,7 +660,8 @@ void Pipeline::download(DepthResult& out, bool countConsistent) {
   select(disp, L0.pd.u, out.disparity, disp ? fitImage(out.disparity, w, h) : nullptr);
   select(warp, L0.w, out.warp, warp ? reinterpret_cast<float*>(fitImage(out.warp, w, h)) : nullptr);
   const bool points = selection_.points;
-  select(points, points_, out.depth.points, points ? reinterpret_cast<float*>(fitImage(out.depth.points, w, h)) : nullptr);
+  select(points, points_, out.depth.points,
+         points ? reinterpret_cast<float*>(fitImage(out.depth.points, w, h)) : nullptr);
   select(points, z_, out.depth.z, points ? fitImage(out.depth.z, w, h) : nullptr);
   countConsistent = countConsistent && initialising();
   if (countConsistent) {
@@ -677,9 +678,11 @@ void Pipeline::download(DepthResult& out, bool countConsistent) {
   backend_.downloadAll(list);
   validFromRadial(out);
   const float accept = params_.initAccept, limit = params_.lrCheckPx;
-  consistentShare_ = countConsistent ? shareOf(sweepConfidence_, [&](float c) { return c >= accept; }, sweepMaskPixels_)
+  consistentShare_ = countConsistent ? shareOf(
+                                           sweepConfidence_, [&](float c) { return c >= accept; }, sweepMaskPixels_)
                                      : std::numeric_limits<double>::quiet_NaN();
-  roundTripShare_ = reverse_ ? shareOf(roundTripErrors_, [&](float e) { return e <= limit; }, maskPixels_)
+  roundTripShare_ = reverse_ ? shareOf(
+                                   roundTripErrors_, [&](float e) { return e <= limit; }, maskPixels_)
                              : std::numeric_limits<double>::quiet_NaN();
 }
 
