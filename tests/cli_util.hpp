@@ -4,11 +4,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+
+#include <doctest/doctest.h>
 
 namespace cs::test {
 
@@ -39,6 +42,16 @@ inline CliOutcome runCli(const std::filesystem::path& dir, const std::string& ar
   o.out = readFile(dir / "stdout.txt");
   o.err = readFile(dir / "stderr.txt");
   return o;
+}
+
+// A refusal: exit 1 (2 for a malformed command line) and one stderr line
+// "curvestereo: error: ..." containing needle.
+inline void checkRefused(const CliOutcome& o, const std::string& needle, int exitCode = 1) {
+  CAPTURE(o.err);
+  CHECK(o.exitCode == exitCode);
+  CHECK(o.err.rfind("curvestereo: error: ", 0) == 0);
+  CHECK(std::count(o.err.begin(), o.err.end(), '\n') == 1);
+  CHECK(o.err.find(needle) != std::string::npos);
 }
 
 }  // namespace cs::test

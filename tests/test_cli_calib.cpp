@@ -18,21 +18,12 @@
 
 namespace fs = std::filesystem;
 using cs::test::CliOutcome;
+using cs::test::checkRefused;
 using cs::test::runCli;
 
 namespace {
 
 fs::path dataDir() { return fs::path(cs::test::goldenDir()).parent_path() / "data"; }
-
-// A refusal: exit 1 (2 for a malformed command line) and one stderr line
-// "curvestereo: error: ..." containing needle.
-void checkRefused(const CliOutcome& o, const std::string& needle, int exitCode = 1) {
-  CAPTURE(o.err);
-  CHECK(o.exitCode == exitCode);
-  CHECK(o.err.rfind("curvestereo: error: ", 0) == 0);
-  CHECK(std::count(o.err.begin(), o.err.end(), '\n') == 1);
-  CHECK(o.err.find(needle) != std::string::npos);
-}
 
 // A small synthetic pair on disk: left.png, right.png, camchain.yaml.
 fs::path writePair(const std::string& name) {

@@ -19,17 +19,10 @@
 
 namespace fs = std::filesystem;
 using cs::test::CliOutcome;
+using cs::test::checkRefused;
 using cs::test::runCli;
 
 namespace {
-
-void checkRefused(const CliOutcome& o, const std::string& needle, int exitCode = 1) {
-  CAPTURE(o.err);
-  CHECK(o.exitCode == exitCode);
-  CHECK(o.err.rfind("curvestereo: error: ", 0) == 0);
-  CHECK(std::count(o.err.begin(), o.err.end(), '\n') == 1);
-  CHECK(o.err.find(needle) != std::string::npos);
-}
 
 // The mean of each factor x factor block (images), or the block's centre sample (depth and
 // range: averaging would mix surfaces).
