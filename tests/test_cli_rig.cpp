@@ -18,8 +18,8 @@
 #include "test_util.hpp"
 
 namespace fs = std::filesystem;
-using cs::test::CliOutcome;
 using cs::test::checkRefused;
+using cs::test::CliOutcome;
 using cs::test::runCli;
 
 namespace {
