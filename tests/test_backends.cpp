@@ -38,6 +38,18 @@ std::unique_ptr<Backend> tryBackend(const std::string& name) {
   }
 }
 
+// Every backend compiled in, the CPU first.
+std::vector<std::string> everyBackend() {
+  std::vector<std::string> names = otherBackends();
+  names.insert(names.begin(), "cpu");
+  return names;
+}
+
+// tryBackend, where the CPU always runs.
+std::unique_ptr<Backend> usableBackend(const std::string& name) {
+  return name == "cpu" ? createBackend("cpu") : tryBackend(name);
+}
+
 // Forwards every fine kernel to a backend but keeps Backend's default coarse kernels: the
 // coarse kernels' documented sequences of fine kernels, run on that backend.
 class FineKernelsOf final : public test::ForwardingBackend {
@@ -80,10 +92,8 @@ TEST_CASE("uploadBytes stores unitFromByte(v) on every backend") {
   const int w = 19, h = 14;
   std::vector<uint8_t> bytes(size_t(w) * h);
   for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = uint8_t((i * 37 + 11) % 256);
-  std::vector<std::string> names = otherBackends();
-  names.insert(names.begin(), "cpu");
-  for (const std::string& name : names) {
-    auto backend = name == "cpu" ? createBackend("cpu") : tryBackend(name);
+  for (const std::string& name : everyBackend()) {
+    auto backend = usableBackend(name);
     if (!backend) continue;
     const Buffer buffer = backend->create(w, h, 1);
     backend->fill(buffer, -1.f);
@@ -98,13 +108,11 @@ TEST_CASE("uploadBytes stores unitFromByte(v) on every backend") {
 }
 
 // downloadAll brings back what one download() each would, whatever the buffers' sizes
-// (the Vulkan staging claim and the CUDA per-buffer events), including a buffer twice and
+// (the Vulkan staging claim, the CUDA pieces and their events), including a buffer twice and
 // results of kernels still queued when it is called.
 TEST_CASE("downloadAll returns each buffer as download() does on every backend") {
-  std::vector<std::string> names = otherBackends();
-  names.insert(names.begin(), "cpu");
-  for (const std::string& name : names) {
-    auto backend = name == "cpu" ? createBackend("cpu") : tryBackend(name);
+  for (const std::string& name : everyBackend()) {
+    auto backend = usableBackend(name);
     if (!backend) continue;
     const Buffer a = backend->create(37, 11, 1), b = backend->create(5, 3, 2), c = backend->create(64, 48, 3);
     std::vector<float> va(a.count()), vb(b.count()), vc(c.count());
@@ -150,9 +158,7 @@ TEST_CASE("8-bit images solve exactly as their float conversion on every backend
   const ImageF left = toFloats(leftBytes), right = toFloats(rightBytes);
   Params params = preset("realtime");
   params.minWidth = 20;
-  std::vector<std::string> names = otherBackends();
-  names.insert(names.begin(), "cpu");
-  for (const std::string& name : names) {
+  for (const std::string& name : everyBackend()) {
     if (name != "cpu" && !tryBackend(name)) continue;
     Stereo stereo(pair.rig, params, name);
     const DepthResult fromFloats = stereo.compute(left, right);
@@ -224,10 +230,8 @@ TEST_CASE("whole solves on every backend agree with the CPU oracle") {
 // A backend may fuse a coarse kernel's sequence (CUDA does), but must give its results: bit
 // for bit the fine kernels' on the same backend.
 TEST_CASE("every coarse kernel on every backend gives its fine kernels' results on that backend") {
-  std::vector<std::string> names = otherBackends();
-  names.insert(names.begin(), "cpu");
-  for (const std::string& name : names) {
-    auto backend = name == "cpu" ? createBackend("cpu") : tryBackend(name);
+  for (const std::string& name : everyBackend()) {
+    auto backend = usableBackend(name);
     if (!backend) continue;
     FineKernelsOf fine(*backend);
     for (const auto& c : golden::kernelCases()) {
@@ -257,9 +261,7 @@ TEST_CASE("progress: every warp of an issued frame, 0 and 1 of a replayed one") 
   params.init = Params::Init::None;  // one report per warp, no sweep step
   const size_t warps = pyramidPlan(pair.left.width, pair.left.height, params).size() * size_t(params.warps);
   REQUIRE(warps > 2);
-  std::vector<std::string> names = otherBackends();
-  names.insert(names.begin(), "cpu");
-  for (const std::string& name : names) {
+  for (const std::string& name : everyBackend()) {
     if (name != "cpu" && !tryBackend(name)) continue;
     Stereo stereo(pair.rig, params, name);
     std::vector<double> calls;
