@@ -287,15 +287,7 @@ void CudaBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
   check(cudak::launchFloatsFromBytes(stream_, s.dev, s.bytes, n), "upload (bytes to floats)");
 }
 
-void CudaBackend::doDownload(const Buffer& src, float* host) {
-  flush();
-  Slot& s = slots_[size_t(slot(src).buffer.id)];
-  float* staging = pinnedFor(s);
-  const size_t bytes = src.count() * sizeof(float);
-  ok(cudaMemcpyAsync(staging, s.dev, bytes, cudaMemcpyDeviceToHost, stream_), "download");
-  ok(cudaStreamSynchronize(stream_), "download (synchronize)");
-  std::memcpy(host, staging, bytes);
-}
+void CudaBackend::doDownload(const Buffer& src, float* host) { doDownloadAll({{src, host}}); }
 
 // Every transfer queued at once, in pieces of at most kDownloadPiece floats each followed by
 // an event: the host copies a piece out of the pinned staging memory while the next ones

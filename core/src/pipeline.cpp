@@ -649,20 +649,19 @@ void Pipeline::download(DepthResult& out, bool countConsistent) {
   const Level& L0 = levels_[0];
   const int w = L0.size.width, h = L0.size.height;
   std::vector<Backend::Download> list{{radial_, fitImage(out.depth.radial, w, h)}};
-  auto select = [&](bool selected, const Buffer& src, auto& image, float* host) {
+  // An unselected output becomes an empty image. Every image's pixels are floats (a warp
+  // pixel two, a point three), so the cast only names them so.
+  auto select = [&](bool selected, const Buffer& src, auto& image) {
     if (selected)
-      list.push_back({src, host});
+      list.push_back({src, reinterpret_cast<float*>(fitImage(image, w, h))});
     else
       image = std::decay_t<decltype(image)>();
   };
-  const bool conf = selection_.confidence, disp = selection_.disparity, warp = selection_.warp;
-  select(conf, confidence_, out.confidence, conf ? fitImage(out.confidence, w, h) : nullptr);
-  select(disp, L0.pd.u, out.disparity, disp ? fitImage(out.disparity, w, h) : nullptr);
-  select(warp, L0.w, out.warp, warp ? reinterpret_cast<float*>(fitImage(out.warp, w, h)) : nullptr);
-  const bool points = selection_.points;
-  select(points, points_, out.depth.points,
-         points ? reinterpret_cast<float*>(fitImage(out.depth.points, w, h)) : nullptr);
-  select(points, z_, out.depth.z, points ? fitImage(out.depth.z, w, h) : nullptr);
+  select(selection_.confidence, confidence_, out.confidence);
+  select(selection_.disparity, L0.pd.u, out.disparity);
+  select(selection_.warp, L0.w, out.warp);
+  select(selection_.points, points_, out.depth.points);
+  select(selection_.points, z_, out.depth.z);
   countConsistent = countConsistent && initialising();
   if (countConsistent) {
     const Level& S = levels_[sweep_.level];
