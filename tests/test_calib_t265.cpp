@@ -90,13 +90,7 @@ TEST_CASE("the T265 calibration as Kalibr, Basalt, OpenCV YAML and XML: one rig 
 
 // The image at half its size (2x2 means), written as an 8-bit PNG at `to`.
 static std::string halfSize(const std::string& from, const fs::path& to) {
-  const cs::ImageF full = cs::readPngGray(from);
-  cs::ImageF half(full.width / 2, full.height / 2);
-  for (int y = 0; y < half.height; ++y)
-    for (int x = 0; x < half.width; ++x)
-      half(x, y) =
-          0.25f * (full(2 * x, 2 * y) + full(2 * x + 1, 2 * y) + full(2 * x, 2 * y + 1) + full(2 * x + 1, 2 * y + 1));
-  cs::writePngGray(to.string(), half);
+  cs::writePngGray(to.string(), cs::test::shrink(cs::readPngGray(from), 2, true));
   return to.string();
 }
 

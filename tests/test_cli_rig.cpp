@@ -24,24 +24,6 @@ using cs::test::runCli;
 
 namespace {
 
-// The mean of each factor x factor block (images), or the block's centre sample (depth and
-// range: averaging would mix surfaces).
-cs::ImageF shrink(const cs::ImageF& in, int factor, bool average) {
-  cs::ImageF out(in.width / factor, in.height / factor);
-  for (int y = 0; y < out.height; ++y)
-    for (int x = 0; x < out.width; ++x) {
-      if (!average) {
-        out(x, y) = in(x * factor + factor / 2, y * factor + factor / 2);
-        continue;
-      }
-      float sum = 0;
-      for (int v = 0; v < factor; ++v)
-        for (int u = 0; u < factor; ++u) sum += in(x * factor + u, y * factor + v);
-      out(x, y) = sum / float(factor * factor);
-    }
-  return out;
-}
-
 // rig4_urban_dev at a quarter of its resolution, in the rig folder layout; "" without the data.
 fs::path smallRigFolder(const std::string& name) {
   const std::string source = cs::test::sharedData("rigs/rig4_urban_dev");
@@ -53,11 +35,12 @@ fs::path smallRigFolder(const std::string& name) {
   for (int k = 0; k < rig.size(); ++k) {
     const std::string n = std::to_string(k);
     cs::writePngGray((dir / ("cam" + n + ".png")).string(),
-                     shrink(cs::readPngGray(source + "/cam" + n + ".png"), 4, true));
+                     cs::test::shrink(cs::readPngGray(source + "/cam" + n + ".png"), 4, true));
     cs::writeExr((dir / ("depth" + n + ".exr")).string(),
-                 shrink(cs::readExr(source + "/depth" + n + ".exr"), 4, false));
+                 cs::test::shrink(cs::readExr(source + "/depth" + n + ".exr"), 4, false));
   }
-  cs::writeExr((dir / "panorama_range.exr").string(), shrink(cs::readExr(source + "/panorama_range.exr"), 4, false));
+  cs::writeExr((dir / "panorama_range.exr").string(),
+               cs::test::shrink(cs::readExr(source + "/panorama_range.exr"), 4, false));
   return dir;
 }
 

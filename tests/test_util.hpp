@@ -31,6 +31,24 @@ inline std::string sharedData(const std::string& rel) {
 
 inline std::string goldenDir() { return CS_GOLDEN_DIR; }
 
+// The mean of each factor x factor block (images), or the block's centre sample (depth and
+// range: averaging would mix surfaces).
+inline ImageF shrink(const ImageF& in, int factor, bool average) {
+  ImageF out(in.width / factor, in.height / factor);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) {
+      if (!average) {
+        out(x, y) = in(x * factor + factor / 2, y * factor + factor / 2);
+        continue;
+      }
+      float sum = 0;
+      for (int v = 0; v < factor; ++v)
+        for (int u = 0; u < factor; ++u) sum += in(x * factor + u, y * factor + v);
+      out(x, y) = sum / float(factor * factor);
+    }
+  return out;
+}
+
 // Accuracy is measured in the Release build. The sanitizer build, about ten times slower,
 // runs the same code with short solves (shortUnderSanitizers) and skips the bounds.
 inline bool accuracyMeasured() {
