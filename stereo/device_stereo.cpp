@@ -78,7 +78,8 @@ DeviceDepth DeviceStereo::next(const float* left, const float* right, const Pose
   const detail::DeviceIO io = core.deviceIO();
   impl_->takeInputs(io, left, right, pitchBytes);
   core.pipeline().runOnDevice(FrameKind{frame.warm, frame.filter});
-  core.endSequenceFrame(frame, std::numeric_limits<double>::quiet_NaN());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  core.endSequenceFrame(frame, nan, nan);
   impl_->backend->enqueueQueued();  // the commit of the carried state, on the stream now
   DeviceDepth d = impl_->outputs(io);
   d.warm = frame.warm;

@@ -42,7 +42,9 @@ void timedSolve(const Rig& rig, const Img& left, const Img& right, DepthResult& 
 }  // namespace
 
 Stereo::Stereo(const Rig& rig, const Params& params, const std::string& backend)
-    : core_(std::make_unique<detail::StereoCore>(rig, params, [&] { return createBackend(backend, &backendWhy_); })) {}
+    : core_(std::make_unique<detail::StereoCore>(rig, params, [&] { return createBackend(backend, &backendWhy_); })) {
+  core_->pipeline().checkWarmFrames(params.warmFailRatio > 0.f);
+}
 
 Stereo::~Stereo() = default;
 
@@ -69,7 +71,7 @@ void Stereo::computeImages(const Img& left, const Img& right, DepthResult& resul
     core_->pipeline().run(left, right, profiling_, progress_, result);
     result.lrPassShare = core_->pipeline().roundTripShare();
     result.warm = result.redone = false;
-    result.consistentShare = std::numeric_limits<double>::quiet_NaN();
+    result.consistentShare = result.meanConfidence = std::numeric_limits<double>::quiet_NaN();
   });
 }
 
@@ -84,16 +86,17 @@ void Stereo::nextImages(const Img& left, const Img& right, DepthResult& result, 
       pipeline.run(left, right, profiling_, progress_, result, {frame.warm, frame.filter}, checked);
       result.lrPassShare = pipeline.roundTripShare();
       result.consistentShare = pipeline.consistentShare();
+      result.meanConfidence = pipeline.meanConfidence();
     };
     solve();
     result.redone = false;
-    if (frame.warm && core_->warmFailed(result.consistentShare)) {
+    if (frame.warm && core_->warmFailed(result.consistentShare, result.meanConfidence)) {
       frame.warm = false;
       solve();
       result.redone = true;
     }
     result.warm = frame.warm;
-    core_->endSequenceFrame(frame, result.consistentShare);
+    core_->endSequenceFrame(frame, result.consistentShare, result.meanConfidence);
   });
 }
 

@@ -166,26 +166,27 @@ std::vector<ParamInfo> buildTable() {
   ParamInfo warm = base("warm_start", Type::Bool, {},
                         "sequences: start each frame from the previous one's estimate (needs init_band)", Shown::Never);
   warm.boolField = &Params::warmStart;
-  std::vector<ParamInfo> sequence =
-      grouped("sequences (run --sequence, Stereo::next)",
-              {
-                  warm,
-                  intParam("warm_band", &Params::warmBand, closed(0, 32),
-                           "hypotheses a pixel of a warm frame's band sweep (0: init_band's)", Shown::Never),
-                  intParam("warm_coarse_warps", &Params::warmCoarseWarps, closed(0, 1000),
-                           "warps at each level above the carried one in a warm frame (0: skipped)", Shown::Never),
-                  intParam("warm_full_res_warps", &Params::warmFullResWarps, closed(0, 1000),
-                           "warps at full resolution in a warm frame (0: init_warps')", Shown::Never),
-                  intParam("cold_every", &Params::coldEvery, closed(0, 1000000),
-                           "solve every N-th frame cold (0: only the first and failed ones)", Shown::Never),
-                  floatParam("warm_fail_ratio", &Params::warmFailRatio, closed(0, 1),
-                             "a warm frame with fewer consistent pixels than this x the last cold one's is redone cold",
-                             Shown::Never),
-                  floatParam("temporal_strength", &Params::temporalStrength, {0, 1, false, true},
-                             "temporal filter: the carried depth's largest weight (0: off)", Shown::Never),
-                  floatParam("temporal_gate", &Params::temporalGate, above(0),
-                             "temporal filter: reset a pixel beyond this many standard deviations", Shown::Never),
-              });
+  std::vector<ParamInfo> sequence = grouped(
+      "sequences (run --sequence, Stereo::next)",
+      {
+          warm,
+          intParam("warm_band", &Params::warmBand, closed(0, 32),
+                   "hypotheses a pixel of a warm frame's band sweep (0: init_band's)", Shown::Never),
+          intParam("warm_coarse_warps", &Params::warmCoarseWarps, closed(0, 1000),
+                   "warps at each level above the carried one in a warm frame (0: skipped)", Shown::Never),
+          intParam("warm_full_res_warps", &Params::warmFullResWarps, closed(0, 1000),
+                   "warps at full resolution in a warm frame (0: init_warps')", Shown::Never),
+          intParam("cold_every", &Params::coldEvery, closed(0, 1000000),
+                   "solve every N-th frame cold (0: only the first and failed ones)", Shown::Never),
+          floatParam("warm_fail_ratio", &Params::warmFailRatio, closed(0, 1),
+                     "a warm frame with fewer consistent pixels or less mean confidence than this x the last cold "
+                     "one's is redone cold (0: no check)",
+                     Shown::Never),
+          floatParam("temporal_strength", &Params::temporalStrength, {0, 1, false, true},
+                     "temporal filter: the carried depth's largest weight (0: off)", Shown::Never),
+          floatParam("temporal_gate", &Params::temporalGate, above(0),
+                     "temporal filter: reset a pixel beyond this many standard deviations", Shown::Never),
+      });
   ParamInfo lrCheck = base(
       "lr_check", Type::Bool, {},
       "solve the other direction too; pixels whose round trip fails become invalid (run prints the share that passes)",

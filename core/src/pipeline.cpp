@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numeric>
 #include <type_traits>
 
 namespace cs {
@@ -231,7 +232,7 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
     // tangent buffer (overwritten by every warp) to receive theirs.
     backend_.fields(L.mask, l == 0 ? calibration_ : L.tangent, L.trajectory, fp);
   }
-  sweepMaskPixels_ = maskPixels_ = -1;  // the mask changed: counted again when next needed
+  sweepMaskPixels_ = maskPixels_ = summaryMaskPixels_ = -1;  // the mask changed: counted again when next needed
   if (reverse_) reverse_->setPose(R.transpose(), -(R.transpose() * t));
   backend_.synchronize();
 }
@@ -240,6 +241,7 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
 // with the results (one wait for all of them); the mask's count is read once per pose.
 double Pipeline::consistentShare() const { return consistentShare_; }
 double Pipeline::roundTripShare() const { return roundTripShare_; }
+double Pipeline::meanConfidence() const { return meanConfidence_; }
 
 long long Pipeline::countMask(const Buffer& mask, long long& counted) {
   if (counted < 0) {
@@ -580,6 +582,19 @@ void Pipeline::finishResult() {
                             p);
 }
 
+// The level whose size the confidence is summarised at: a sixteenth of the pixels with the
+// usual factor 2, enough for a mean, and a small transfer.
+static size_t summaryLevel(size_t levels) { return std::min<size_t>(2, levels - 1); }
+
+// Before finishOutputs, which makes the confidence NaN where unsolved: here it is 0 there,
+// and outside the field of view. The decimation blends the rim with those zeros, alike in
+// every frame, so means of one sequence compare.
+void Pipeline::summariseConfidence() {
+  const Level& S = levels_[summaryLevel(levels_.size())];
+  stage("confidence");
+  backend_.downsample(confidenceSummary_, confidence_, float(levels_[0].size.scale / S.size.scale));
+}
+
 // In place on the solver's disparity and warp at level 0: nothing reads them after the
 // frame (a sequence carries its own state, filterResult's, and the next frame starts them
 // afresh), and a NaN there is what the user must see.
@@ -625,6 +640,7 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
   triangulate();
   if (kind.filter) filterResult();
   finishResult();
+  if (kind.filter && checksWarmFrames_) summariseConfidence();
   if (finishes_) finishOutputs();
 }
 
@@ -644,7 +660,7 @@ static void validFromRadial(DepthResult& out) {
 
 // One downloadAll for the frame: the selected results and, where asked, the buffers its
 // shares are counted from.
-void Pipeline::download(DepthResult& out, bool countConsistent) {
+void Pipeline::download(DepthResult& out, bool countConsistent, bool countConfidence) {
   stage("download");
   const Level& L0 = levels_[0];
   const int w = L0.size.width, h = L0.size.height;
@@ -674,6 +690,11 @@ void Pipeline::download(DepthResult& out, bool countConsistent) {
     roundTripErrors_.resize(roundTripError_.count());
     list.push_back({roundTripError_, roundTripErrors_.data()});
   }
+  if (countConfidence) {
+    countMask(levels_[summaryLevel(levels_.size())].mask, summaryMaskPixels_);
+    confidenceSummaries_.resize(confidenceSummary_.count());
+    list.push_back({confidenceSummary_, confidenceSummaries_.data()});
+  }
   backend_.downloadAll(list);
   validFromRadial(out);
   const float accept = params_.initAccept, limit = params_.lrCheckPx;
@@ -683,6 +704,10 @@ void Pipeline::download(DepthResult& out, bool countConsistent) {
   roundTripShare_ = reverse_ ? shareOf(
                                    roundTripErrors_, [&](float e) { return e <= limit; }, maskPixels_)
                              : std::numeric_limits<double>::quiet_NaN();
+  meanConfidence_ =
+      countConfidence && summaryMaskPixels_ > 0
+          ? std::accumulate(confidenceSummaries_.begin(), confidenceSummaries_.end(), 0.0) / double(summaryMaskPixels_)
+          : std::numeric_limits<double>::quiet_NaN();
 }
 
 void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
@@ -707,6 +732,8 @@ void Pipeline::resetSequence() {
     next_ = backend_.create(L0.size.width, L0.size.height, 2);
     prior_ = backend_.create(L0.size.width, L0.size.height, 2);
     motion_ = backend_.create(kMotionFloats, 1, 1);
+    const LevelSize& S = levels_[summaryLevel(levels_.size())].size;
+    confidenceSummary_ = backend_.create(S.width, S.height, 1);
   }
   backend_.fill(state_, -1.f);
 }
@@ -734,7 +761,7 @@ void Pipeline::run(const InputImage& left, const InputImage& right, bool profile
   }
   const bool replay = !profiling_ && backend_.canReplayFrame(slotBase_ + kind.slot());
   issueOrReplay(progress, kind);
-  download(out, countConsistent);
+  download(out, countConsistent, countConsistent && kind.filter && checksWarmFrames_);
   if (replay && progress) progress(1.0);
   if (profiling_)
     out.stages = backend_.takeStageTimes();

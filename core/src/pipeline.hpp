@@ -107,6 +107,16 @@ class Pipeline {
   // without ground truth. Counted by run(), from the round trip's error brought back with
   // the results.
   double roundTripShare() const;
+  // The mean of the result's confidence over the field of view in the sequence frame just
+  // solved (NaN when run() was not asked to count, or for a single pair): how well the
+  // images agree with the estimate (the photometric term, the data residual after the last
+  // warp) and how well it is supported (structure, the sweep's check), read from a copy of
+  // the confidence at a sixteenth of the pixels.
+  double meanConfidence() const;
+  // Stereo's warm-failure check (Params::warmFailRatio): sequence frames then also
+  // summarise the result's confidence for meanConfidence(). DeviceStereo has no check and
+  // leaves it off, so its frames do none of that work. Before the first frame.
+  void checkWarmFrames(bool on) { checksWarmFrames_ = on; }
 
   // For callers whose images are already on the backend's device (cs::cuda::DeviceStereo):
   // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
@@ -171,13 +181,14 @@ class Pipeline {
   void triangulate();
   void finishResult();
   void finishOutputs();
+  void summariseConfidence();
   void swapIntoReverse();
   void stage(const char* name);
   void initialiseLevel(size_t l);
   void startFromCoarser(size_t l);
   void solveLevel(Level& level, int warps, const std::function<void(int)>& warpDone);
   PrimalDualParams primalDualParams() const;
-  void download(DepthResult& out, bool countConsistent);
+  void download(DepthResult& out, bool countConsistent, bool countConfidence);
 
   Backend& backend_;
   Params params_;
@@ -195,16 +206,22 @@ class Pipeline {
   Buffer roundTripError_;
   bool profiling_ = false;
   bool warmFrame_ = false;  // the frame being issued is warm (issueFrame)
+  bool checksWarmFrames_ = false;
   Selection selection_;
   // A sequence's state at level 0 (Backend::carryEstimate): `state` is the committed
   // frame's, `next` this frame's filtered result, `prior` the state carried into this
   // frame's view; `motion` the kMotionFloats of camera 0's motion. Created by resetSequence.
   Buffer state_, next_, prior_, motion_;
-  long long sweepMaskPixels_ = -1;  // valid pixels at the sweep's level (-1: not counted since setPose)
-  long long maskPixels_ = -1;       // valid pixels at level 0 (roundTripShare; -1: not counted since setPose)
-  std::vector<float> sweepConfidence_, roundTripErrors_;  // download()'s copies the shares are counted from
+  // The result's confidence at level kSummaryLevel (summariseConfidence), for meanConfidence.
+  Buffer confidenceSummary_;
+  long long sweepMaskPixels_ = -1;    // valid pixels at the sweep's level (-1: not counted since setPose)
+  long long maskPixels_ = -1;         // valid pixels at level 0 (roundTripShare; -1: not counted since setPose)
+  long long summaryMaskPixels_ = -1;  // valid pixels at confidenceSummary_'s level (meanConfidence)
+  // download()'s copies the shares are counted from
+  std::vector<float> sweepConfidence_, roundTripErrors_, confidenceSummaries_;
   double consistentShare_ = std::numeric_limits<double>::quiet_NaN();
   double roundTripShare_ = std::numeric_limits<double>::quiet_NaN();
+  double meanConfidence_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace cs

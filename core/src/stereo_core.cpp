@@ -91,10 +91,13 @@ StereoCore::SequenceFrame StereoCore::beginSequenceFrame(const Pose* pose) {
   return frame;
 }
 
-bool StereoCore::warmFailed(double share) const { return share < params_.warmFailRatio * coldShare_; }
+bool StereoCore::warmFailed(double share, double meanConfidence) const {
+  const double r = params_.warmFailRatio;
+  return share < r * coldShare_ || meanConfidence < r * coldConfidence_;
+}
 
-void StereoCore::endSequenceFrame(const SequenceFrame& frame, double share) {
-  if (!frame.warm) coldShare_ = share;
+void StereoCore::endSequenceFrame(const SequenceFrame& frame, double share, double meanConfidence) {
+  if (!frame.warm) coldShare_ = share, coldConfidence_ = meanConfidence;
   pipeline_->commitSequenceFrame();
   ++sequenceFrames_;
 }

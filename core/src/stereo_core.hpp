@@ -72,11 +72,12 @@ class StereoCore {
     bool warm = false, filter = false;
   };
   SequenceFrame beginSequenceFrame(const Pose* pose);
-  // Whether a warm frame whose share of left-right consistent pixels is `share` failed:
-  // below Params::warmFailRatio times the last cold frame's share.
-  bool warmFailed(double share) const;
-  // The frame is done (cold with its share, or warm): its state is carried into the next.
-  void endSequenceFrame(const SequenceFrame& frame, double share);
+  // Whether a warm frame failed: its share of left-right consistent pixels (`share`) or the
+  // mean of its result's confidence (`meanConfidence`, Pipeline::meanConfidence) below
+  // Params::warmFailRatio times the last cold frame's. NaN (not measured) never fails.
+  bool warmFailed(double share, double meanConfidence) const;
+  // The frame is done (cold with its figures, or warm): its state is carried into the next.
+  void endSequenceFrame(const SequenceFrame& frame, double share, double meanConfidence);
   void resetSequence() { sequenceFrames_ = 0; }
 
   Backend& backend() { return *backend_; }
@@ -96,7 +97,8 @@ class StereoCore {
   long long sequenceFrames_ = 0;        // frames since the sequence's start (0: the next is the first)
   bool hasPose_ = false;                // the previous frame's pose, when it had one
   Pose pose_;
-  double coldShare_ = 0;  // consistent share of the last cold frame
+  double coldShare_ = 0;       // consistent share of the last cold frame
+  double coldConfidence_ = 0;  // its mean confidence
 };
 
 }  // namespace cs::detail

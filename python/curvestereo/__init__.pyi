@@ -123,6 +123,11 @@ class Result:
         """next(): share of the valid pixels at the sweep's level that passed its left-right
         check; NaN from compute(), without the initialiser and on the GPU-array path."""
     @property
+    def mean_confidence(self) -> float:
+        """next(): mean confidence over the field of view, which falls where the images
+        disagree with the estimate; NaN from compute(), with warm_fail_ratio 0 and on the
+        GPU-array path."""
+    @property
     def lr_pass_share(self) -> float:
         """lr_check: share of the field of view whose left-right round trip passed; NaN
         without lr_check and on the GPU-array path."""

@@ -313,6 +313,7 @@ Result resultFromDepth(DepthResult&& r, const std::shared_ptr<ResultPool>& pool)
   for (const StageTime& s : r.stages) out.stages[pb::str(s.name)] = s.ms;
   out.totalMs = r.totalMs;
   out.warm = r.warm, out.redone = r.redone, out.consistentShare = r.consistentShare;
+  out.meanConfidence = r.meanConfidence;
   out.lrPassShare = r.lrPassShare;
   return out;
 }

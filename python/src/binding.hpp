@@ -105,9 +105,9 @@ struct Result {
   pb::object depth, z, points, disparity, warp, valid, confidence;
   pb::dict stages;
   double totalMs = 0;
-  // Sequences (Stereo.next): DepthResult's warm, redone and consistentShare.
+  // Sequences (Stereo.next): DepthResult's warm, redone, consistentShare and meanConfidence.
   bool warm = false, redone = false;
-  double consistentShare = 0;
+  double consistentShare = 0, meanConfidence = 0;
   double lrPassShare = 0;  // DepthResult's (lr_check)
 };
 Result resultFromDepth(DepthResult&& r, const std::shared_ptr<ResultPool>& pool = nullptr);

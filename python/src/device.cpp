@@ -359,7 +359,7 @@ class DevicePath {
     result.confidence = take(fa.outConfidence, {h, w}, false);
     // Nothing is read back to judge a frame by (DeviceStereo::next has no warm-failure check).
     result.redone = false;
-    result.consistentShare = std::numeric_limits<double>::quiet_NaN();
+    result.consistentShare = result.meanConfidence = std::numeric_limits<double>::quiet_NaN();
     result.lrPassShare = std::numeric_limits<double>::quiet_NaN();
     result.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     return result;

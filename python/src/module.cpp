@@ -567,6 +567,11 @@ PYBIND11_MODULE(_curvestereo, m) {
           "next(): share of the valid pixels at the sweep's level that passed its left-right check, in [0, 1] (what "
           "a warm frame is judged by); NaN from compute(), without the initialiser and on the GPU-array path.")
       .def_property_readonly(
+          "mean_confidence", [](const Result& r) { return r.meanConfidence; },
+          "next(): mean confidence over the field of view, in [0, 1]: it falls where the images disagree with the "
+          "estimate (the other figure a warm frame is judged by); NaN from compute(), with warm_fail_ratio 0 and on "
+          "the GPU-array path.")
+      .def_property_readonly(
           "lr_pass_share", [](const Result& r) { return r.lrPassShare; },
           "lr_check: share of the pixels in the field of view whose left-right round trip passed, in [0, 1] (the "
           "figure a real pair has without ground truth); NaN without lr_check and on the GPU-array path.")

@@ -171,12 +171,14 @@ def test_next_cold_then_warm_on_cpu(asl):
             # compute() between next() calls solves a pair without touching the sequence.
             single = stereo.compute(f.left, f.right)
             assert not single.warm and not single.redone and np.isnan(single.consistent_share)
+            assert np.isnan(single.mean_confidence)
     assert [r.warm for r in results] == [False, True, True]
     assert not any(r.redone for r in results)
     for r in results:
         assert r.depth.dtype == np.float32 and r.depth.shape == (N, N)
         assert r.valid.dtype == np.bool_ and r.valid.mean() > 0.5
         assert 0.5 < r.consistent_share <= 1.0
+        assert 0.0 < r.mean_confidence <= 1.0
         assert r.confidence is not None
     # The wall: 2 px of shift at the centre of a 180-degree image of 128 px.
     centre = results[2].depth[N // 2 - 8 : N // 2 + 8, N // 2 - 8 : N // 2 + 8]

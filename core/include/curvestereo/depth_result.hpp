@@ -28,11 +28,15 @@ struct DepthResult {
   double totalMs = 0;
   // Sequences (Stereo::next): whether this frame started from the previous one's estimate,
   // whether it was a warm frame that failed its check and was solved again cold, and the
-  // share of valid pixels at the sweep's level that passed its left-right check: the figure
-  // a warm frame is judged by (NaN for compute() and without the initialiser).
+  // two figures a warm frame is judged by (Params::warmFailRatio; NaN for compute(), with
+  // the check off, and the first without the initialiser): the share of valid pixels at the
+  // sweep's level that passed its left-right check, and the mean of the confidence over the
+  // field of view, which falls where the images disagree with the estimate (the data
+  // residual after the last warp).
   bool warm = false;
   bool redone = false;
   double consistentShare = 0;
+  double meanConfidence = 0;
   // Params::lrCheck: the share of the pixels in the field of view whose left-right round
   // trip passed (NaN without it): how much of a real pair survives the check, the figure
   // there is without ground truth.

@@ -148,9 +148,11 @@ struct Params {
   // every frame cold. Every coldEvery-th frame is solved cold (0: only the first and the
   // failed ones): a warm start can keep an error it never re-examines, such as an object
   // that entered faster than the band follows. A warm frame whose share of left-right
-  // consistent pixels falls below warmFailRatio times that of the last cold frame is
-  // solved again, cold. 0 turns the check off, and with it the read of the sweep level's
-  // confidence it needs every frame (0.18 ms of a 2.8 ms warm frame at 848x800, H200).
+  // consistent pixels, or whose mean result confidence (low where the images disagree with
+  // the estimate after the last warp: the data residual), falls below warmFailRatio times
+  // that of the last cold frame is solved again, cold. 0 turns the check off, and with it
+  // the reads it needs every frame: the sweep level's confidence and a sixteenth-size copy
+  // of the result's (Pipeline::meanConfidence).
   bool warmStart = true;
   int coldEvery = 30;
   // Hypotheses a pixel of a warm frame's band sweep (0: initBand's). The carried estimate is
