@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <numeric>
 #include <type_traits>
 
 namespace cs {
@@ -256,6 +255,17 @@ template <class Predicate>
 static double shareOf(const std::vector<float>& values, Predicate counts, long long maskPixels) {
   const long long counted = (long long)std::count_if(values.begin(), values.end(), counts);
   return maskPixels ? double(counted) / double(maskPixels) : 0.0;
+}
+
+// Four running sums: one would be a chain of dependent additions (the compiler may not
+// reorder floating-point sums), four times slower on every warm frame's read.
+static double sumOf(const std::vector<float>& values) {
+  double lanes[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= values.size(); i += 4)
+    for (size_t k = 0; k < 4; ++k) lanes[k] += values[i + k];
+  for (; i < values.size(); ++i) lanes[0] += values[i];
+  return (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
 }
 
 void Pipeline::stage(const char* name) {
@@ -704,10 +714,8 @@ void Pipeline::download(DepthResult& out, bool countConsistent, bool countConfid
   roundTripShare_ = reverse_ ? shareOf(
                                    roundTripErrors_, [&](float e) { return e <= limit; }, maskPixels_)
                              : std::numeric_limits<double>::quiet_NaN();
-  meanConfidence_ =
-      countConfidence && summaryMaskPixels_ > 0
-          ? std::accumulate(confidenceSummaries_.begin(), confidenceSummaries_.end(), 0.0) / double(summaryMaskPixels_)
-          : std::numeric_limits<double>::quiet_NaN();
+  meanConfidence_ = countConfidence && summaryMaskPixels_ > 0 ? sumOf(confidenceSummaries_) / double(summaryMaskPixels_)
+                                                              : std::numeric_limits<double>::quiet_NaN();
 }
 
 void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
