@@ -123,7 +123,7 @@ TEST_CASE("run --rig with two images: a rig of two cameras gets per-camera outpu
   CHECK(!fs::exists(dir / "pair" / "cam0"));
 }
 
-TEST_CASE("eval on a rig folder: each camera's tau, the panorama's abs-rel and coverage") {
+TEST_CASE("eval on a rig folder: each camera's tau, the panorama's abs-rel, tau and coverage") {
   const fs::path dir = smallRigFolder("cli_rig_eval");
   if (dir.empty()) {
     MESSAGE("skipped: ../shared/data/rigs/rig4_urban_dev not present");
@@ -150,6 +150,12 @@ TEST_CASE("eval on a rig folder: each camera's tau, the panorama's abs-rel and c
   CHECK(value("panorama_coverage") > 90.0);
   CHECK(value("panorama_absrel") < 15.0);
   CHECK(value("panorama_absrel") > 0.0);
+  // tau in the panorama's pixels: errors over 3 px are errors over 1 px; some are (a quarter
+  // of the resolution), most are not.
+  MESSAGE("panorama tau>1 " << value("panorama_tau1") << " %, tau>3 " << value("panorama_tau3") << " %");
+  CHECK(value("panorama_tau3") <= value("panorama_tau1"));
+  CHECK(value("panorama_tau1") > 0.0);
+  CHECK(value("panorama_tau1") < 50.0);
 }
 
 TEST_CASE("calib show prints a rig's cameras and overlaps; bad rigs and rig options are one line") {

@@ -1,8 +1,10 @@
 // curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N]
 //                         [--cross-check T] [--panorama-min-confidence C] [solver options]
 // A rig folder (../shared/data/rigs layout): each camera's tau against its depth<k>.exr, in
-// the pixel terms of its pairs; the panorama's range error where the truth is finite; and
-// the coverage, the share of the sphere seen by two cameras or more that gets a range.
+// the pixel terms of its pairs; the panorama's range error where the truth is finite, as a
+// relative error and as tau in the panorama's pixel terms (parallaxErrorPx); and the
+// coverage, the share of the sphere seen by two cameras or more that gets a range.
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -91,19 +93,32 @@ CameraScore scoreCamera(const RigFolder& f, int k, const std::vector<int>& partn
 
 struct PanoramaScore {
   double absRel = 0, coverage = 0, density = 0;
-  long long finite = 0, twoCameras = 0;
+  double tau1 = 0, tau3 = 0;  // over `finiteSeen`: finite truth that two cameras see
+  long long finite = 0, twoCameras = 0, finiteSeen = 0;
 };
+
+// tau in the panorama's own pixel terms. A range error is an error of the parallax b / rho
+// that a point shows between two centres a baseline b apart (b the mean baseline of the
+// solved pairs; the angle at its largest, across the baseline), counted in the panorama's
+// pixels (width / 2 pi of them a radian), as a pair's tau counts its pixels of displacement.
+// +inf is no parallax; a missing range is an error, as in a pair's tau.
+double parallaxErrorPx(double baseline, int width, float truth, float estimate) {
+  if (std::isnan(estimate)) return HUGE_VAL;
+  const double pxPerRadian = double(width) / (2.0 * M_PI);
+  const double estimated = std::isfinite(estimate) && estimate > 0 ? baseline / double(estimate) : 0.0;
+  return std::abs(estimated - baseline / double(truth)) * pxPerRadian;
+}
 
 // The truth's pixel (i, j) looks along the panorama ray of the same pixel: run's panorama
 // frame is the folders' body frame (levelled cameras, camera 0 forward, origin the centre).
 // Sampled every other pixel: the sphere's shares need no more, and each sample projects into
 // every camera.
 PanoramaScore scorePanorama(const CameraRig& rig, const PanoramaFrame& frame, const ImageF& truth,
-                            const ImageF& estimate, ImageF* errorMap) {
+                            const ImageF& estimate, double baseline, ImageF* errorMap) {
   const RigViews views(rig);
   PanoramaScore s;
   double absRelSum = 0;
-  long long samples = 0, withRange = 0, covered = 0, finiteEstimated = 0;
+  long long samples = 0, withRange = 0, covered = 0, finiteEstimated = 0, over1 = 0, over3 = 0;
   for (int i = 0; i < truth.height; i += 2)
     for (int j = 0; j < truth.width; j += 2) {
       const float gt = truth(j, i), est = estimate(j, i);
@@ -114,6 +129,10 @@ PanoramaScore scorePanorama(const CameraRig& rig, const PanoramaFrame& frame, co
       if (seeing >= 2) ++s.twoCameras, covered += estimated;
       if (far || !(gt > 0)) continue;
       ++s.finite;
+      if (seeing >= 2) {
+        const double e = parallaxErrorPx(baseline, truth.width, gt, est);
+        ++s.finiteSeen, over1 += e > 1.0, over3 += e > 3.0;
+      }
       if (!estimated) continue;
       ++finiteEstimated;  // as evaluate()'s abs-rel: over the estimates, +inf counting 1
       const double error = std::isfinite(est) ? std::min(1.0, std::abs(double(est) - gt) / gt) : 1.0;
@@ -123,6 +142,8 @@ PanoramaScore scorePanorama(const CameraRig& rig, const PanoramaFrame& frame, co
   s.density = samples ? 100.0 * double(withRange) / double(samples) : 0.0;
   s.coverage = s.twoCameras ? 100.0 * double(covered) / double(s.twoCameras) : 0.0;
   s.absRel = finiteEstimated ? 100.0 * absRelSum / double(finiteEstimated) : 0.0;
+  s.tau1 = s.finiteSeen ? 100.0 * double(over1) / double(s.finiteSeen) : 0.0;
+  s.tau3 = s.finiteSeen ? 100.0 * double(over3) / double(s.finiteSeen) : 0.0;
   return s;
 }
 
@@ -175,15 +196,22 @@ int evalRig(const Args& args) {
            std::to_string(s.density) + "," + std::to_string(s.pixels) + "\n";
   }
   ImageF errorMap(panorama.range.width, panorama.range.height, NAN);
-  const PanoramaScore p = scorePanorama(f.rig, frame, f.panoramaRange, panorama.range, &errorMap);
+  double baseline = 0;
+  for (const PairInfo& pair : pairs) baseline += pair.baseline / double(pairs.size());
+  const PanoramaScore p = scorePanorama(f.rig, frame, f.panoramaRange, panorama.range, baseline, &errorMap);
   if (args.has("maps")) writeRigMaps(args.get("maps", ""), panorama, errorMap);
   std::printf(
       "panorama %dx%d  abs-rel %5.2f %% (finite truth)  coverage %5.1f %% (of the sphere two cameras see)  "
       "density %5.1f %%\n",
       panorama.range.width, panorama.range.height, p.absRel, p.coverage, p.density);
+  std::printf(
+      "panorama tau>1 %5.2f %%  tau>3 %5.2f %% (parallax over a %.3f m baseline, in panorama pixels; finite "
+      "truth two cameras see)\n",
+      p.tau1, p.tau3, baseline);
   std::printf("time: %.1f ms pairs and per-camera fusion (%zu solves), %.1f ms panorama (host)\n", r.totalMs,
               r.solves.size(), panoramaMs);
   if (args.has("csv")) {
+    csv += "panorama_tau1," + std::to_string(p.tau1) + "\npanorama_tau3," + std::to_string(p.tau3) + "\n";
     csv += "panorama_absrel," + std::to_string(p.absRel) + "\npanorama_coverage," + std::to_string(p.coverage) +
            "\npanorama_density," + std::to_string(p.density) + "\nms," + std::to_string(r.totalMs + panoramaMs) + "\n";
     std::ofstream out(args.get("csv", ""));
