@@ -58,6 +58,7 @@ namespace cs::vk {
   X(vkCmdPipelineBarrier)                     \
   X(vkCmdCopyBuffer)                          \
   X(vkCmdFillBuffer)                          \
+  X(vkCmdUpdateBuffer)                        \
   X(vkCmdWriteTimestamp)                      \
   X(vkCmdResetQueryPool)                      \
   X(vkCreateQueryPool)                        \

@@ -8,6 +8,14 @@
 
 namespace cs::vk {
 
+namespace {
+// bytes_to_floats.comp's push constants.
+struct PcBytesToFloats {
+  Addr dst, src, table;
+  uint32_t n;
+};
+}  // namespace
+
 // ---- memory ----
 
 // The largest device-local heap (a GPU's memory; lavapipe reports system memory).
@@ -142,6 +150,7 @@ VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
   }
   if (staging_.size < bytes) {
     destroyBuffer(staging_);
+    destroyBuffer(stagingMirror_);  // made again at the new size by the next byte upload
     staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(16) << 20), Memory::Staging);
   }
   stagingUsed_ = offset + bytes;
@@ -170,10 +179,40 @@ void VulkanBackend::doUpload(const Buffer& dst, const float* host, bool* finite)
   copyFromStaging(dst, [&](float* staged) { copyFloats(staged, host, dst.count(), finite); });
 }
 
-// Converted on the host as they are written into the mapped staging memory: the bytes are
-// read once either way, and GLSL's division is not exact enough to give unitFromByte's bits.
+// The bytes cross the bus as they are, a quarter of the floats' bytes, and the device
+// converts them (as CUDA's upload does): staged, copied to the same offset of the device's
+// mirror of the staging buffer (whose claims keep regions apart while in use), then
+// bytes_to_floats.comp looks each one up in the table of unitFromByte's floats (lut_), the
+// host's bits by construction.
 void VulkanBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
-  copyFromStaging(dst, [&](float* staged) { floatsFromBytes(staged, host, dst.count()); });
+  const size_t n = dst.count();
+  if (n > size_t(UINT32_MAX) - 3) throw Error("vulkan backend: uploadBytes of more than 4 GiB");
+  const VkDeviceSize bytes = (VkDeviceSize(n) + 3) & ~VkDeviceSize(3);  // whole words
+  const VkDeviceSize offset = claimStaging(bytes);
+  std::memcpy(static_cast<char*>(staging_.mapped) + offset, host, n);
+  if (stagingMirror_.size != staging_.size) {  // not in use: claimStaging flushed before regrowing
+    destroyBuffer(stagingMirror_);
+    stagingMirror_ = makeBuffer(staging_.size, Memory::Device);
+  }
+  VkCommandBuffer cb = recorder();
+  barrier(cb, Cmd::Transfer);
+  const VkBufferCopy region{offset, offset, bytes};
+  inst_.fn.vkCmdCopyBuffer(cb, staging_.buffer, stagingMirror_.buffer, 1, &region);
+  const PcBytesToFloats pc{addr(dst), stagingMirror_.address + offset, lut_.address, uint32_t(n)};
+  const uint32_t groups = uint32_t((bytes / 4 + 255) / 256);
+  const uint32_t groupsX = std::min<uint32_t>(groups, 65535);
+  dispatchGroups(kBytesToFloats, pc, groupsX, (groups + groupsX - 1) / groupsX);
+}
+
+// unitFromByte(v) for v = 0 .. 255 in lut_, written by the immediate command buffer's first
+// command (the first submission runs it, before any byte upload's conversion).
+void VulkanBackend::fillByteTable() {
+  float table[256];
+  for (int v = 0; v < 256; ++v) table[v] = unitFromByte(uint8_t(v));
+  lut_ = makeBuffer(sizeof(table), Memory::Device);
+  VkCommandBuffer cb = recorder();
+  barrier(cb, Cmd::Transfer);
+  inst_.fn.vkCmdUpdateBuffer(cb, lut_.buffer, 0, sizeof(table), table);
 }
 
 // One submission and one wait: the copy joins the immediate command buffer (after any

@@ -138,6 +138,7 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
   }
 
   params_ = makeBuffer(1 << 20, Memory::Params);
+  fillByteTable();
 }
 
 VulkanBackend::~VulkanBackend() {
@@ -148,6 +149,8 @@ VulkanBackend::~VulkanBackend() {
     if (p) inst_.fn.vkDestroyPipeline(dev_, p, nullptr);
   for (Arena& a : arenas_) destroyBuffer(a);
   destroyBuffer(staging_);
+  destroyBuffer(stagingMirror_);
+  destroyBuffer(lut_);
   destroyBuffer(params_);
   if (queryPool_) inst_.fn.vkDestroyQueryPool(dev_, queryPool_, nullptr);
   if (layout_) inst_.fn.vkDestroyPipelineLayout(dev_, layout_, nullptr);

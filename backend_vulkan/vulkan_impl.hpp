@@ -142,6 +142,7 @@ class VulkanBackend final : public Backend {
   Addr addr(const Buffer& b) const;
   Addr paramBlock(const void* data, size_t bytes);
   VkDeviceSize claimStaging(VkDeviceSize bytes);
+  void fillByteTable();
   template <class Fill>
   void copyFromStaging(const Buffer& dst, Fill&& fill);
   Addr sweepParamBlock(const SweepParams& p);
@@ -199,6 +200,9 @@ class VulkanBackend final : public Backend {
   std::vector<Arena> arenas_;
   std::vector<Alloc> allocs_;
   Arena staging_, params_;
+  // The byte uploads' device side: stagingMirror_ the staging buffer's size, its regions the
+  // bytes copied from the same offsets of staging_; lut_ unitFromByte's 256 floats.
+  Arena stagingMirror_, lut_;
   VkDeviceSize paramsUsed_ = 0;
   VkDeviceSize stagingUsed_ = 0;  // by uploads in the immediate command buffer, until flushed
   unsigned long long allocatedBytes_ = 0;
