@@ -67,6 +67,12 @@ namespace cs::vk {
   X(vkCreateFence)                            \
   X(vkDestroyFence)                           \
   X(vkWaitForFences)                          \
+  X(vkGetFenceStatus)                         \
+  X(vkCreateEvent)                            \
+  X(vkDestroyEvent)                           \
+  X(vkGetEventStatus)                         \
+  X(vkResetEvent)                             \
+  X(vkCmdSetEvent)                            \
   X(vkResetFences)                            \
   X(vkQueueSubmit)                            \
   X(vkDeviceWaitIdle)

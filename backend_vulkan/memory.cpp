@@ -1,6 +1,7 @@
 // The Vulkan backend's memory: device-local arenas that buffers sit in back to back,
 // host-visible parameter blocks, the staging buffer of transfers, and the transfers.
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 
 #include "curvestereo/image.hpp"
@@ -215,39 +216,92 @@ void VulkanBackend::fillByteTable() {
   inst_.fn.vkCmdUpdateBuffer(cb, lut_.buffer, 0, sizeof(table), table);
 }
 
-// One submission and one wait: the copy joins the immediate command buffer (after any
-// uploads still there, in the staging buffer beyond theirs) and the flush waits for the
-// frame and the copy together.
+// One submission: the copy joins the immediate command buffer (after any uploads still
+// there, in the staging buffer beyond theirs), behind the frame.
 void VulkanBackend::doDownload(const Buffer& src, float* host) { doDownloadAll({{src, host}}); }
 
-// Every copy in the one immediate command buffer, into one claim of the staging buffer,
-// then one submission and one wait for the frame and all of them.
+// Every copy in the one immediate command buffer, into one claim of the staging buffer, in
+// pieces of at most kDownloadPiece bytes, each followed by an event (recordPieces); one
+// submission, then the host copies each piece out of the staging buffer as soon as its
+// event is set, while the later pieces still cross the bus (as CUDA's downloads do), and
+// the fences are waited for as before (flush), the frame's and the copies' alike.
 void VulkanBackend::doDownloadAll(const std::vector<Download>& downloads) {
   auto aligned = [](VkDeviceSize b) { return (b + 255) & ~VkDeviceSize(255); };
   VkDeviceSize total = 0;
   for (const Download& d : downloads) total += aligned(d.src.count() * sizeof(float));
-  const VkDeviceSize base = claimStaging(total);
-  VkCommandBuffer cb = recorder();
-  barrier(cb, Cmd::Transfer);
-  VkDeviceSize offset = base;
+  const VkDeviceSize base = claimStaging(total);  // runs a frame being recorded first
+  const std::vector<Piece> pieces = downloadPieces(downloads, base);
+  recordPieces(pieces);
+  submitImmediate();  // behind the frame in the queue: its first barrier waits for the frame
+  copyPiecesOut(pieces);
+}
+
+constexpr VkDeviceSize kDownloadPiece = VkDeviceSize(1) << 20;  // 1 MiB
+
+// The downloads' pieces in order, each buffer's staged at base and on (256-aligned).
+std::vector<VulkanBackend::Piece> VulkanBackend::downloadPieces(const std::vector<Download>& downloads,
+                                                                VkDeviceSize base) {
+  std::vector<Piece> pieces;
+  VkDeviceSize staged = base;
   for (const Download& d : downloads) {
     const Alloc& a = alloc(d.src);
-    const VkBufferCopy region{a.offset, offset, d.src.count() * sizeof(float)};
-    inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(a.arena)].buffer, staging_.buffer, 1, &region);
-    offset += aligned(region.size);
+    const VkDeviceSize bytes = d.src.count() * sizeof(float);
+    for (VkDeviceSize at = 0; at < bytes; at += kDownloadPiece)
+      pieces.push_back({reinterpret_cast<char*>(d.host) + at, arenas_[size_t(a.arena)].buffer, a.offset + at,
+                        staged + at, std::min(kDownloadPiece, bytes - at)});
+    staged += (bytes + 255) & ~VkDeviceSize(255);
   }
+  return pieces;
+}
+
+// Each piece's copy, then a barrier that makes its bytes available to the host and keeps
+// the next copies behind it (the pieces arrive in order), then its event: set once the
+// copy and the barrier before it are done, so a set event means the piece is there (the
+// staging memory is host-coherent: nothing to invalidate). Events are reset by the host
+// before recording: no pending command buffer uses them (every download waits for its own).
+void VulkanBackend::recordPieces(const std::vector<Piece>& pieces) {
+  auto eci = vkStruct<VkEventCreateInfo>(VK_STRUCTURE_TYPE_EVENT_CREATE_INFO);
+  while (pieceEvents_.size() < pieces.size()) {
+    VkEvent e;
+    check(inst_.fn.vkCreateEvent(dev_, &eci, nullptr, &e), "vkCreateEvent");
+    pieceEvents_.push_back(e);
+  }
+  for (size_t i = 0; i < pieces.size(); ++i) check(inst_.fn.vkResetEvent(dev_, pieceEvents_[i]), "vkResetEvent");
+  VkCommandBuffer cb = recorder();
+  barrier(cb, Cmd::Transfer);  // after the frame and everything else before
   auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
   mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
   mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-  inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr,
-                                0, nullptr);
-  flush();
-  offset = base;
-  for (const Download& d : downloads) {
-    const VkDeviceSize bytes = d.src.count() * sizeof(float);
-    std::memcpy(d.host, static_cast<const char*>(staging_.mapped) + offset, bytes);
-    offset += aligned(bytes);
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    const VkBufferCopy region{pieces[i].srcOffset, pieces[i].staged, pieces[i].bytes};
+    inst_.fn.vkCmdCopyBuffer(cb, pieces[i].src, staging_.buffer, 1, &region);
+    inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                  VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0,
+                                  nullptr);
+    inst_.fn.vkCmdSetEvent(cb, pieceEvents_[i], VK_PIPELINE_STAGE_TRANSFER_BIT);
   }
+}
+
+// The pieces into the user's memory in order, each as soon as its event is set: the host
+// polls for at most spinNs_ in all (none on a CPU device, whose work the polling would
+// slow); past that it waits for the fences (flush: the frame's and the copies', with the
+// hang timeout) and copies the rest. flush() either way: every state back to idle.
+void VulkanBackend::copyPiecesOut(const std::vector<Piece>& pieces) {
+  const auto start = std::chrono::steady_clock::now();
+  size_t i = 0;
+  for (; i < pieces.size(); ++i) {
+    const VkEvent e = pieceEvents_[i];
+    const bool set = spinUntil(start, spinNs_, [&] {
+      const VkResult r = inst_.fn.vkGetEventStatus(dev_, e);
+      if (r != VK_EVENT_SET && r != VK_EVENT_RESET) check(r, "vkGetEventStatus");
+      return r == VK_EVENT_SET;
+    });
+    if (!set) break;
+    std::memcpy(pieces[i].host, static_cast<const char*>(staging_.mapped) + pieces[i].staged, pieces[i].bytes);
+  }
+  flush();
+  for (; i < pieces.size(); ++i)
+    std::memcpy(pieces[i].host, static_cast<const char*>(staging_.mapped) + pieces[i].staged, pieces[i].bytes);
 }
 
 void VulkanBackend::doFill(const Buffer& dst, float value) {

@@ -112,16 +112,21 @@ void VulkanBackend::submit(VkCommandBuffer cb, VkFence fence) {
   check(inst_.fn.vkQueueSubmit(queue_, 1, &si, fence), "vkQueueSubmit");
 }
 
+// The immediate command buffer, when it holds commands, ended and submitted without a
+// wait (flush or recorder() waits for its fence before it is recorded again).
+void VulkanBackend::submitImmediate() {
+  if (imm_ != Immediate::Recording) return;
+  imm_ = Immediate::Idle;
+  check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
+  submit(immCmd_, immFence_);
+  imm_ = Immediate::InFlight;
+}
+
 // Submits pending work and waits for everything in flight.
 void VulkanBackend::flush() {
   ensureUsable();
   abortFrameRecording();
-  if (imm_ == Immediate::Recording) {
-    imm_ = Immediate::Idle;
-    check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
-    submit(immCmd_, immFence_);
-    imm_ = Immediate::InFlight;
-  }
+  submitImmediate();
   for (FrameSlot& f : frames_) {
     if (f.state != Frame::Running && f.state != Frame::RunningOnce) continue;
     f.state = f.state == Frame::Running ? Frame::Ready : Frame::Empty;
@@ -188,12 +193,7 @@ void VulkanBackend::replayFrame(int slot) {
   // The work issued since (uploads, fills, copies: the sequence's state and motion) goes
   // first and is not waited for: queue order and the barrier before the frame's first
   // command keep the frame behind it (a download's flush waits for both).
-  if (imm_ == Immediate::Recording) {
-    imm_ = Immediate::Idle;
-    check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
-    submit(immCmd_, immFence_);
-    imm_ = Immediate::InFlight;
-  }
+  submitImmediate();
   submit(f.cmd, f.fence);
   f.state = Frame::Running;
 }

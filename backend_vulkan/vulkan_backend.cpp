@@ -55,6 +55,11 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
            props_.limits.maxComputeWorkGroupSize[0] >= w && props_.limits.maxComputeWorkGroupSize[1] >= h;
   };
   pdTile_ = holds(32, 32) ? PdTile::Square : holds(32, 16) ? PdTile::Wide : PdTile::Narrow;
+  // The host polls for the device's work (up to 20 ms, a cold frame's time, then blocks)
+  // rather than sleeping in the driver at once, whose wake-up costs a GPU frame; not on a
+  // CPU device, where polling takes a core from the work itself.
+  spinNs_ = props_.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? 0 : 20ull * 1000 * 1000;
+  if (const char* s = std::getenv("CURVESTEREO_VULKAN_SPIN_US")) spinNs_ = uint64_t(std::max(0L, std::atol(s))) * 1000;
   if (const char* t = std::getenv("CURVESTEREO_VULKAN_TIMEOUT_S"))
     timeoutNs_ = uint64_t(std::max(1.0, std::atof(t)) * 1e9);
   inst_.fn.vkGetPhysicalDeviceMemoryProperties(phys_, &memProps_);
@@ -155,6 +160,7 @@ VulkanBackend::~VulkanBackend() {
   if (queryPool_) inst_.fn.vkDestroyQueryPool(dev_, queryPool_, nullptr);
   if (layout_) inst_.fn.vkDestroyPipelineLayout(dev_, layout_, nullptr);
   if (immFence_) inst_.fn.vkDestroyFence(dev_, immFence_, nullptr);
+  for (VkEvent e : pieceEvents_) inst_.fn.vkDestroyEvent(dev_, e, nullptr);
   for (FrameSlot& f : frames_)
     if (f.fence) inst_.fn.vkDestroyFence(dev_, f.fence, nullptr);
   if (pool_) inst_.fn.vkDestroyCommandPool(dev_, pool_, nullptr);
