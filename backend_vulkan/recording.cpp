@@ -2,6 +2,7 @@
 // the immediate command buffer and the recorded frame, submission and fences, replay, and
 // stage times from timestamp queries.
 #include <algorithm>
+#include <chrono>
 
 #include "curvestereo/image.hpp"
 #include "shader_table.hpp"
@@ -82,8 +83,16 @@ void VulkanBackend::barrier(VkCommandBuffer cb, Cmd next) {
   last = next;
 }
 
+// Polled for up to spinNs_ first, as CUDA's default synchronisation spins: a blocking
+// vkWaitForFences sleeps in the driver, and its wake-up adds to every frame. Past that (at
+// once on a CPU device), the blocking wait, whose timeout marks the device hung.
 void VulkanBackend::waitFence(VkFence fence, const char* what) {
-  VkResult r = inst_.fn.vkWaitForFences(dev_, 1, &fence, VK_TRUE, timeoutNs_);
+  const bool done = spinUntil(std::chrono::steady_clock::now(), spinNs_, [&] {
+    const VkResult s = inst_.fn.vkGetFenceStatus(dev_, fence);
+    if (s != VK_SUCCESS && s != VK_NOT_READY) check(s, what);
+    return s == VK_SUCCESS;
+  });
+  VkResult r = done ? VK_SUCCESS : inst_.fn.vkWaitForFences(dev_, 1, &fence, VK_TRUE, timeoutNs_);
   if (r == VK_TIMEOUT) {
     health_ = Health::Hung;
     throw Error(std::string("vulkan backend: ") + what + " did not finish within " +

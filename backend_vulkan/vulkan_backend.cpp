@@ -55,9 +55,10 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
            props_.limits.maxComputeWorkGroupSize[0] >= w && props_.limits.maxComputeWorkGroupSize[1] >= h;
   };
   pdTile_ = holds(32, 32) ? PdTile::Square : holds(32, 16) ? PdTile::Wide : PdTile::Narrow;
-  // The host polls for the device's work (up to 20 ms, a cold frame's time, then blocks)
-  // rather than sleeping in the driver at once, whose wake-up costs a GPU frame; not on a
-  // CPU device, where polling takes a core from the work itself.
+  // The host polls for the device's work (fences, downloads' pieces: up to 20 ms, more
+  // than a cold frame, then it blocks) rather than sleeping in the driver at once, whose
+  // wake-up adds to a GPU frame; not on a CPU device, where polling takes a core from the
+  // work itself.
   spinNs_ = props_.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? 0 : 20ull * 1000 * 1000;
   if (const char* s = std::getenv("CURVESTEREO_VULKAN_SPIN_US")) spinNs_ = uint64_t(std::max(0L, std::atol(s))) * 1000;
   if (const char* t = std::getenv("CURVESTEREO_VULKAN_TIMEOUT_S"))
