@@ -6,6 +6,7 @@
 // a usable Vulkan device the suite is reported to ctest as skipped (gpu_suite.hpp).
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -651,6 +652,44 @@ TEST_CASE(
   CHECK(warm > 0);
   if (vulkanValidationLayerActive())
     CHECK_MESSAGE(vulkanValidationMessageCount() == before, "last: " << vulkanValidationLastMessage());
+}
+
+// The transfers' two ways of waiting: the host polling each download piece's event
+// (CURVESTEREO_VULKAN_SPIN_US; lavapipe polls nothing by default) and the fences at once
+// (0). Each with a byte upload larger than the staging buffer's first 16 MiB (it and its
+// device mirror made again, larger) and then a small one, and downloads of dozens of pieces.
+TEST_CASE("vulkan: polled or waited, large byte uploads and downloads of many pieces come back exact") {
+  for (const char* spinUs : {"20000000", "0"}) {
+    setenv("CURVESTEREO_VULKAN_SPIN_US", spinUs, 1);
+    auto vk = vulkanOrSkip();
+    unsetenv("CURVESTEREO_VULKAN_SPIN_US");
+    if (!vk) return;
+    INFO("CURVESTEREO_VULKAN_SPIN_US=" << spinUs);
+    const long long before = vulkanValidationMessageCount();
+    const Buffer big = vk->create(4500, 4000, 1), small = vk->create(37, 3, 1), floats = vk->create(300, 200, 3);
+    std::vector<uint8_t> bigBytes(big.count()), smallBytes(small.count());
+    for (size_t i = 0; i < bigBytes.size(); ++i) bigBytes[i] = uint8_t((i * 97 + i / 4500) % 256);
+    for (size_t i = 0; i < smallBytes.size(); ++i) smallBytes[i] = uint8_t(255 - i);
+    std::vector<float> values(floats.count());
+    for (size_t i = 0; i < values.size(); ++i) values[i] = float(i) - 0.5f;
+    vk->uploadBytes(big, bigBytes.data());
+    vk->uploadBytes(small, smallBytes.data());
+    vk->upload(floats, values.data());
+    std::vector<float> gotBig(big.count(), NAN), gotSmall(small.count(), NAN), gotFloats(floats.count(), NAN);
+    const auto start = std::chrono::steady_clock::now();
+    vk->downloadAll({{small, gotSmall.data()}, {big, gotBig.data()}, {floats, gotFloats.data()}});
+    // Polled pieces that were never set would wait out the 20 s before the fences.
+    CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(10));
+    size_t exact = 0;
+    for (size_t i = 0; i < bigBytes.size(); ++i) exact += gotBig[i] == unitFromByte(bigBytes[i]);
+    CHECK(exact == bigBytes.size());
+    exact = 0;
+    for (size_t i = 0; i < smallBytes.size(); ++i) exact += gotSmall[i] == unitFromByte(smallBytes[i]);
+    CHECK(exact == smallBytes.size());
+    CHECK(gotFloats == values);
+    if (vulkanValidationLayerActive())
+      CHECK_MESSAGE(vulkanValidationMessageCount() == before, "last: " << vulkanValidationLastMessage());
+  }
 }
 
 TEST_CASE("vulkan: kernels under the validation layer report nothing") {
