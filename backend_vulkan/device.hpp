@@ -58,6 +58,7 @@ namespace cs::vk {
   X(vkCmdPipelineBarrier)                     \
   X(vkCmdCopyBuffer)                          \
   X(vkCmdFillBuffer)                          \
+  X(vkCmdUpdateBuffer)                        \
   X(vkCmdWriteTimestamp)                      \
   X(vkCmdResetQueryPool)                      \
   X(vkCreateQueryPool)                        \
@@ -66,6 +67,12 @@ namespace cs::vk {
   X(vkCreateFence)                            \
   X(vkDestroyFence)                           \
   X(vkWaitForFences)                          \
+  X(vkGetFenceStatus)                         \
+  X(vkCreateEvent)                            \
+  X(vkDestroyEvent)                           \
+  X(vkGetEventStatus)                         \
+  X(vkResetEvent)                             \
+  X(vkCmdSetEvent)                            \
   X(vkResetFences)                            \
   X(vkQueueSubmit)                            \
   X(vkDeviceWaitIdle)

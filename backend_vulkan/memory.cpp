@@ -1,12 +1,21 @@
 // The Vulkan backend's memory: device-local arenas that buffers sit in back to back,
 // host-visible parameter blocks, the staging buffer of transfers, and the transfers.
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 
 #include "curvestereo/image.hpp"
 #include "vulkan_impl.hpp"
 
 namespace cs::vk {
+
+namespace {
+// bytes_to_floats.comp's push constants.
+struct PcBytesToFloats {
+  Addr dst, src, table;
+  uint32_t n;
+};
+}  // namespace
 
 // ---- memory ----
 
@@ -142,6 +151,7 @@ VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
   }
   if (staging_.size < bytes) {
     destroyBuffer(staging_);
+    destroyBuffer(stagingMirror_);  // made again at the new size by the next byte upload
     staging_ = makeBuffer(std::max<VkDeviceSize>(bytes, VkDeviceSize(16) << 20), Memory::Staging);
   }
   stagingUsed_ = offset + bytes;
@@ -170,45 +180,128 @@ void VulkanBackend::doUpload(const Buffer& dst, const float* host, bool* finite)
   copyFromStaging(dst, [&](float* staged) { copyFloats(staged, host, dst.count(), finite); });
 }
 
-// Converted on the host as they are written into the mapped staging memory: the bytes are
-// read once either way, and GLSL's division is not exact enough to give unitFromByte's bits.
+// The bytes cross the bus as they are, a quarter of the floats' bytes, and the device
+// converts them (as CUDA's upload does): staged, copied to the same offset of the device's
+// mirror of the staging buffer (whose claims keep regions apart while in use), then
+// bytes_to_floats.comp looks each one up in the table of unitFromByte's floats (lut_), the
+// host's bits by construction.
 void VulkanBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
-  copyFromStaging(dst, [&](float* staged) { floatsFromBytes(staged, host, dst.count()); });
+  const size_t n = dst.count();
+  if (n > size_t(UINT32_MAX) - 3) throw Error("vulkan backend: uploadBytes of more than 4 GiB");
+  const VkDeviceSize bytes = (VkDeviceSize(n) + 3) & ~VkDeviceSize(3);  // whole words
+  const VkDeviceSize offset = claimStaging(bytes);
+  std::memcpy(static_cast<char*>(staging_.mapped) + offset, host, n);
+  if (stagingMirror_.size != staging_.size) {  // not in use: claimStaging flushed before regrowing
+    destroyBuffer(stagingMirror_);
+    stagingMirror_ = makeBuffer(staging_.size, Memory::Device);
+  }
+  VkCommandBuffer cb = recorder();
+  barrier(cb, Cmd::Transfer);
+  const VkBufferCopy region{offset, offset, bytes};
+  inst_.fn.vkCmdCopyBuffer(cb, staging_.buffer, stagingMirror_.buffer, 1, &region);
+  const PcBytesToFloats pc{addr(dst), stagingMirror_.address + offset, lut_.address, uint32_t(n)};
+  const uint32_t groups = uint32_t((bytes / 4 + 255) / 256);
+  const uint32_t groupsX = std::min<uint32_t>(groups, 65535);
+  dispatchGroups(kBytesToFloats, pc, groupsX, (groups + groupsX - 1) / groupsX);
 }
 
-// One submission and one wait: the copy joins the immediate command buffer (after any
-// uploads still there, in the staging buffer beyond theirs) and the flush waits for the
-// frame and the copy together.
+// unitFromByte(v) for v = 0 .. 255 in lut_, written by the immediate command buffer's first
+// command (the first submission runs it, before any byte upload's conversion).
+void VulkanBackend::fillByteTable() {
+  float table[256];
+  for (int v = 0; v < 256; ++v) table[v] = unitFromByte(uint8_t(v));
+  lut_ = makeBuffer(sizeof(table), Memory::Device);
+  VkCommandBuffer cb = recorder();
+  barrier(cb, Cmd::Transfer);
+  inst_.fn.vkCmdUpdateBuffer(cb, lut_.buffer, 0, sizeof(table), table);
+}
+
+// One submission: the copy joins the immediate command buffer (after any uploads still
+// there, in the staging buffer beyond theirs), behind the frame.
 void VulkanBackend::doDownload(const Buffer& src, float* host) { doDownloadAll({{src, host}}); }
 
-// Every copy in the one immediate command buffer, into one claim of the staging buffer,
-// then one submission and one wait for the frame and all of them.
+// Every copy in the one immediate command buffer, into one claim of the staging buffer, in
+// pieces of at most kDownloadPiece bytes, each followed by an event (recordPieces); one
+// submission, then the host copies each piece out of the staging buffer as soon as its
+// event is set, while the later pieces still cross the bus (as CUDA's downloads do), and
+// the fences are waited for as before (flush), the frame's and the copies' alike.
 void VulkanBackend::doDownloadAll(const std::vector<Download>& downloads) {
   auto aligned = [](VkDeviceSize b) { return (b + 255) & ~VkDeviceSize(255); };
   VkDeviceSize total = 0;
   for (const Download& d : downloads) total += aligned(d.src.count() * sizeof(float));
-  const VkDeviceSize base = claimStaging(total);
-  VkCommandBuffer cb = recorder();
-  barrier(cb, Cmd::Transfer);
-  VkDeviceSize offset = base;
+  const VkDeviceSize base = claimStaging(total);  // runs a frame being recorded first
+  const std::vector<Piece> pieces = downloadPieces(downloads, base);
+  recordPieces(pieces);
+  submitImmediate();  // behind the frame in the queue: its first barrier waits for the frame
+  copyPiecesOut(pieces);
+}
+
+constexpr VkDeviceSize kDownloadPiece = VkDeviceSize(1) << 20;  // 1 MiB
+
+// The downloads' pieces in order, each buffer's staged at base and on (256-aligned).
+std::vector<VulkanBackend::Piece> VulkanBackend::downloadPieces(const std::vector<Download>& downloads,
+                                                                VkDeviceSize base) {
+  std::vector<Piece> pieces;
+  VkDeviceSize staged = base;
   for (const Download& d : downloads) {
     const Alloc& a = alloc(d.src);
-    const VkBufferCopy region{a.offset, offset, d.src.count() * sizeof(float)};
-    inst_.fn.vkCmdCopyBuffer(cb, arenas_[size_t(a.arena)].buffer, staging_.buffer, 1, &region);
-    offset += aligned(region.size);
+    const VkDeviceSize bytes = d.src.count() * sizeof(float);
+    for (VkDeviceSize at = 0; at < bytes; at += kDownloadPiece)
+      pieces.push_back({reinterpret_cast<char*>(d.host) + at, arenas_[size_t(a.arena)].buffer, a.offset + at,
+                        staged + at, std::min(kDownloadPiece, bytes - at)});
+    staged += (bytes + 255) & ~VkDeviceSize(255);
   }
+  return pieces;
+}
+
+// Each piece's copy, then a barrier that makes its bytes available to the host and keeps
+// the next copies behind it (the pieces arrive in order), then its event: set once the
+// copy and the barrier before it are done, so a set event means the piece is there (the
+// staging memory is host-coherent: nothing to invalidate). Events are reset by the host
+// before recording: no pending command buffer uses them (every download waits for its own).
+void VulkanBackend::recordPieces(const std::vector<Piece>& pieces) {
+  auto eci = vkStruct<VkEventCreateInfo>(VK_STRUCTURE_TYPE_EVENT_CREATE_INFO);
+  while (pieceEvents_.size() < pieces.size()) {
+    VkEvent e;
+    check(inst_.fn.vkCreateEvent(dev_, &eci, nullptr, &e), "vkCreateEvent");
+    pieceEvents_.push_back(e);
+  }
+  for (size_t i = 0; i < pieces.size(); ++i) check(inst_.fn.vkResetEvent(dev_, pieceEvents_[i]), "vkResetEvent");
+  VkCommandBuffer cb = recorder();
+  barrier(cb, Cmd::Transfer);  // after the frame and everything else before
   auto mb = vkStruct<VkMemoryBarrier>(VK_STRUCTURE_TYPE_MEMORY_BARRIER);
   mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
   mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-  inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr,
-                                0, nullptr);
-  flush();
-  offset = base;
-  for (const Download& d : downloads) {
-    const VkDeviceSize bytes = d.src.count() * sizeof(float);
-    std::memcpy(d.host, static_cast<const char*>(staging_.mapped) + offset, bytes);
-    offset += aligned(bytes);
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    const VkBufferCopy region{pieces[i].srcOffset, pieces[i].staged, pieces[i].bytes};
+    inst_.fn.vkCmdCopyBuffer(cb, pieces[i].src, staging_.buffer, 1, &region);
+    inst_.fn.vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                  VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0,
+                                  nullptr);
+    inst_.fn.vkCmdSetEvent(cb, pieceEvents_[i], VK_PIPELINE_STAGE_TRANSFER_BIT);
   }
+}
+
+// The pieces into the user's memory in order, each as soon as its event is set: the host
+// polls for at most spinNs_ in all (none on a CPU device, whose work the polling would
+// slow); past that it waits for the fences (flush: the frame's and the copies', with the
+// hang timeout) and copies the rest. flush() either way: every state back to idle.
+void VulkanBackend::copyPiecesOut(const std::vector<Piece>& pieces) {
+  const auto start = std::chrono::steady_clock::now();
+  size_t i = 0;
+  for (; i < pieces.size(); ++i) {
+    const VkEvent e = pieceEvents_[i];
+    const bool set = spinUntil(start, spinNs_, [&] {
+      const VkResult r = inst_.fn.vkGetEventStatus(dev_, e);
+      if (r != VK_EVENT_SET && r != VK_EVENT_RESET) check(r, "vkGetEventStatus");
+      return r == VK_EVENT_SET;
+    });
+    if (!set) break;
+    std::memcpy(pieces[i].host, static_cast<const char*>(staging_.mapped) + pieces[i].staged, pieces[i].bytes);
+  }
+  flush();
+  for (; i < pieces.size(); ++i)
+    std::memcpy(pieces[i].host, static_cast<const char*>(staging_.mapped) + pieces[i].staged, pieces[i].bytes);
 }
 
 void VulkanBackend::doFill(const Buffer& dst, float value) {

@@ -2,6 +2,7 @@
 // the immediate command buffer and the recorded frame, submission and fences, replay, and
 // stage times from timestamp queries.
 #include <algorithm>
+#include <chrono>
 
 #include "curvestereo/image.hpp"
 #include "shader_table.hpp"
@@ -82,8 +83,16 @@ void VulkanBackend::barrier(VkCommandBuffer cb, Cmd next) {
   last = next;
 }
 
+// Polled for up to spinNs_ first, as CUDA's default synchronisation spins: a blocking
+// vkWaitForFences sleeps in the driver, and its wake-up adds to every frame. Past that (at
+// once on a CPU device), the blocking wait, whose timeout marks the device hung.
 void VulkanBackend::waitFence(VkFence fence, const char* what) {
-  VkResult r = inst_.fn.vkWaitForFences(dev_, 1, &fence, VK_TRUE, timeoutNs_);
+  const bool done = spinUntil(std::chrono::steady_clock::now(), spinNs_, [&] {
+    const VkResult s = inst_.fn.vkGetFenceStatus(dev_, fence);
+    if (s != VK_SUCCESS && s != VK_NOT_READY) check(s, what);
+    return s == VK_SUCCESS;
+  });
+  VkResult r = done ? VK_SUCCESS : inst_.fn.vkWaitForFences(dev_, 1, &fence, VK_TRUE, timeoutNs_);
   if (r == VK_TIMEOUT) {
     health_ = Health::Hung;
     throw Error(std::string("vulkan backend: ") + what + " did not finish within " +
@@ -112,16 +121,21 @@ void VulkanBackend::submit(VkCommandBuffer cb, VkFence fence) {
   check(inst_.fn.vkQueueSubmit(queue_, 1, &si, fence), "vkQueueSubmit");
 }
 
+// The immediate command buffer, when it holds commands, ended and submitted without a
+// wait (flush or recorder() waits for its fence before it is recorded again).
+void VulkanBackend::submitImmediate() {
+  if (imm_ != Immediate::Recording) return;
+  imm_ = Immediate::Idle;
+  check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
+  submit(immCmd_, immFence_);
+  imm_ = Immediate::InFlight;
+}
+
 // Submits pending work and waits for everything in flight.
 void VulkanBackend::flush() {
   ensureUsable();
   abortFrameRecording();
-  if (imm_ == Immediate::Recording) {
-    imm_ = Immediate::Idle;
-    check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
-    submit(immCmd_, immFence_);
-    imm_ = Immediate::InFlight;
-  }
+  submitImmediate();
   for (FrameSlot& f : frames_) {
     if (f.state != Frame::Running && f.state != Frame::RunningOnce) continue;
     f.state = f.state == Frame::Running ? Frame::Ready : Frame::Empty;
@@ -188,12 +202,7 @@ void VulkanBackend::replayFrame(int slot) {
   // The work issued since (uploads, fills, copies: the sequence's state and motion) goes
   // first and is not waited for: queue order and the barrier before the frame's first
   // command keep the frame behind it (a download's flush waits for both).
-  if (imm_ == Immediate::Recording) {
-    imm_ = Immediate::Idle;
-    check(inst_.fn.vkEndCommandBuffer(immCmd_), "vkEndCommandBuffer");
-    submit(immCmd_, immFence_);
-    imm_ = Immediate::InFlight;
-  }
+  submitImmediate();
   submit(f.cmd, f.fence);
   f.state = Frame::Running;
 }

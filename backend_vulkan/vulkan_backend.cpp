@@ -7,6 +7,7 @@
 #include <cstdlib>
 
 #include "curvestereo/image.hpp"
+#include "normalise.hpp"
 #include "vulkan_impl.hpp"
 
 namespace cs {
@@ -55,6 +56,19 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
            props_.limits.maxComputeWorkGroupSize[0] >= w && props_.limits.maxComputeWorkGroupSize[1] >= h;
   };
   pdTile_ = holds(32, 32) ? PdTile::Square : holds(32, 16) ? PdTile::Wide : PdTile::Narrow;
+  // normalise_tiled.comp's 32 x 16 invocations with a 32- or a 16-row tile's shared memory
+  // (CURVESTEREO_VULKAN_SHARED_MEMORY likewise); else the normalisation's two passes.
+  auto holdsNormalise = [&](uint32_t tileH) {
+    return shared >= normaliseTileBytes(tileH) && props_.limits.maxComputeWorkGroupInvocations >= 512 &&
+           props_.limits.maxComputeWorkGroupSize[0] >= 32 && props_.limits.maxComputeWorkGroupSize[1] >= 16;
+  };
+  normaliseTileH_ = holdsNormalise(32) ? 32 : holdsNormalise(16) ? 16 : 0;
+  // The host polls for the device's work (fences, downloads' pieces: up to 20 ms, more
+  // than a cold frame, then it blocks) rather than sleeping in the driver at once, whose
+  // wake-up adds to a GPU frame; not on a CPU device, where polling takes a core from the
+  // work itself.
+  spinNs_ = props_.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? 0 : 20ull * 1000 * 1000;
+  if (const char* s = std::getenv("CURVESTEREO_VULKAN_SPIN_US")) spinNs_ = uint64_t(std::max(0L, std::atol(s))) * 1000;
   if (const char* t = std::getenv("CURVESTEREO_VULKAN_TIMEOUT_S"))
     timeoutNs_ = uint64_t(std::max(1.0, std::atof(t)) * 1e9);
   inst_.fn.vkGetPhysicalDeviceMemoryProperties(phys_, &memProps_);
@@ -138,6 +152,7 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
   }
 
   params_ = makeBuffer(1 << 20, Memory::Params);
+  fillByteTable();
 }
 
 VulkanBackend::~VulkanBackend() {
@@ -148,10 +163,13 @@ VulkanBackend::~VulkanBackend() {
     if (p) inst_.fn.vkDestroyPipeline(dev_, p, nullptr);
   for (Arena& a : arenas_) destroyBuffer(a);
   destroyBuffer(staging_);
+  destroyBuffer(stagingMirror_);
+  destroyBuffer(lut_);
   destroyBuffer(params_);
   if (queryPool_) inst_.fn.vkDestroyQueryPool(dev_, queryPool_, nullptr);
   if (layout_) inst_.fn.vkDestroyPipelineLayout(dev_, layout_, nullptr);
   if (immFence_) inst_.fn.vkDestroyFence(dev_, immFence_, nullptr);
+  for (VkEvent e : pieceEvents_) inst_.fn.vkDestroyEvent(dev_, e, nullptr);
   for (FrameSlot& f : frames_)
     if (f.fence) inst_.fn.vkDestroyFence(dev_, f.fence, nullptr);
   if (pool_) inst_.fn.vkDestroyCommandPool(dev_, pool_, nullptr);

@@ -11,6 +11,10 @@
 //
 // Validation: with CURVESTEREO_VULKAN_VALIDATION=1 in the environment, instances enable
 // VK_LAYER_KHRONOS_validation (when installed) and count its warnings and errors.
+//
+// Waiting: the host polls fences and downloads' pieces for up to CURVESTEREO_VULKAN_SPIN_US
+// microseconds (default 20000; 0 on a CPU device such as lavapipe) before it blocks in the
+// driver, as CUDA's default synchronisation spins; 0 blocks at once.
 #pragma once
 #include <memory>
 #include <string>

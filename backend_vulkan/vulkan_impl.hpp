@@ -4,6 +4,7 @@
 // transfers), recording.cpp (command buffers, submission, frame replay, timestamps) and
 // kernels.cpp (the dispatches of the kernels).
 #pragma once
+#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <map>
@@ -142,6 +143,7 @@ class VulkanBackend final : public Backend {
   Addr addr(const Buffer& b) const;
   Addr paramBlock(const void* data, size_t bytes);
   VkDeviceSize claimStaging(VkDeviceSize bytes);
+  void fillByteTable();
   template <class Fill>
   void copyFromStaging(const Buffer& dst, Fill&& fill);
   Addr sweepParamBlock(const SweepParams& p);
@@ -162,6 +164,16 @@ class VulkanBackend final : public Backend {
   void abortFrameRecording();
   // Submits one ended command buffer, signalling fence when done.
   void submit(VkCommandBuffer cb, VkFence fence);
+  void submitImmediate();
+  // A download's piece: its bytes at `staged` in the staging buffer, for `host`.
+  struct Piece {
+    char* host;
+    VkBuffer src;  // the piece's buffer's arena, at srcOffset
+    VkDeviceSize srcOffset, staged, bytes;
+  };
+  std::vector<Piece> downloadPieces(const std::vector<Download>& downloads, VkDeviceSize base);
+  void recordPieces(const std::vector<Piece>& pieces);
+  void copyPiecesOut(const std::vector<Piece>& pieces);
   // A w x h grid of pixels in the 16 x 16 work groups of common.glsl.
   template <class PC>
   void dispatch(Shader s, const PC& pc, int w, int h);
@@ -181,6 +193,7 @@ class VulkanBackend final : public Backend {
   bool float64_ = false;             // the camera models in double (CURVESTEREO_VULKAN_DOUBLE_MODELS)
   bool deviceFloat64_ = false;       // the device has shaderFloat64 (triangulate always uses it)
   PdTile pdTile_ = PdTile::Narrow;   // the largest tile of primal_dual.comp the device holds
+  int normaliseTileH_ = 0;           // normalise_tiled.comp's rows the device holds: 32, 16, 0 (two passes)
   bool subgroupArithmetic_ = false;  // subgroup arithmetic and shuffles in compute shaders
   uint32_t subgroupSize_ = 1;        // the device's subgroup size (VkPhysicalDeviceSubgroupProperties)
   VkDevice dev_ = VK_NULL_HANDLE;
@@ -189,6 +202,7 @@ class VulkanBackend final : public Backend {
   VkCommandPool pool_ = VK_NULL_HANDLE;
   VkCommandBuffer immCmd_ = VK_NULL_HANDLE;
   VkFence immFence_ = VK_NULL_HANDLE;
+  std::vector<VkEvent> pieceEvents_;  // set by a download's piece copies, one per piece (made on first use)
   VkPipelineLayout layout_ = VK_NULL_HANDLE;
   VkPipeline pipelines_[kShaderCount] = {};
   VkQueryPool queryPool_ = VK_NULL_HANDLE;
@@ -199,6 +213,9 @@ class VulkanBackend final : public Backend {
   std::vector<Arena> arenas_;
   std::vector<Alloc> allocs_;
   Arena staging_, params_;
+  // The byte uploads' device side: stagingMirror_ the staging buffer's size, its regions the
+  // bytes copied from the same offsets of staging_; lut_ unitFromByte's 256 floats.
+  Arena stagingMirror_, lut_;
   VkDeviceSize paramsUsed_ = 0;
   VkDeviceSize stagingUsed_ = 0;  // by uploads in the immediate command buffer, until flushed
   unsigned long long allocatedBytes_ = 0;
@@ -240,7 +257,28 @@ class VulkanBackend final : public Backend {
     }
   }
   uint64_t timeoutNs_ = 120ull * 1000 * 1000 * 1000;
+  // How long the host polls for work to finish before it blocks (CURVESTEREO_VULKAN_SPIN_US;
+  // 0 on a CPU device such as lavapipe, whose threads the polling would compete with).
+  uint64_t spinNs_ = 0;
 };
+
+// Polls ready() until it holds (true) or budgetNs have passed since start (false); ready()
+// is asked at least once. The pause between polls spares a hyper-threaded sibling.
+template <class Ready>
+bool spinUntil(std::chrono::steady_clock::time_point start, uint64_t budgetNs, Ready&& ready) {
+  for (;;) {
+    if (ready()) return true;
+    if (uint64_t(
+            std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start).count()) >=
+        budgetNs)
+      return false;
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#elif defined(__aarch64__)
+    asm volatile("yield");
+#endif
+  }
+}
 
 template <class PC>
 void VulkanBackend::dispatch(Shader s, const PC& pc, int w, int h) {

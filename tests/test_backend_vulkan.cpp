@@ -6,6 +6,7 @@
 // a usable Vulkan device the suite is reported to ctest as skipped (gpu_suite.hpp).
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -13,6 +14,7 @@
 #include <map>
 
 #include "curvestereo/camera.hpp"
+#include "curvestereo/pipeline_params.hpp"
 #include "curvestereo/stereo.hpp"
 #include "forwarding_backend.hpp"
 #include "golden_cases.hpp"
@@ -409,6 +411,46 @@ TEST_CASE("vulkan: the fused primal-dual matches the oracle for every split into
     CHECK_MESSAGE(vulkanValidationMessageCount() == 0, "last: " << vulkanValidationLastMessage());
 }
 
+// normalise_tiled.comp (one dispatch, the row sums in shared memory) takes the two
+// passes' sums in their order: the same bits as the two passes (shared memory below the
+// 16-row tile's) at radii it takes (8, the golden case's; 12, the default's), on images
+// of several tiles and a partial one, a masked disc with a hole, and the two passes alone
+// at a radius past its own (13).
+TEST_CASE("vulkan: the one-dispatch normalisation gives the two passes' bits") {
+  auto tiled = vulkanOrSkip();
+  if (!tiled) return;
+  setenv("CURVESTEREO_VULKAN_SHARED_MEMORY", "16384", 1);
+  auto twoPasses = createBackend("vulkan");
+  unsetenv("CURVESTEREO_VULKAN_SHARED_MEMORY");
+  const int w = 97, h = 83;
+  std::vector<float> src(size_t(w) * h), mask(src.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const float dx = float(x) - 50.f, dy = float(y) - 40.f, r2 = dx * dx + dy * dy;
+      src[size_t(y) * w + x] = std::sin(0.37f * float(x)) * std::cos(0.23f * float(y)) * (0.1f + 0.01f * float(x));
+      mask[size_t(y) * w + x] = r2 < 45.f * 45.f && r2 > 6.f * 6.f ? 1.f : 0.f;
+    }
+  auto run = [&](Backend& b, float sigma) {
+    const Buffer dst = b.create(w, h, 1), moments = b.create(w, h, 3), s = b.create(w, h, 1), m = b.create(w, h, 1);
+    b.upload(s, src.data());
+    b.upload(m, mask.data());
+    Params params;
+    params.normSigma = sigma;
+    b.normalise(dst, moments, s, m, normaliseParams(params));
+    std::vector<float> out(src.size());
+    b.download(dst, out.data());
+    return out;
+  };
+  for (float sigma : {2.5f, 4.f, 13.f / 3.f}) {
+    INFO("sigma " << sigma);
+    const std::vector<float> a = run(*tiled, sigma), b = run(*twoPasses, sigma);
+    CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
+    CHECK(std::count_if(a.begin(), a.end(), [](float v) { return v != 0.f; }) > 1000);
+  }
+  if (vulkanValidationLayerActive())
+    CHECK_MESSAGE(vulkanValidationMessageCount() == 0, "last: " << vulkanValidationLastMessage());
+}
+
 // sweep_aggregate.comp takes each step's minimum with subgroup arithmetic where the device
 // has it, else with a shared-memory tree: min is exact, so both give the same bits.
 TEST_CASE("vulkan: the sweep aggregation with and without subgroup arithmetic gives the same bits") {
@@ -651,6 +693,44 @@ TEST_CASE(
   CHECK(warm > 0);
   if (vulkanValidationLayerActive())
     CHECK_MESSAGE(vulkanValidationMessageCount() == before, "last: " << vulkanValidationLastMessage());
+}
+
+// The transfers' two ways of waiting: the host polling each download piece's event
+// (CURVESTEREO_VULKAN_SPIN_US; lavapipe polls nothing by default) and the fences at once
+// (0). Each with a byte upload larger than the staging buffer's first 16 MiB (it and its
+// device mirror made again, larger) and then a small one, and downloads of dozens of pieces.
+TEST_CASE("vulkan: polled or waited, large byte uploads and downloads of many pieces come back exact") {
+  for (const char* spinUs : {"20000000", "0"}) {
+    setenv("CURVESTEREO_VULKAN_SPIN_US", spinUs, 1);
+    auto vk = vulkanOrSkip();
+    unsetenv("CURVESTEREO_VULKAN_SPIN_US");
+    if (!vk) return;
+    INFO("CURVESTEREO_VULKAN_SPIN_US=" << spinUs);
+    const long long before = vulkanValidationMessageCount();
+    const Buffer big = vk->create(4500, 4000, 1), small = vk->create(37, 3, 1), floats = vk->create(300, 200, 3);
+    std::vector<uint8_t> bigBytes(big.count()), smallBytes(small.count());
+    for (size_t i = 0; i < bigBytes.size(); ++i) bigBytes[i] = uint8_t((i * 97 + i / 4500) % 256);
+    for (size_t i = 0; i < smallBytes.size(); ++i) smallBytes[i] = uint8_t(255 - i);
+    std::vector<float> values(floats.count());
+    for (size_t i = 0; i < values.size(); ++i) values[i] = float(i) - 0.5f;
+    vk->uploadBytes(big, bigBytes.data());
+    vk->uploadBytes(small, smallBytes.data());
+    vk->upload(floats, values.data());
+    std::vector<float> gotBig(big.count(), NAN), gotSmall(small.count(), NAN), gotFloats(floats.count(), NAN);
+    const auto start = std::chrono::steady_clock::now();
+    vk->downloadAll({{small, gotSmall.data()}, {big, gotBig.data()}, {floats, gotFloats.data()}});
+    // Polled pieces that were never set would wait out the 20 s before the fences.
+    CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(10));
+    size_t exact = 0;
+    for (size_t i = 0; i < bigBytes.size(); ++i) exact += gotBig[i] == unitFromByte(bigBytes[i]);
+    CHECK(exact == bigBytes.size());
+    exact = 0;
+    for (size_t i = 0; i < smallBytes.size(); ++i) exact += gotSmall[i] == unitFromByte(smallBytes[i]);
+    CHECK(exact == smallBytes.size());
+    CHECK(gotFloats == values);
+    if (vulkanValidationLayerActive())
+      CHECK_MESSAGE(vulkanValidationMessageCount() == before, "last: " << vulkanValidationLastMessage());
+  }
 }
 
 TEST_CASE("vulkan: kernels under the validation layer report nothing") {

@@ -6,6 +6,7 @@
 // skipped, and the suite to ctest as skipped when no backend besides the CPU ran
 // (gpu_suite.hpp).
 #include <cmath>
+#include <utility>
 
 #include "curvestereo/metrics.hpp"
 #include "curvestereo/stereo.hpp"
@@ -132,6 +133,68 @@ TEST_CASE("downloadAll returns each buffer as download() does on every backend")
     CHECK(ga2 == va);
     CHECK(gb == std::vector<float>(vb.size(), 3.25f));
     CHECK(gc == vc);
+  }
+}
+
+// Buffers of several download pieces (1 MiB each on CUDA and Vulkan), one a float short
+// of a piece and one a float over, between small ones: each comes back whole, in order,
+// with its neighbours untouched.
+TEST_CASE("downloadAll returns buffers of several pieces and odd sizes as download() does on every backend") {
+  for (const std::string& name : everyBackend()) {
+    auto backend = usableBackend(name);
+    if (!backend) continue;
+    const std::vector<Buffer> buffers = {backend->create(3, 1, 1), backend->create(700, 500, 2),
+                                         backend->create(513, 511, 1), backend->create(262145, 1, 1),
+                                         backend->create(7, 5, 3)};
+    std::vector<std::vector<float>> values, expected, got;
+    std::vector<Backend::Download> list;
+    for (size_t k = 0; k < buffers.size(); ++k) {
+      values.emplace_back(buffers[k].count());
+      for (size_t i = 0; i < values[k].size(); ++i) values[k][i] = float(k) * 1e6f + float(i);
+      backend->upload(buffers[k], values[k].data());
+      expected.emplace_back(buffers[k].count(), NAN);
+      got.emplace_back(buffers[k].count(), NAN);
+    }
+    for (size_t k = 0; k < buffers.size(); ++k) list.push_back({buffers[k], got[k].data()});
+    backend->downloadAll(list);
+    for (size_t k = 0; k < buffers.size(); ++k) backend->download(buffers[k], expected[k].data());
+    INFO("backend " << name);
+    for (size_t k = 0; k < buffers.size(); ++k) {
+      INFO("buffer " << k);
+      CHECK(got[k] == values[k]);
+      CHECK(expected[k] == values[k]);
+    }
+  }
+}
+
+// Several byte uploads before one download (the Vulkan conversions' staged bytes side by
+// side), of 1 to 5 samples (a partial word alone) and of images of many work groups.
+TEST_CASE("uploadBytes of several images of odd sizes in a row stores unitFromByte(v) on every backend") {
+  const std::vector<std::pair<int, int>> sizes = {{1, 1}, {2, 1}, {3, 1}, {4, 1}, {5, 1}, {333, 333}, {1000, 701}};
+  for (const std::string& name : everyBackend()) {
+    auto backend = usableBackend(name);
+    if (!backend) continue;
+    std::vector<Buffer> buffers;
+    std::vector<std::vector<uint8_t>> bytes;
+    for (size_t k = 0; k < sizes.size(); ++k) {
+      buffers.push_back(backend->create(sizes[k].first, sizes[k].second, 1));
+      backend->fill(buffers.back(), -1.f);
+      bytes.emplace_back(buffers.back().count());
+      for (size_t i = 0; i < bytes[k].size(); ++i) bytes[k][i] = uint8_t((i * 131 + k * 7 + 3) % 256);
+    }
+    for (size_t k = 0; k < sizes.size(); ++k) backend->uploadBytes(buffers[k], bytes[k].data());
+    std::vector<std::vector<float>> back;
+    std::vector<Backend::Download> list;
+    for (const Buffer& b : buffers) back.emplace_back(b.count(), NAN);
+    for (size_t k = 0; k < buffers.size(); ++k) list.push_back({buffers[k], back[k].data()});
+    backend->downloadAll(list);
+    INFO("backend " << name);
+    for (size_t k = 0; k < sizes.size(); ++k) {
+      size_t exact = 0;
+      for (size_t i = 0; i < bytes[k].size(); ++i) exact += back[k][i] == unitFromByte(bytes[k][i]);
+      INFO("image " << k);
+      CHECK(exact == bytes[k].size());
+    }
   }
 }
 
