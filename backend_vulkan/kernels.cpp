@@ -340,13 +340,6 @@ void VulkanBackend::doNormalise(const Buffer& dst, const Buffer& moments, const 
   const vk::NormaliseBlock block = vk::normaliseBlock(p);
   const Addr prm = paramBlock(&block, sizeof(block));
   const int w = src.width, h = src.height;
-  if (normaliseTileH_ > 0 && p.radius <= kMaxTiledNormaliseRadius) {  // one dispatch; moments unused
-    const uint32_t th = uint32_t(normaliseTileH_);
-    dispatchGroups(th == 32 ? kNormaliseTiled : kNormaliseTiledShort,
-                   vk::PcNormaliseTiled{addr(dst), addr(src), addr(mask), prm, w, h}, (uint32_t(w) + 31) / 32,
-                   (uint32_t(h) + th - 1) / th);
-    return;
-  }
   dispatch(kNormaliseMoments, vk::PcNormaliseMoments{addr(moments), addr(src), addr(mask), prm, w, h}, w, h);
   dispatch(kNormalise, vk::PcNormalise{addr(dst), addr(moments), addr(src), addr(mask), prm, w, h}, w, h);
 }

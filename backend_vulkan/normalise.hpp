@@ -27,18 +27,6 @@ struct PcNormalise {
   uint64_t dst, moments, src, mask, params;
   int32_t w, h;
 };
-struct PcNormaliseTiled {
-  uint64_t dst, src, mask, params;
-  int32_t w, h;
-};
-
-// shaders/normalise_tiled.comp: 32 x tileH outputs a work group of 32 x 16 invocations, for
-// radii up to kMaxTiledNormaliseRadius; its shared memory for a tile height.
-constexpr int kMaxTiledNormaliseRadius = 12;  // the default norm_sigma 4
-constexpr uint32_t normaliseTileBytes(uint32_t tileH) {
-  const uint32_t rows = tileH + 2 * kMaxTiledNormaliseRadius, cols = 32 + 2 * kMaxTiledNormaliseRadius;
-  return rows * cols * 4 + rows * ((cols + 31) / 32) * 4 + 3 * rows * 32 * 4;
-}
 
 // The block for p (taps past 2 radius zero, so equal parameters give equal blocks); p.radius
 // is in [0, kMaxNormaliseRadius] (Backend::normalise checked it).

@@ -7,7 +7,6 @@
 #include <cstdlib>
 
 #include "curvestereo/image.hpp"
-#include "normalise.hpp"
 #include "vulkan_impl.hpp"
 
 namespace cs {
@@ -56,13 +55,6 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
            props_.limits.maxComputeWorkGroupSize[0] >= w && props_.limits.maxComputeWorkGroupSize[1] >= h;
   };
   pdTile_ = holds(32, 32) ? PdTile::Square : holds(32, 16) ? PdTile::Wide : PdTile::Narrow;
-  // normalise_tiled.comp's 32 x 16 invocations with a 32- or a 16-row tile's shared memory
-  // (CURVESTEREO_VULKAN_SHARED_MEMORY likewise); else the normalisation's two passes.
-  auto holdsNormalise = [&](uint32_t tileH) {
-    return shared >= normaliseTileBytes(tileH) && props_.limits.maxComputeWorkGroupInvocations >= 512 &&
-           props_.limits.maxComputeWorkGroupSize[0] >= 32 && props_.limits.maxComputeWorkGroupSize[1] >= 16;
-  };
-  normaliseTileH_ = holdsNormalise(32) ? 32 : holdsNormalise(16) ? 16 : 0;
   // The host polls for the device's work (fences, downloads' pieces: up to 20 ms, more
   // than a cold frame, then it blocks) rather than sleeping in the driver at once, whose
   // wake-up adds to a GPU frame; not on a CPU device, where polling takes a core from the

@@ -193,7 +193,6 @@ class VulkanBackend final : public Backend {
   bool float64_ = false;             // the camera models in double (CURVESTEREO_VULKAN_DOUBLE_MODELS)
   bool deviceFloat64_ = false;       // the device has shaderFloat64 (triangulate always uses it)
   PdTile pdTile_ = PdTile::Narrow;   // the largest tile of primal_dual.comp the device holds
-  int normaliseTileH_ = 0;           // normalise_tiled.comp's rows the device holds: 32, 16, 0 (two passes)
   bool subgroupArithmetic_ = false;  // subgroup arithmetic and shuffles in compute shaders
   uint32_t subgroupSize_ = 1;        // the device's subgroup size (VkPhysicalDeviceSubgroupProperties)
   VkDevice dev_ = VK_NULL_HANDLE;
