@@ -42,6 +42,30 @@ void RigStereo::setCrossCheck(double tolerance) {
 std::string RigStereo::backendName() const { return directions_.front().stereo->backendName(); }
 
 RigResult RigStereo::compute(const std::vector<ImageF>& images) {
+  return solveAll(images, [&](Direction& dir, DepthResult& out) {
+    dir.stereo->compute(images[size_t(dir.reference)], images[size_t(dir.other)], out);
+  });
+}
+
+RigResult RigStereo::next(const std::vector<ImageF>& images, const Pose* bodyPose) {
+  return solveAll(images, [&](Direction& dir, DepthResult& out) {
+    Pose camera;  // T_world_cam = T_world_body * T_body_cam
+    if (bodyPose) {
+      const BodyPose& inBody = rig_.poses[size_t(dir.reference)];
+      camera.R = bodyPose->R * inBody.R;
+      camera.t = bodyPose->R * inBody.p + bodyPose->t;
+    }
+    dir.stereo->next(images[size_t(dir.reference)], images[size_t(dir.other)], out, bodyPose ? &camera : nullptr);
+  });
+}
+
+void RigStereo::resetSequence() {
+  for (Direction& dir : directions_) dir.stereo->resetSequence();
+}
+
+// Every direction through `solve`, then the cross-check and the per-camera fusion.
+template <class Solve>
+RigResult RigStereo::solveAll(const std::vector<ImageF>& images, Solve&& solve) {
   if (int(images.size()) != rig_.size())
     throw Error("a rig of " + std::to_string(rig_.size()) + " cameras needs " + std::to_string(rig_.size()) +
                 " images, got " + std::to_string(images.size()));
@@ -50,8 +74,8 @@ RigResult RigStereo::compute(const std::vector<ImageF>& images) {
   std::vector<DepthResult> estimates(directions_.size());
   for (size_t d = 0; d < directions_.size(); ++d) {
     Direction& dir = directions_[d];
-    dir.stereo->compute(images[size_t(dir.reference)], images[size_t(dir.other)], estimates[d]);
-    out.solves.push_back({dir.reference, dir.other, estimates[d].totalMs});
+    solve(dir, estimates[d]);
+    out.solves.push_back({dir.reference, dir.other, estimates[d].totalMs, 0, estimates[d].warm, estimates[d].redone});
   }
   if (crossCheck_ > 0) {
     // Against the other directions as solved, not as already checked.

@@ -310,6 +310,11 @@ class RigStereo:
     ) -> None: ...
     def compute(self, images: _Sequence[_HostImage]) -> RigResult:
         """One image per camera, in order, each at its camera's size."""
+    def next(self, images: _Sequence[_HostImage], pose: _Pose | None = None) -> RigResult:
+        """A frame of a sequence: every pair direction continues its own sequence as
+        Stereo.next does. pose: the rig's T_world_body, or None."""
+    def reset_sequence(self) -> None:
+        """The next frame starts a new sequence (cold)."""
     @property
     def rig(self) -> CameraRig: ...
     @property

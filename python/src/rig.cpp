@@ -138,6 +138,8 @@ pb::dict solveDict(const RigResult::Solve& s) {
   d["other"] = s.other;
   d["ms"] = s.ms;
   d["cross_check_invalidated"] = s.crossCheckInvalidated;
+  d["warm"] = s.warm;
+  d["redone"] = s.redone;
   return d;
 }
 
@@ -177,13 +179,35 @@ class PyRigStereo {
   }
 
   PyRigResult compute(pb::handle imagesObj) {
+    return solve(imagesObj, [&](const std::vector<ImageF>& images) { return stereo_->compute(images); });
+  }
+
+  // RigStereo::next: a frame of a sequence; pose: T_world_body (the rig's), as Stereo.next's.
+  PyRigResult next(pb::handle imagesObj, pb::handle poseObj) {
+    const std::optional<Pose> pose = poseFrom(poseObj);
+    return solve(imagesObj,
+                 [&](const std::vector<ImageF>& images) { return stereo_->next(images, pose ? &*pose : nullptr); });
+  }
+
+  void resetSequence() { stereo_->resetSequence(); }
+
+  const CameraRig& rig() const { return rig_; }
+  const Params& params() const { return params_; }
+  const std::vector<PairInfo>& pairs() const { return pairs_; }
+  double crossCheck() const { return crossCheck_; }
+  std::string backendName() const { return stereo_->backendName(); }
+
+ private:
+  // One frame through `run` (compute or next), the GIL released, into Python's RigResult.
+  template <class Run>
+  PyRigResult solve(pb::handle imagesObj, Run&& run) {
     std::unique_lock<std::mutex> lock(busy_, std::try_to_lock);
     if (!lock.owns_lock()) throw Error("this RigStereo object is in use by another thread (use one per thread)");
     std::vector<ImageF> images = imagesFrom(imagesObj);
     RigResult r;
     {
       pb::gil_scoped_release nogil;
-      r = stereo_->compute(images);
+      r = run(images);
     }
     PyRigResult out;
     out.totalMs = r.totalMs;
@@ -194,13 +218,6 @@ class PyRigStereo {
     return out;
   }
 
-  const CameraRig& rig() const { return rig_; }
-  const Params& params() const { return params_; }
-  const std::vector<PairInfo>& pairs() const { return pairs_; }
-  double crossCheck() const { return crossCheck_; }
-  std::string backendName() const { return stereo_->backendName(); }
-
- private:
   // One image per camera, in order, each at its camera's size.
   std::vector<ImageF> imagesFrom(pb::handle obj) const {
     const std::string count = std::to_string(rig_.size());
@@ -317,6 +334,12 @@ parameter, pair or backend.)doc")
            "Solve one frame: images is a list with one 2-D image per camera, in order (uint8, uint16 or float32 "
            "in [0, 1], each at its camera's size; colour is converted as read_image does). Returns a RigResult. "
            "The GIL is released while the pairs are solved.")
+      .def("next", &PyRigStereo::next, pb::arg("images"), pb::arg("pose") = pb::none(),
+           "One frame of a sequence: as compute(), but every pair's direction continues its own sequence as "
+           "Stereo.next does (warm start, temporal filter; each camera's Result tells warm / redone). pose: the "
+           "rig's T_world_body (a 4x4 matrix or (R, t)), from which each camera's own pose follows; None when "
+           "unknown. compute() in between does not disturb the sequence.")
+      .def("reset_sequence", &PyRigStereo::resetSequence, "The next frame starts a new sequence (cold).")
       .def_property_readonly("rig", &PyRigStereo::rig, "The CameraRig.")
       .def_property_readonly(
           "pairs", [](const PyRigStereo& s) { return pairList(s.pairs()); },

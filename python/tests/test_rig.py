@@ -116,6 +116,31 @@ def test_bad_input_raises(ring4, solved):
         r.panorama(centre=[0.0, 1.0])
 
 
+def test_sequence_continues_every_direction(ring4, solved):
+    """RigStereo.next: each pair direction is its own Stereo sequence (realtime: warm frames
+    need the band sweep), the first frame the cold solve itself."""
+    rig, _, images, _ = solved
+    options = dict(levels=3, min_width=16)
+    stereo = cs.RigStereo(rig, "realtime", "cpu", **options)
+    first = stereo.next(images)
+    cold = cs.RigStereo(rig, "realtime", "cpu", **options).compute(images)
+    for k in range(4):
+        assert same_bits(first.cameras[k].depth, cold.cameras[k].depth), k
+    assert not any(s["warm"] for s in first.solves)
+    # A still rig: the body pose changes nothing, every direction starts warm.
+    second = stereo.next(images, pose=np.eye(4))
+    assert all(s["warm"] and not s["redone"] for s in second.solves), second.solves
+    for k in range(4):
+        assert second.cameras[k].valid.mean() > 0.5, k
+    # compute() in between leaves the sequence; reset_sequence() starts it again cold.
+    stereo.compute(images)
+    assert all(s["warm"] for s in stereo.next(images, pose=np.eye(4)).solves)
+    stereo.reset_sequence()
+    assert not any(s["warm"] for s in stereo.next(images).solves)
+    with pytest.raises(cs.Error, match="pose"):
+        stereo.next(images, pose="nope")
+
+
 def test_field_of_view_as_the_cli(cli, tmp_path):
     """back2's 220-degree lenses: the preset's 180 degrees widen to the lenses', as `run` does,
     unless the field of view is given."""

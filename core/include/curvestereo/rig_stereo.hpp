@@ -13,6 +13,7 @@
 #include "curvestereo/camera_rig.hpp"
 #include "curvestereo/depth_result.hpp"
 #include "curvestereo/params.hpp"
+#include "curvestereo/pose.hpp"
 
 namespace cs {
 
@@ -30,6 +31,7 @@ struct RigResult {
     int reference = 0, other = 0;  // the pair's cameras: depth for `reference`
     double ms = 0;
     long long crossCheckInvalidated = 0;  // pixels the cross-check took away (setCrossCheck)
+    bool warm = false, redone = false;    // next(): as the direction's DepthResult says
   };
   std::vector<Solve> solves;
   double totalMs = 0;  // the solves and the fusion
@@ -48,6 +50,14 @@ class RigStereo {
 
   // images[k] is camera k's (float grey in [0, 1], its camera's size).
   RigResult compute(const std::vector<ImageF>& images);
+  // A frame of a sequence: every direction is its own Stereo sequence (Stereo::next: warm
+  // start, temporal filter, the cold schedule and check), so each camera's depth is as
+  // steady as a pair's. bodyPose (optional): the rig's pose in the world, T_world_body;
+  // each direction's reference camera then moves by its own pose in the world
+  // (T_world_body * the camera's BodyPose). compute() between frames does not disturb them.
+  RigResult next(const std::vector<ImageF>& images, const Pose* bodyPose = nullptr);
+  // The next frame starts a new sequence (cold) in every direction.
+  void resetSequence();
   // With a tolerance > 0, each camera's estimate from a pair is checked against the pair's
   // other direction before the fusion (crossCheck in rig_fusion.hpp); 0 (default) leaves it.
   void setCrossCheck(double tolerance);
@@ -59,6 +69,9 @@ class RigStereo {
     int reference, other;
     std::unique_ptr<Stereo> stereo;
   };
+  template <class Solve>
+  RigResult solveAll(const std::vector<ImageF>& images, Solve&& solve);
+
   CameraRig rig_;
   std::vector<Direction> directions_;
   double crossCheck_ = 0;
