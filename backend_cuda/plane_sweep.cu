@@ -400,37 +400,6 @@ __global__ void sweepInitialiseKernel(Img u, Img w, Img confidence, Img best, Im
   storeWarp(u, w, there, x, y);
 }
 
-// The walk of occludedSurface on one side: steps s = 1 .. reach of (sx, sy) from (x, y),
-// rounded to the nearest pixel, until the mask ends (-1) or a pixel's confidence is not below
-// `accept` (its hypothesis). A pixel in a plain region walks the whole reach, one dependent
-// load after another: the steps are taken kLookahead at a time, their loads issued
-// together, then scanned in order, so the result is the one-step walk's. sign * s * d is
-// rounded as the oracle's x + sign * s * dx (the sign folded into d is exact).
-constexpr int kLookahead = 4;
-
-__device__ double firstConsistent(const Img& best, const Img& confidence, const Img& mask, float accept, int x, int y,
-                                  double sx, double sy, int reach) {
-  for (int first = 1; first <= reach; first += kLookahead) {
-    int nx[kLookahead], ny[kLookahead];
-    bool in[kLookahead];
-    float c[kLookahead];
-#pragma unroll
-    for (int k = 0; k < kLookahead; ++k) {
-      const int s = first + k;
-      nx[k] = int(llround(x + s * sx));
-      ny[k] = int(llround(y + s * sy));
-      in[k] = s <= reach && masked(mask, nx[k], ny[k]);
-      c[k] = in[k] ? at(confidence, nx[k], ny[k]) : 0.f;
-    }
-#pragma unroll
-    for (int k = 0; k < kLookahead; ++k) {
-      if (!in[k]) return -1.0;                                 // the mask ended, or past the reach
-      if (!(c[k] < accept)) return at(best, nx[k], ny[k], 0);  // as the oracle's test (NaN too)
-    }
-  }
-  return -1.0;
-}
-
 // Occlusion (the oracle's occludedSurface): a pixel the other view cannot see is covered
 // there by a nearer surface lying behind it along its epipolar curve (the nearer surface
 // moves further and overtakes it), so the pixel belongs to the farther surface ahead of
@@ -451,9 +420,16 @@ __device__ double occludedSurface(const Img& best, const Img& confidence, const 
   dx /= norm;
   dy /= norm;
   double nearest[2] = {-1.0, -1.0};  // behind, ahead
-  for (int side = 0; side < 2; ++side)
-    nearest[side] =
-        firstConsistent(best, confidence, mask, accept, x, y, side == 0 ? -dx : dx, side == 0 ? -dy : dy, reach);
+  for (int side = 0; side < 2; ++side) {
+    const double sign = side == 0 ? -1.0 : 1.0;
+    for (int s = 1; s <= reach; ++s) {
+      const int nx = int(llround(x + sign * s * dx)), ny = int(llround(y + sign * s * dy));
+      if (!masked(mask, nx, ny)) break;
+      if (at(confidence, nx, ny) < accept) continue;
+      nearest[side] = at(best, nx, ny, 0);
+      break;
+    }
+  }
   return nearest[1] >= 0.0 && nearest[0] > nearest[1] ? nearest[1] : -1.0;
 }
 

@@ -99,35 +99,6 @@ void setWarp(Cam cam, int x, int y, vec3r ray, real q) {
   pc.u.v[i] = float(u);
 }
 
-// One side of occludedSurface's walk: steps s = 1 .. pc.planes of sgn * dir from (x, y),
-// rounded to the nearest pixel, until the mask ends (-1) or a pixel's confidence is not
-// below the threshold (its hypothesis). A pixel in a plain region walks the whole reach,
-// one dependent load after another: the steps are taken LOOKAHEAD at a time, their loads
-// issued together, then scanned in order, so the result is the one-step walk's.
-#define LOOKAHEAD 4
-real firstConsistent(int x, int y, real sgn, vec2r dir) {
-  for (int first = 1; first <= pc.planes; first += LOOKAHEAD) {
-    int nx[LOOKAHEAD], ny[LOOKAHEAD];
-    bool inside[LOOKAHEAD];
-    float c[LOOKAHEAD];
-    for (int k = 0; k < LOOKAHEAD; ++k) {
-      const int s = first + k;
-      precise real step = sgn * real(s);
-      precise real sx = real(x) + step * dir.x;
-      precise real sy = real(y) + step * dir.y;
-      nx[k] = lroundr(sx);
-      ny[k] = lroundr(sy);
-      inside[k] = s <= pc.planes && masked(pc.mask, pc.width, pc.height, nx[k], ny[k]);
-      c[k] = inside[k] ? pc.confidence.v[ny[k] * pc.width + nx[k]] : 0.0;
-    }
-    for (int k = 0; k < LOOKAHEAD; ++k) {
-      if (!inside[k]) return R(-1.0);  // the mask ended, or past the reach
-      if (!(c[k] < pc.acceptConfidence)) return real(pc.best.v[idx(pc.width, 2, nx[k], ny[k], 0)]);
-    }
-  }
-  return R(-1.0);
-}
-
 // The oracle's occludedSurface: one-pixel steps along d = J t / |J t| (J at the pixel's
 // ray), rounded to the nearest pixel, up to pc.planes each way and stopping at the mask,
 // find the first consistent pixel behind (-d) and ahead (+d). When the one behind is
@@ -142,7 +113,20 @@ real occludedSurface(Cam cam, vec3r ray, int x, int y) {
   precise real norm = sqrt(d.x * d.x + d.y * d.y);
   if (!(norm > R(0.0))) return R(-1.0);
   precise vec2r dir = d / norm;
-  real nearest[2] = real[2](firstConsistent(x, y, R(-1.0), dir), firstConsistent(x, y, R(1.0), dir));
+  real nearest[2] = real[2](R(-1.0), R(-1.0));  // behind, ahead
+  for (int side = 0; side < 2; ++side) {
+    const real sgn = side == 0 ? R(-1.0) : R(1.0);
+    for (int s = 1; s <= pc.planes; ++s) {
+      precise real step = sgn * real(s);
+      precise real sx = real(x) + step * dir.x;
+      precise real sy = real(y) + step * dir.y;
+      const int nx = lroundr(sx), ny = lroundr(sy);
+      if (!masked(pc.mask, pc.width, pc.height, nx, ny)) break;
+      if (pc.confidence.v[ny * pc.width + nx] < pc.acceptConfidence) continue;
+      nearest[side] = real(pc.best.v[idx(pc.width, 2, nx, ny, 0)]);
+      break;
+    }
+  }
   return nearest[1] >= R(0.0) && nearest[0] > nearest[1] ? nearest[1] : R(-1.0);
 }
 
