@@ -157,6 +157,8 @@ TEST_CASE("bench: per-stage medians and the sweep's total a frame") {
   const CliOutcome o = runCli(dir, "bench --calib camchain.yaml left.png right.png --runs 3 --backend cpu");
   CAPTURE(o.err);
   REQUIRE(o.exitCode == 0);
+  // The pair's 8-bit files are timed as a camera's bytes, as Stereo takes them.
+  CHECK(o.out.find("8-bit samples as stored") != std::string::npos);
   // Each row: name, median, min, max. The total's median lies between the largest
   // stage median and the sum of the stages' maxima (a frame's total sums its stages).
   std::istringstream lines(o.out);

@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "curvestereo/image_io.hpp"
 #include "curvestereo/sequence.hpp"
 #include "synth/scene.hpp"
 
@@ -31,14 +32,38 @@ struct Inputs {
   Rig rig;
   ImageF left, right;
   std::string what;
+  // The files' 8-bit samples as stored, when both are 8-bit gray PNGs at the calibration's
+  // size: what a camera gives, timed as Stereo takes it (a quarter of the bytes to move), as
+  // bench --sequence does. Empty otherwise (16-bit or colour files, scaled intrinsics).
+  ImageU8 leftBytes, rightBytes;
+  bool bytes() const { return !leftBytes.data.empty(); }
 };
+
+// Both files' bytes when both are 8-bit gray and the images' sizes are the solve's.
+void readBytesIfEightBit(const std::string& leftPath, const std::string& rightPath, Inputs& in) {
+  ImageU8 l, r;
+  readPngGray(leftPath, nullptr, &l);
+  readPngGray(rightPath, nullptr, &r);
+  const bool sized = l.width == in.left.width && l.height == in.left.height && r.width == in.right.width &&
+                     r.height == in.right.height;
+  if (!l.data.empty() && !r.data.empty() && sized) in.leftBytes = std::move(l), in.rightBytes = std::move(r);
+}
+
+void computeInputs(Stereo& stereo, const Inputs& in, DepthResult& result) {
+  if (in.bytes())
+    stereo.compute(in.leftBytes, in.rightBytes, result);
+  else
+    stereo.compute(in.left, in.right, result);
+}
 
 Inputs benchInputs(const Args& args) {
   if (args.has("calib")) {
     if (args.positional().size() != 2) throw UsageError("bench --calib needs LEFT RIGHT images");
-    StereoInputs in = loadStereoInputs(args.require("calib"), args.positional()[0], args.positional()[1],
-                                       args.has("scale-intrinsics"));
-    return {std::move(in.rig), std::move(in.left), std::move(in.right), args.require("calib")};
+    StereoInputs loaded = loadStereoInputs(args.require("calib"), args.positional()[0], args.positional()[1],
+                                           args.has("scale-intrinsics"));
+    Inputs in{std::move(loaded.rig), std::move(loaded.left), std::move(loaded.right), args.require("calib"), {}, {}};
+    readBytesIfEightBit(args.positional()[0], args.positional()[1], in);
+    return in;
   }
   // A synthetic pair of the requested size (same default fisheye as the demo).
   int w = 800, h = 800;
@@ -53,7 +78,7 @@ Inputs benchInputs(const Args& args) {
   cfg.camera.params[3] = 0.5 * (h - 1);
   cfg.samplesPerAxis = 1;
   synth::SynthPair pair = synth::renderPair(cfg);
-  return {pair.rig, pair.left, pair.right, "synthetic " + size};
+  return {pair.rig, pair.left, pair.right, "synthetic " + size, {}, {}};
 }
 
 void printStageTable(const std::vector<std::string>& order, std::map<std::string, std::vector<double>>& perStage,
@@ -194,7 +219,8 @@ int cmdBench(const Args& args) {
   if (outputs == "depth") stereo.setOutputs({false, false, false, false});
 
   std::printf("device:   %s (backend %s)\n", stereo.deviceName().c_str(), stereo.backendName().c_str());
-  std::printf("input:    %s, %dx%d\n", in.what.c_str(), in.left.width, in.left.height);
+  std::printf("input:    %s, %dx%d, %s\n", in.what.c_str(), in.left.width, in.left.height,
+              in.bytes() ? "8-bit samples as stored" : "float");
   std::printf("settings: %s\n", describe(params).c_str());
   std::printf("outputs:  %s\n",
               outputs == "depth" ? "radial depth + valid mask" : "all (depth, disparity, warp, points, confidence)");
@@ -204,7 +230,7 @@ int cmdBench(const Args& args) {
   // so its images are allocated once (here, by the warm-up frame: first-touch allocation,
   // caches) and GPU backends replay a recorded frame.
   DepthResult result;
-  stereo.compute(in.left, in.right, result);
+  computeInputs(stereo, in, result);
 
   // Then the same number through compute() returning a new DepthResult (allocated and
   // zero-filled each frame), and the same number with per-stage timing, which
@@ -217,10 +243,11 @@ int cmdBench(const Args& args) {
     const bool byValue = i >= runs && i < 2 * runs, profiled = i >= 2 * runs;
     stereo.setProfiling(profiled);
     if (byValue) {
-      const DepthResult r = stereo.compute(in.left, in.right);
+      DepthResult r;
+      computeInputs(stereo, in, r);
       byValueTotals.push_back(r.totalMs);
     } else {
-      stereo.compute(in.left, in.right, result);
+      computeInputs(stereo, in, result);
       (profiled ? profiledTotals : totals).push_back(result.totalMs);
       collectStages(result, perStage, order, sweepTotals);
     }
