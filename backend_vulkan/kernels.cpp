@@ -515,6 +515,8 @@ void VulkanBackend::doAccumulate(const Buffer& u, const Buffer& w, const Buffer&
 
 // Mirrors kMaxPlanes in sweep_aggregate.comp (the path costs of two steps in shared memory).
 static_assert(kMaxSweepPlanes <= 512, "sweep_aggregate.comp holds at most 512 planes");
+// The floats a work group of sweep_combine.comp adds: 256 invocations of four each.
+constexpr int64_t kSweepCombineFloats = 1024;
 
 // The camera, translation and nearest sphere, in the precision of the geometry shaders.
 Addr VulkanBackend::sweepParamBlock(const SweepParams& p) {
@@ -571,7 +573,7 @@ void VulkanBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& cos
   dispatchGroups(subgroupWalk ? Shader(kSweepAggregateJ1 + int(J) - 1) : kSweepAggregate, pc, lines, 4);
   const int64_t count = int64_t(w) * h * p.planes;
   PcSweepCombine sum{addr(aggregated), addr(spare), int32_t(count)};
-  dispatchGroups(kSweepCombine, sum, uint32_t((count + 255) / 256), 1);
+  dispatchGroups(kSweepCombine, sum, uint32_t((count + kSweepCombineFloats - 1) / kSweepCombineFloats), 1);
 }
 
 void VulkanBackend::doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
@@ -664,7 +666,7 @@ void VulkanBackend::doSweepBandAggregate(const Buffer& aggregated, const Buffer&
     dispatchGroups(walk, pc, uint32_t((lines + kSweepBandAggregateLines - 1) / kSweepBandAggregateLines), 4);
   const int64_t count = int64_t(w) * h * p.band;
   PcSweepCombine sum{addr(aggregated), addr(spare), int32_t(count)};
-  dispatchGroups(kSweepCombine, sum, uint32_t((count + 255) / 256), 1);
+  dispatchGroups(kSweepCombine, sum, uint32_t((count + kSweepCombineFloats - 1) / kSweepCombineFloats), 1);
 }
 
 void VulkanBackend::doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs,
