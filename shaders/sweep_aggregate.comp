@@ -24,7 +24,7 @@
 // With -DCS_SUBGROUP -DCS_J=J (devices with subgroup arithmetic and shuffles in compute
 // shaders; the host picks J = ceil(planes / subgroup size), 1 .. 8) a line is one
 // subgroup's (walkSubgroup): lane l holds planes l + S j (as backend_cuda's lanes) in
-// registers, m is a butterfly of shuffles, the neighbours pass by shuffles too: no shared
+// registers, m is a subgroupMin, the neighbours pass by subgroup shuffles: no shared
 // memory and no barrier in the step loop, the loads and stores of a step coalesce, and
 // each step's costs load kSlots - 1 steps ahead. Work group x takes lines x * subgroups ..;
 // the groups past the last line return at once. More planes (a small subgroup) and the
@@ -151,18 +151,6 @@ void walkGroup(Line ln) {
 #ifdef CS_SUBGROUP
 // ---- a line per subgroup ----
 
-// The minimum of v over the subgroup (exact in any order, as the oracle's running minimum):
-// a butterfly of shuffles as backend_cuda's, unrolled from the largest subgroup the host
-// walks a line with (kGroupSize); the halvings a smaller subgroup skips are uniform
-// branches, constant where the driver knows its size. subgroupMin is slower on NVIDIA's
-// driver: sweep_band_aggregate.comp's walk took 0.50 ms with it against 0.27 with the
-// butterfly (H200, NVIDIA 580).
-float butterflyMin(float v) {
-  [[unroll]] for (int o = kGroupSize / 2; o > 0; o /= 2)
-    if (o < int(gl_SubgroupSize)) v = min(v, subgroupShuffleXor(v, uint(o)));
-  return v;
-}
-
 // One masked or unmasked step of a line with its costs c and mask value in hand. Lane l
 // holds planes l + S j (j < CS_J, S the subgroup size): the loads and stores of a step
 // coalesce, and the neighbours k -+ 1 come by a rotating shuffle (lane 0's k - 1 is the
@@ -209,7 +197,7 @@ void subgroupStep(Line ln, int lane, int S, int step, float c[CS_J], float inMas
       }
     }
   }
-  previousMin = butterflyMin(localMin);
+  previousMin = subgroupMin(localMin);  // exact, as the oracle's running minimum
   havePrevious = true;
 }
 
