@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
 #include <doctest/doctest.h>
+#include <Eigen/Geometry>
 
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/metrics.hpp"
