@@ -15,6 +15,10 @@ struct PcBytesToFloats {
   Addr dst, src, table;
   uint32_t n;
 };
+
+// Where parameter blocks and staged regions start: on 256 bytes, one rule for both and
+// for the downloads' layout and the staging claims that must agree on it.
+VkDeviceSize aligned256(VkDeviceSize bytes) { return (bytes + 255) & ~VkDeviceSize(255); }
 }  // namespace
 
 // ---- memory ----
@@ -122,7 +126,7 @@ Addr VulkanBackend::paramBlock(const void* data, size_t bytes) {
   const std::string key(static_cast<const char*>(data), bytes);
   auto it = paramCache_.find(key);
   if (it != paramCache_.end()) return params_.address + it->second;
-  const VkDeviceSize aligned = (bytes + 255) & ~VkDeviceSize(255);
+  const VkDeviceSize aligned = aligned256(bytes);
   if (paramsUsed_ + aligned > params_.size) {
     // Full (thousands of poses): wait until no submitted work reads a block, then start over.
     flush();
@@ -144,7 +148,7 @@ Addr VulkanBackend::paramBlock(const void* data, size_t bytes) {
 // there, or a frame is being recorded, the queued work runs first and the buffer starts
 // over (grown if needed, 16 MiB at least: two 848x800 images' uploads share it).
 VkDeviceSize VulkanBackend::claimStaging(VkDeviceSize bytes) {
-  VkDeviceSize offset = (stagingUsed_ + 255) & ~VkDeviceSize(255);
+  VkDeviceSize offset = aligned256(stagingUsed_);
   if (recordingFrame() || offset + bytes > staging_.size) {
     flush();  // the frame being recorded runs first; no submitted copy reads the staging buffer
     offset = 0;
@@ -226,11 +230,10 @@ void VulkanBackend::doDownload(const Buffer& src, float* host) { doDownloadAll({
 // event is set, while the later pieces still cross the bus (as CUDA's downloads do), and
 // the fences are waited for as before (flush), the frame's and the copies' alike.
 void VulkanBackend::doDownloadAll(const std::vector<Download>& downloads) {
-  auto aligned = [](VkDeviceSize b) { return (b + 255) & ~VkDeviceSize(255); };
-  VkDeviceSize total = 0;
-  for (const Download& d : downloads) total += aligned(d.src.count() * sizeof(float));
+  std::vector<Piece> pieces = downloadPieces(downloads);
+  const VkDeviceSize total = pieces.empty() ? 0 : pieces.back().staged + pieces.back().bytes;
   const VkDeviceSize base = claimStaging(total);  // runs a frame being recorded first
-  const std::vector<Piece> pieces = downloadPieces(downloads, base);
+  for (Piece& p : pieces) p.staged += base;
   recordPieces(pieces);
   submitImmediate();  // behind the frame in the queue: its first barrier waits for the frame
   copyPiecesOut(pieces);
@@ -238,18 +241,18 @@ void VulkanBackend::doDownloadAll(const std::vector<Download>& downloads) {
 
 constexpr VkDeviceSize kDownloadPiece = VkDeviceSize(1) << 20;  // 1 MiB
 
-// The downloads' pieces in order, each buffer's staged at base and on (256-aligned).
-std::vector<VulkanBackend::Piece> VulkanBackend::downloadPieces(const std::vector<Download>& downloads,
-                                                                VkDeviceSize base) {
+// The downloads' pieces in order, each buffer staged after the one before (256-aligned),
+// from offset 0 of the region the caller claims.
+std::vector<VulkanBackend::Piece> VulkanBackend::downloadPieces(const std::vector<Download>& downloads) {
   std::vector<Piece> pieces;
-  VkDeviceSize staged = base;
+  VkDeviceSize staged = 0;
   for (const Download& d : downloads) {
     const Alloc& a = alloc(d.src);
     const VkDeviceSize bytes = d.src.count() * sizeof(float);
     for (VkDeviceSize at = 0; at < bytes; at += kDownloadPiece)
       pieces.push_back({reinterpret_cast<char*>(d.host) + at, arenas_[size_t(a.arena)].buffer, a.offset + at,
                         staged + at, std::min(kDownloadPiece, bytes - at)});
-    staged += (bytes + 255) & ~VkDeviceSize(255);
+    staged += aligned256(bytes);
   }
   return pieces;
 }

@@ -171,7 +171,7 @@ class VulkanBackend final : public Backend {
     VkBuffer src;  // the piece's buffer's arena, at srcOffset
     VkDeviceSize srcOffset, staged, bytes;
   };
-  std::vector<Piece> downloadPieces(const std::vector<Download>& downloads, VkDeviceSize base);
+  std::vector<Piece> downloadPieces(const std::vector<Download>& downloads);
   void recordPieces(const std::vector<Piece>& pieces);
   void copyPiecesOut(const std::vector<Piece>& pieces);
   // A w x h grid of pixels in the 16 x 16 work groups of common.glsl.
