@@ -650,7 +650,7 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
   triangulate();
   if (kind.filter) filterResult();
   finishResult();
-  if (kind.filter && checksWarmFrames_) summariseConfidence();
+  if (summarises(kind)) summariseConfidence();
   if (finishes_) finishOutputs();
 }
 
@@ -769,7 +769,7 @@ void Pipeline::run(const InputImage& left, const InputImage& right, bool profile
   }
   const bool replay = !profiling_ && backend_.canReplayFrame(slotBase_ + kind.slot());
   issueOrReplay(progress, kind);
-  download(out, countConsistent, countConsistent && kind.filter && checksWarmFrames_);
+  download(out, countConsistent, countConsistent && summarises(kind));
   if (replay && progress) progress(1.0);
   if (profiling_)
     out.stages = backend_.takeStageTimes();

@@ -182,6 +182,9 @@ class Pipeline {
   void finishResult();
   void finishOutputs();
   void summariseConfidence();
+  // Whether a frame of this kind summarises its confidence (meanConfidence): a sequence's
+  // frame, with Stereo's warm-failure check on.
+  bool summarises(FrameKind kind) const { return kind.filter && checksWarmFrames_; }
   void swapIntoReverse();
   void stage(const char* name);
   void initialiseLevel(size_t l);
