@@ -4,8 +4,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
+#include <thread>
 
-#include "curvestereo/rig_fusion.hpp"
 #include "curvestereo/stereo.hpp"
 
 namespace cs {
@@ -30,6 +31,20 @@ RigStereo::RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, c
     }
   for (int k = 0; k < rig.size(); ++k)
     if (!covered[size_t(k)]) throw Error("cam" + std::to_string(k) + " is in none of the pairs to solve");
+  for (const Camera& cam : rig_.cameras) rays_.push_back(cameraRays(cam));
+  estimates_.resize(directions_.size());
+  applyOutputs();
+}
+
+// A camera's fused result computes its own z and points from its depth, so the directions
+// never return theirs; the fusion needs their confidence.
+void RigStereo::applyOutputs() {
+  for (Direction& dir : directions_) dir.stereo->setOutputs({flow_, flow_, false, true});
+}
+
+void RigStereo::setFlowOutputs(bool on) {
+  flow_ = on;
+  applyOutputs();
 }
 
 RigStereo::~RigStereo() = default;
@@ -39,23 +54,37 @@ void RigStereo::setCrossCheck(double tolerance) {
   crossCheck_ = tolerance;
 }
 
+void RigStereo::setConcurrentSolves(bool on) { concurrent_ = on; }
+
 std::string RigStereo::backendName() const { return directions_.front().stereo->backendName(); }
 
 RigResult RigStereo::compute(const std::vector<ImageF>& images) {
-  return solveAll(images, [&](Direction& dir, DepthResult& out) {
-    dir.stereo->compute(images[size_t(dir.reference)], images[size_t(dir.other)], out);
+  RigResult out;
+  compute(images, out);
+  return out;
+}
+
+void RigStereo::compute(const std::vector<ImageF>& images, RigResult& out) {
+  solveAll(images, out, [&](Direction& dir, DepthResult& estimate) {
+    dir.stereo->compute(images[size_t(dir.reference)], images[size_t(dir.other)], estimate);
   });
 }
 
 RigResult RigStereo::next(const std::vector<ImageF>& images, const Pose* bodyPose) {
-  return solveAll(images, [&](Direction& dir, DepthResult& out) {
+  RigResult out;
+  next(images, out, bodyPose);
+  return out;
+}
+
+void RigStereo::next(const std::vector<ImageF>& images, RigResult& out, const Pose* bodyPose) {
+  solveAll(images, out, [&](Direction& dir, DepthResult& estimate) {
     Pose camera;  // T_world_cam = T_world_body * T_body_cam
     if (bodyPose) {
       const BodyPose& inBody = rig_.poses[size_t(dir.reference)];
       camera.R = bodyPose->R * inBody.R;
       camera.t = bodyPose->R * inBody.p + bodyPose->t;
     }
-    dir.stereo->next(images[size_t(dir.reference)], images[size_t(dir.other)], out, bodyPose ? &camera : nullptr);
+    dir.stereo->next(images[size_t(dir.reference)], images[size_t(dir.other)], estimate, bodyPose ? &camera : nullptr);
   });
 }
 
@@ -63,18 +92,44 @@ void RigStereo::resetSequence() {
   for (Direction& dir : directions_) dir.stereo->resetSequence();
 }
 
+// Every direction through `solve`, concurrently (each Stereo is independent: test_threads):
+// a GPU backend's solves then overlap on the device, each on its own stream or queue, where one
+// 848x800 solve leaves most of a large GPU idle between its small kernels. The first error
+// (in direction order) is rethrown once all have finished.
+template <class Solve>
+void RigStereo::solveDirections(std::vector<DepthResult>& estimates, Solve& solve) {
+  std::vector<std::exception_ptr> errors(directions_.size());
+  auto run = [&](size_t d) {
+    try {
+      solve(directions_[d], estimates[d]);
+    } catch (...) {
+      errors[d] = std::current_exception();
+    }
+  };
+  if (!concurrent_) {
+    for (size_t d = 0; d < directions_.size(); ++d) run(d);
+  } else {
+    std::vector<std::thread> workers;
+    for (size_t d = 1; d < directions_.size(); ++d) workers.emplace_back(run, d);
+    run(0);
+    for (std::thread& w : workers) w.join();
+  }
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
 // Every direction through `solve`, then the cross-check and the per-camera fusion.
 template <class Solve>
-RigResult RigStereo::solveAll(const std::vector<ImageF>& images, Solve&& solve) {
+void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solve&& solve) {
   if (int(images.size()) != rig_.size())
     throw Error("a rig of " + std::to_string(rig_.size()) + " cameras needs " + std::to_string(rig_.size()) +
                 " images, got " + std::to_string(images.size()));
   const auto start = std::chrono::steady_clock::now();
-  RigResult out;
-  std::vector<DepthResult> estimates(directions_.size());
+  std::vector<DepthResult>& estimates = estimates_;  // reused: a frame allocates nothing
+  solveDirections(estimates, solve);
+  out.solves.clear();
   for (size_t d = 0; d < directions_.size(); ++d) {
-    Direction& dir = directions_[d];
-    solve(dir, estimates[d]);
+    const Direction& dir = directions_[d];
     out.solves.push_back({dir.reference, dir.other, estimates[d].totalMs, 0, estimates[d].warm, estimates[d].redone});
   }
   if (crossCheck_ > 0) {
@@ -86,14 +141,14 @@ RigResult RigStereo::solveAll(const std::vector<ImageF>& images, Solve&& solve) 
           out.solves[d].crossCheckInvalidated = crossCheck(
               pairRig(rig_, directions_[d].reference, directions_[d].other), estimates[d], solved[back], crossCheck_);
   }
+  out.cameras.resize(size_t(rig_.size()));
   for (int k = 0; k < rig_.size(); ++k) {
     std::vector<const DepthResult*> mine;
     for (size_t d = 0; d < directions_.size(); ++d)
       if (directions_[d].reference == k) mine.push_back(&estimates[d]);
-    out.cameras.push_back(fuseCameraEstimates(rig_.cameras[size_t(k)], mine));
+    fuseCameraEstimates(rig_.cameras[size_t(k)], mine, rays_[size_t(k)], out.cameras[size_t(k)]);
   }
   out.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  return out;
 }
 
 }  // namespace cs

@@ -2,6 +2,8 @@
 // frame and per stage after a warm-up frame, in the manner of libSGM's benchmark.
 // curvestereo bench --sequence SRC [--calib C] [--runs N]: a sequence's frames through
 // Stereo::next, warm and cold frames timed apart.
+// curvestereo bench --calib RIG IMG0 IMG1 IMG2 ...: a rig's frames, solves and panorama
+// (cmd_rig.cpp).
 #include <algorithm>
 #include <cstdio>
 #include <functional>
@@ -11,6 +13,7 @@
 #include "common.hpp"
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/sequence.hpp"
+#include "rig_cli.hpp"
 #include "synth/scene.hpp"
 
 namespace cs::cli {
@@ -189,9 +192,14 @@ int benchSequence(const Args& args, Stereo& stereo, const Sequence& sequence, in
 
 int cmdBench(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"calib", "size", "runs", "scale-intrinsics", "outputs", "sequence", "poses"});
+  known.insert({"calib", "size", "runs", "scale-intrinsics", "outputs", "sequence", "poses", "pairs", "partners",
+                "panorama-width", "serial"});
   args.allowOnly(known);
   if (args.has("runs") && args.getInt("runs", 0) < 1) throw Error("option --runs must be >= 1");
+  // Three images or more: a rig of as many cameras (cmd_rig.cpp), as for run.
+  if (args.positional().size() >= 3 && !args.has("sequence")) return benchRig(args);
+  for (const char* option : {"pairs", "partners", "panorama-width", "serial"})
+    if (args.has(option)) throw UsageError(std::string("--") + option + " is for a rig (three images or more)");
   const Params params = paramsFromArgs(args);
   if (args.has("sequence")) {
     if (!args.positional().empty()) throw UsageError("bench --sequence takes no images: the sequence names them");

@@ -146,4 +146,65 @@ int runRig(const Args& args, const std::string& outDir) {
   return 0;
 }
 
+namespace {
+
+double medianOf(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+}  // namespace
+
+int benchRig(const Args& args) {
+  const CameraRig rig = loadCameraRig(args.require("calib"));
+  const std::vector<std::string>& paths = args.positional();
+  if (int(paths.size()) != rig.size())
+    throw UsageError("the rig has " + std::to_string(rig.size()) + " cameras: bench needs " +
+                     std::to_string(rig.size()) + " images, one per camera in order, got " +
+                     std::to_string(paths.size()));
+  const std::vector<PairInfo> pairs = rigPairsFromArgs(args, rig);
+  const Params params = rigParamsFromArgs(args, rig);
+  std::vector<ImageF> images;
+  for (int k = 0; k < rig.size(); ++k)
+    images.push_back(loadImageFor(paths[size_t(k)], rig.cameras[size_t(k)], ("cam" + std::to_string(k)).c_str()));
+  RigStereo stereo(rig, pairs, params, backendFromArgs(args));
+  const bool serial = args.has("serial");
+  stereo.setConcurrentSolves(!serial);
+  stereo.setFlowOutputs(false);  // a panorama needs neither disparity nor warp
+  PanoramaFusion fusion(rig, panoramaFrame(rig), panoramaWidth(args));
+  const int runs = args.getInt("runs", stereo.backendName() == "cpu" ? 1 : 20);
+  std::printf("backend:  %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
+  std::printf("input:    %d cameras, %s\n", rig.size(), describePairs(pairs).c_str());
+  std::printf("runs:     %d frames after 1 warm-up frame; %zu solves a frame, %s\n", runs, 2 * pairs.size(),
+              serial ? "one after the other (--serial)" : "concurrently");
+  std::vector<double> solves, slowest, panoramas, totals;
+  Progress progress("benchmark");
+  RigResult r;  // reused, as a real-time loop would
+  Panorama panorama;
+  for (int i = 0; i <= runs; ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    stereo.compute(images, r);
+    const auto solved = std::chrono::steady_clock::now();
+    fusion.fuse(r.cameras, images, panorama);
+    const auto end = std::chrono::steady_clock::now();
+    if (i == 0) continue;  // the warm-up: allocations, first-use compilation
+    solves.push_back(std::chrono::duration<double, std::milli>(solved - start).count());
+    double longest = 0;
+    for (const RigResult::Solve& solve : r.solves) longest = std::max(longest, solve.ms);
+    slowest.push_back(longest);
+    panoramas.push_back(std::chrono::duration<double, std::milli>(end - solved).count());
+    totals.push_back(std::chrono::duration<double, std::milli>(end - start).count());
+    progress(double(i) / runs);
+  }
+  progress.done();
+  std::printf("frame:    median %.2f ms (%.1f fps), images in memory to the panorama on the host\n", medianOf(totals),
+              1000.0 / medianOf(totals));
+  std::printf("  solves and per-camera fusion: median %.2f ms (the slowest solve %.2f ms)\n", medianOf(solves),
+              medianOf(slowest));
+  std::printf("  panorama %dx%d (host):        median %.2f ms\n", fusion.width(), fusion.width() / 2,
+              medianOf(panoramas));
+  return 0;
+}
+
 }  // namespace cs::cli

@@ -160,9 +160,12 @@ sequences (synth --sequence's layout, with ground truth):
     {"bench", "time per frame and per stage",
      R"(usage: curvestereo bench [--calib CALIB LEFT RIGHT | --size WxH] [--runs N] [--outputs depth|all] [solver options]
        curvestereo bench --sequence SRC [--calib CALIB] [--poses FILE] [--runs N] [solver options]
+       curvestereo bench --calib RIG IMG0 IMG1 IMG2 ... [--runs N] [--serial] [rig options]
 
 Times frames after one warm-up frame and prints the median, min and max per frame and per
-stage, with the device, the settings and the frame's buffer memory.
+stage, with the device, the settings and the frame's buffer memory. With one image per
+camera of a rig (three or more), a frame is every pair solved and the panorama fused
+(--pairs, --partners, --panorama-width as for run).
 
   --calib CALIB LEFT RIGHT   a calibrated pair (default: a rendered 800x800 pair)
   --size WxH             the rendered pair's size (default 800x800)
@@ -172,6 +175,7 @@ stage, with the device, the settings and the frame's buffer memory.
   --outputs depth|all    depth: radial depth and the valid mask come back (default); all:
                          also disparity, warp, points and confidence
   --sequence SRC  --poses FILE   a sequence's frames through Stereo::next (see run --help)
+  --serial               a rig's solves one after the other (default: concurrently)
 )",
      true, false},
     {"fields", "write the valid mask, the calibration field and the trajectory field",

@@ -12,6 +12,8 @@ namespace cs::cli {
 
 // run --calib RIG IMG0 ... IMGN-1 -o OUTDIR.
 int runRig(const Args& args, const std::string& outDir);
+// bench --calib RIG IMG0 ... IMGN-1: a rig's frames timed, solves and panorama.
+int benchRig(const Args& args);
 // eval RIGDIR (a folder with cam<k>.png, depth<k>.exr, camchain.yaml, panorama_range.exr).
 int evalRig(const Args& args);
 // Whether a folder is a rig folder (cam0.png, cam1.png, ...) rather than a pair's.

@@ -4,8 +4,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
+#include <thread>
 
 namespace cs {
 
@@ -22,15 +22,29 @@ bool agrees(double a, double b) {
 // Confidence as a weight: never zero, so that a lone estimate of confidence 0 still counts.
 double weightOf(float confidence) { return std::isfinite(confidence) ? std::max(double(confidence), 1e-6) : 1e-6; }
 
+// f(begin, end) over [0, n) in contiguous chunks, one thread each, as many as the machine has
+// (the fusion is per pixel and independent, and a rig's frame is millions of them).
+template <class F>
+void inChunks(int n, F&& f) {
+  const int threads = std::clamp(int(std::thread::hardware_concurrency()), 1, std::max(1, n));
+  std::vector<std::thread> workers;
+  for (int t = 1; t < threads; ++t)
+    workers.emplace_back([&, t] { f(int(1LL * n * t / threads), int(1LL * n * (t + 1) / threads)); });
+  f(0, int(1LL * n / threads));
+  for (std::thread& w : workers) w.join();
+}
+
 // The unit rays of a camera's pixels (NaN where it does not unproject).
-Image<Eigen::Vector3f> cameraRays(const Camera& cam) {
+Image<Eigen::Vector3f> raysOf(const Camera& cam) {
   const BuiltCamera built(cam);
   Image<Eigen::Vector3f> rays(cam.width, cam.height, Eigen::Vector3f::Constant(kNaNf));
-  for (int y = 0; y < cam.height; ++y)
-    for (int x = 0; x < cam.width; ++x) {
-      Vec3<double> ray;
-      if (built.unproject(Vec2<double>(x, y), ray)) rays(x, y) = ray.cast<float>();
-    }
+  inChunks(cam.height, [&](int y0, int y1) {
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        Vec3<double> ray;
+        if (built.unproject(Vec2<double>(x, y), ray)) rays(x, y) = ray.cast<float>();
+      }
+  });
   return rays;
 }
 
@@ -56,45 +70,86 @@ void checkResult(const DepthResult& r, const Camera& cam, bool allOutputs, const
 DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates) {
   if (estimates.empty()) throw Error("fuseCameraEstimates: no estimates");
   for (const DepthResult* e : estimates) checkResult(*e, cam, true, "fuseCameraEstimates");
-  DepthResult out = *estimates.front();
-  const Image<Eigen::Vector3f> rays = cameraRays(cam);
-  for (size_t p = 0; p < out.valid.size(); ++p) {
-    const DepthResult* best = nullptr;
-    for (const DepthResult* e : estimates)
-      if (e->valid.data[p] && (!best || weightOf(e->confidence.data[p]) > weightOf(best->confidence.data[p]))) best = e;
-    if (!best) continue;  // every output is already NaN there (the first estimate's)
-    const double bestDepth = best->depth.radial.data[p];
-    double inverseSum = 0, weightSum = 0;
-    for (const DepthResult* e : estimates) {
-      const double d = e->depth.radial.data[p];
-      if (!e->valid.data[p] || !agrees(d, bestDepth)) continue;
-      const double w = weightOf(e->confidence.data[p]);
-      inverseSum += w / d, weightSum += w;
-    }
-    const double depth = 1.0 / (inverseSum / weightSum);
-    const Eigen::Vector3f ray = rays.data[p];
-    out.valid.data[p] = 1;
-    out.disparity.data[p] = best->disparity.data[p];
-    out.warp.data[p] = best->warp.data[p];
-    out.confidence.data[p] = best->confidence.data[p];
-    out.depth.radial.data[p] = float(depth);
-    out.depth.z.data[p] = std::isfinite(depth) ? float(depth * ray.z()) : INFINITY;
-    out.depth.points.data[p] = std::isfinite(depth)
-                                   ? Point3f{float(depth * ray.x()), float(depth * ray.y()), float(depth * ray.z())}
-                                   : Point3f{kNaNf, kNaNf, kNaNf};
-  }
+  DepthResult out;
+  fuseCameraEstimates(cam, estimates, cameraRays(cam), out);
   return out;
 }
 
 namespace {
 
-// Every output of pixel p made NaN: DepthResult's contract where valid is 0.
+template <class T>
+void sizeFor(Image<T>& image, const Camera& cam) {
+  if (!sameSize(image, cam)) image = Image<T>(cam.width, cam.height);
+}
+
+// Every output of pixel p made NaN: DepthResult's contract where valid is 0. Outputs a result
+// does not carry (empty) are left.
 void invalidate(DepthResult& r, size_t p) {
   r.valid.data[p] = 0;
-  r.disparity.data[p] = r.depth.radial.data[p] = r.depth.z.data[p] = r.confidence.data[p] = kNaNf;
-  r.warp.data[p] = {kNaNf, kNaNf};
-  r.depth.points.data[p] = {kNaNf, kNaNf, kNaNf};
+  r.depth.radial.data[p] = r.confidence.data[p] = kNaNf;
+  if (!r.disparity.empty()) r.disparity.data[p] = kNaNf;
+  if (!r.depth.z.empty()) r.depth.z.data[p] = kNaNf;
+  if (!r.warp.empty()) r.warp.data[p] = {kNaNf, kNaNf};
+  if (!r.depth.points.empty()) r.depth.points.data[p] = {kNaNf, kNaNf, kNaNf};
 }
+
+// Pixel p of `out` from the estimates: the most confident one, averaged with those that agree.
+void fusePixel(const std::vector<const DepthResult*>& estimates, const Eigen::Vector3f& ray, bool withFlow, size_t p,
+               DepthResult& out) {
+  const DepthResult* best = nullptr;
+  for (const DepthResult* e : estimates)
+    if (e->valid.data[p] && (!best || weightOf(e->confidence.data[p]) > weightOf(best->confidence.data[p]))) best = e;
+  if (!best) return invalidate(out, p);
+  const double bestDepth = best->depth.radial.data[p];
+  double inverseSum = 0, weightSum = 0;
+  for (const DepthResult* e : estimates) {
+    const double d = e->depth.radial.data[p];
+    if (!e->valid.data[p] || !agrees(d, bestDepth)) continue;
+    const double w = weightOf(e->confidence.data[p]);
+    inverseSum += w / d, weightSum += w;
+  }
+  const double depth = 1.0 / (inverseSum / weightSum);
+  out.valid.data[p] = 1;
+  if (withFlow) out.disparity.data[p] = best->disparity.data[p], out.warp.data[p] = best->warp.data[p];
+  out.confidence.data[p] = best->confidence.data[p];
+  out.depth.radial.data[p] = float(depth);
+  out.depth.z.data[p] = std::isfinite(depth) ? float(depth * ray.z()) : INFINITY;
+  out.depth.points.data[p] = std::isfinite(depth)
+                                 ? Point3f{float(depth * ray.x()), float(depth * ray.y()), float(depth * ray.z())}
+                                 : Point3f{kNaNf, kNaNf, kNaNf};
+}
+
+}  // namespace
+
+CameraRays cameraRays(const Camera& cam) { return raysOf(cam); }
+
+void fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates, const CameraRays& rays,
+                         DepthResult& out) {
+  if (estimates.empty()) throw Error("fuseCameraEstimates: no estimates");
+  for (const DepthResult* e : estimates) checkResult(*e, cam, false, "fuseCameraEstimates");
+  if (!sameSize(rays, cam)) throw Error("fuseCameraEstimates: the rays are not the camera's size");
+  bool withFlow = true;
+  for (const DepthResult* e : estimates) withFlow = withFlow && sameSize(e->disparity, cam) && sameSize(e->warp, cam);
+  const DepthResult& first = *estimates.front();
+  out.stages = first.stages;
+  out.totalMs = first.totalMs;
+  out.warm = first.warm, out.redone = first.redone;
+  out.consistentShare = first.consistentShare, out.meanConfidence = first.meanConfidence;
+  out.lrPassShare = first.lrPassShare;
+  sizeFor(out.valid, cam), sizeFor(out.confidence, cam), sizeFor(out.depth.radial, cam);
+  sizeFor(out.depth.z, cam), sizeFor(out.depth.points, cam);
+  if (withFlow) {
+    sizeFor(out.disparity, cam), sizeFor(out.warp, cam);
+  } else {
+    out.disparity = ImageF(), out.warp = FlowImage();
+  }
+  inChunks(cam.height, [&](int y0, int y1) {
+    for (size_t p = size_t(y0) * size_t(cam.width); p < size_t(y1) * size_t(cam.width); ++p)
+      fusePixel(estimates, rays.data[p], withFlow, p, out);
+  });
+}
+
+namespace {
 
 // Inverse ranges within tolerance of the larger, or within the slack that a fraction of a
 // pixel of parallax makes of distant points.
@@ -106,9 +161,9 @@ bool consistent(double inverseA, double inverseB, double tolerance) {
 }  // namespace
 
 long long crossCheck(const Rig& pair, DepthResult& forward, const DepthResult& backward, double tolerance) {
-  checkResult(forward, pair.cam0, true, "crossCheck");
+  checkResult(forward, pair.cam0, false, "crossCheck");
   checkResult(backward, pair.cam1, false, "crossCheck");
-  const Image<Eigen::Vector3f> rays = cameraRays(pair.cam0);
+  const Image<Eigen::Vector3f> rays = raysOf(pair.cam0);
   const BuiltCamera other(pair.cam1);
   long long invalidated = 0;
   for (int y = 0; y < forward.valid.height; ++y)
@@ -183,110 +238,83 @@ Eigen::Vector2d footprint(const Eigen::Vector2d& spacing, double row, int width)
   return {std::clamp(0.5 * spacing.x(), 0.5, columns), std::clamp(0.5 * spacing.y(), 0.5, kMaxSplatRadius)};
 }
 
-// Where camera k's pixels land in the panorama, as forEachSplat's callback receives them.
-class SplatSource {
- public:
-  SplatSource(const Camera& cam, const BodyPose& pose, const PanoramaFrame& frame, int width)
-      : rays_(cameraRays(cam)), width_(width) {
-    // X_pano = Rf^T (R X_cam + p - centre).
-    R_ = frame.R.transpose() * pose.R;
-    p_ = frame.R.transpose() * (pose.p - frame.centre);
-  }
-
-  void forEach(const DepthResult& r, const ImageF& image, const std::function<void(const Splat&)>& emit) const {
-    const ImageF& radial = r.depth.radial;
-    for (int y = 0; y < radial.height; ++y)
-      for (int x = 0; x < radial.width; ++x) {
-        if (!r.valid(x, y)) continue;
-        const Eigen::Vector3d point = pointOf(x, y, radial(x, y));
-        if (!point.allFinite()) continue;  // a pixel the camera does not unproject
-        const Eigen::Vector2d at = panoramaPixel(point, width_);
-        // The steps to the neighbours on the same surface along the camera's rows (a) and
-        // columns (b) set the footprint: a box of half-size (|a| + |b|) / 2 per axis covers
-        // the cell they span however the camera's grid lies in the panorama, so the panorama
-        // has no holes where it samples more finely than the camera.
-        Eigen::Vector2d a = Eigen::Vector2d::Zero(), b = Eigen::Vector2d::Zero();
-        for (const auto& [nx, ny] :
-             {std::pair{x + 1, y}, std::pair{x, y + 1}, std::pair{x - 1, y}, std::pair{x, y - 1}}) {
-          if (nx < 0 || ny < 0 || nx >= radial.width || ny >= radial.height || !r.valid(nx, ny)) continue;
-          if (!agrees(radial(nx, ny), radial(x, y)) || !rays_(nx, ny).allFinite()) continue;
-          Eigen::Vector2d step = panoramaPixel(pointOf(nx, ny, radial(nx, ny)), width_) - at;
-          step.x() = std::remainder(step.x(), double(width_));  // across the longitude seam
-          Eigen::Vector2d& along = ny == y ? a : b;
-          along = along.cwiseMax(step.cwiseAbs());
-        }
-        const Eigen::Vector2d spacing = a + b;
-        const float grey = image.empty() ? kNaNf : image(x, y);
-        const float range = std::isfinite(radial(x, y)) ? float(point.norm()) : INFINITY;
-        emit({at, footprint(spacing, at.y(), width_), range, r.confidence(x, y), grey});
-      }
-  }
-
- private:
-  Image<Eigen::Vector3f> rays_;
-  int width_;
-  Eigen::Matrix3d R_;
-  Eigen::Vector3d p_;
-
-  // The point in the panorama frame; a point at infinity is seen along its direction from
-  // anywhere, so it is that direction.
-  Eigen::Vector3d pointOf(int x, int y, float range) const {
-    const Eigen::Vector3d ray = rays_(x, y).cast<double>();
-    return std::isfinite(range) ? Eigen::Vector3d(R_ * (double(range) * ray) + p_) : Eigen::Vector3d(R_ * ray);
-  }
+// Where one camera's pixels land in the panorama: each pixel's position there (NaN where the
+// pixel has no depth or the camera does not unproject it) and its range from the centre, and
+// per camera row the panorama rows its pixels reach (min, max; empty when min > max), so that
+// a band of the panorama reads only the camera rows that reach it.
+struct Placement {
+  Image<Eigen::Vector2d> at, radius;  // the footprint: centre and half-sizes (Splat)
+  ImageF range;
+  std::vector<Eigen::Vector2d> rowSpan;
 };
 
 // Three passes over the splats: the best confidence per pixel, the nearest confident range
 // (the z-buffer), then the confidence-weighted mean of the samples on that nearest surface.
+// Each pass touches only the rows [rowBegin, rowEnd) of a band: the bands' threads share the
+// accumulator but no pixel, and a pixel's samples arrive in the same order however the rows
+// are banded, so the result does not depend on the number of threads.
 class PanoramaAccumulator {
  public:
   explicit PanoramaAccumulator(int width)
       : width_(width),
         height_(width / 2),
-        bestConfidence_(width, width / 2, -1.f),
-        nearest_(width, width / 2, INFINITY),
-        rangeSum_(width, width / 2, 0.f),
-        greySum_(width, width / 2, 0.f),
-        weightSum_(width, width / 2, 0.f),
-        greyWeight_(width, width / 2, 0.f) {}
+        bestConfidence_(width, width / 2),
+        nearest_(width, width / 2),
+        rangeSum_(width, width / 2),
+        greySum_(width, width / 2),
+        weightSum_(width, width / 2),
+        greyWeight_(width, width / 2) {}
+
+  // Rows [rowBegin, rowEnd) emptied for a new frame.
+  void reset(int rowBegin, int rowEnd) {
+    const size_t begin = size_t(rowBegin) * size_t(width_), end = size_t(rowEnd) * size_t(width_);
+    auto fill = [&](ImageF& image, float value) {
+      std::fill(image.data.begin() + std::ptrdiff_t(begin), image.data.begin() + std::ptrdiff_t(end), value);
+    };
+    fill(bestConfidence_, -1.f), fill(nearest_, INFINITY);
+    fill(rangeSum_, 0.f), fill(greySum_, 0.f), fill(weightSum_, 0.f), fill(greyWeight_, 0.f);
+  }
 
   template <class F>
-  void cover(const Splat& s, F&& f) {
+  void cover(const Splat& s, int rowBegin, int rowEnd, F&& f) {
     const int x0 = int(std::ceil(s.at.x() - s.radius.x())), x1 = int(std::floor(s.at.x() + s.radius.x()));
-    const int y0 = std::max(0, int(std::ceil(s.at.y() - s.radius.y()))),
-              y1 = std::min(height_ - 1, int(std::floor(s.at.y() + s.radius.y())));
+    const int y0 = std::max({0, rowBegin, int(std::ceil(s.at.y() - s.radius.y()))}),
+              y1 = std::min({height_ - 1, rowEnd - 1, int(std::floor(s.at.y() + s.radius.y()))});
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) f(((x % width_) + width_) % width_, y);
   }
 
-  void bestPass(const Splat& s) {
-    cover(s, [&](int x, int y) { bestConfidence_(x, y) = std::max(bestConfidence_(x, y), confidenceOf(s)); });
+  void bestPass(const Splat& s, int rowBegin, int rowEnd) {
+    cover(s, rowBegin, rowEnd,
+          [&](int x, int y) { bestConfidence_(x, y) = std::max(bestConfidence_(x, y), confidenceOf(s)); });
   }
-  void nearestPass(const Splat& s) {
-    cover(s, [&](int x, int y) {
+  void nearestPass(const Splat& s, int rowBegin, int rowEnd) {
+    cover(s, rowBegin, rowEnd, [&](int x, int y) {
       if (confident(s, x, y)) nearest_(x, y) = std::min(nearest_(x, y), s.range);
     });
   }
-  void meanPass(const Splat& s) {
-    cover(s, [&](int x, int y) {
+  void meanPass(const Splat& s, int rowBegin, int rowEnd) {
+    const float w = float(weightOf(s.confidence));
+    // Inverse range, so that +inf samples average to +inf without NaN.
+    const float inverse = w / s.range, grey = w * s.grey;
+    const bool hasGrey = std::isfinite(s.grey);
+    cover(s, rowBegin, rowEnd, [&](int x, int y) {
       if (!confident(s, x, y) || !agrees(s.range, nearest_(x, y))) return;
-      const float w = float(weightOf(s.confidence));
-      // Inverse range, so that +inf samples average to +inf without NaN.
-      rangeSum_(x, y) += w / s.range;
+      rangeSum_(x, y) += inverse;
       weightSum_(x, y) += w;
-      if (std::isfinite(s.grey)) greySum_(x, y) += w * s.grey, greyWeight_(x, y) += w;
+      if (hasGrey) greySum_(x, y) += grey, greyWeight_(x, y) += w;
     });
   }
 
-  Panorama result() const {
-    Panorama p{ImageF(width_, height_, kNaNf), ImageF(width_, height_, kNaNf), ImageF(width_, height_, kNaNf)};
-    for (size_t k = 0; k < p.range.size(); ++k) {
+  // Rows [rowBegin, rowEnd) of the panorama `p` (its images the panorama's size).
+  void resolve(int rowBegin, int rowEnd, Panorama& p) const {
+    for (size_t k = size_t(rowBegin) * size_t(width_); k < size_t(rowEnd) * size_t(width_); ++k) {
+      p.range.data[k] = p.grey.data[k] = p.confidence.data[k] = kNaNf;
       if (!(weightSum_.data[k] > 0)) continue;
       p.range.data[k] = weightSum_.data[k] / rangeSum_.data[k];
       p.confidence.data[k] = bestConfidence_.data[k];
       if (greyWeight_.data[k] > 0) p.grey.data[k] = greySum_.data[k] / greyWeight_.data[k];
     }
-    return p;
   }
 
  private:
@@ -300,6 +328,146 @@ class PanoramaAccumulator {
 
 }  // namespace
 
+// A camera as the panorama sees it: its rays and its pose in the panorama's frame.
+struct PanoramaFusion::CameraView {
+  Image<Eigen::Vector3f> rays;
+  Eigen::Matrix3d R;  // X_pano = R X_cam + p
+  Eigen::Vector3d p;
+
+  // The point in the panorama frame; a point at infinity is seen along its direction from
+  // anywhere, so it is that direction.
+  Eigen::Vector3d pointOf(int x, int y, float range) const {
+    const Eigen::Vector3d ray = rays(x, y).cast<double>();
+    return std::isfinite(range) ? Eigen::Vector3d(R * (double(range) * ray) + p) : Eigen::Vector3d(R * ray);
+  }
+
+  // Camera row y of `out`.
+  void placeRow(const DepthResult& r, int width, int y, Placement& out) const {
+    Eigen::Vector2d span(INFINITY, -INFINITY);
+    for (int x = 0; x < r.valid.width; ++x) {
+      out.at(x, y) = Eigen::Vector2d::Constant(kNaNf);
+      if (!r.valid(x, y) || !rays(x, y).allFinite()) continue;
+      const float radial = r.depth.radial(x, y);
+      const Eigen::Vector3d point = pointOf(x, y, radial);
+      const Eigen::Vector2d at = panoramaPixel(point, width);
+      out.at(x, y) = at;
+      out.range(x, y) = std::isfinite(radial) ? float(point.norm()) : INFINITY;
+      if (at.allFinite()) span = {std::min(span.x(), at.y()), std::max(span.y(), at.y())};
+    }
+    out.rowSpan[size_t(y)] = span;
+  }
+
+  // The half-sizes of pixel (x, y)'s footprint, whose position is finite. The steps to the neighbours on
+  // the same surface along the camera's rows (a) and columns (b) set it: a box of half-size
+  // (|a| + |b|) / 2 per axis covers the cell they span however the camera's grid lies in the
+  // panorama, so the panorama has no holes where it samples more finely than the camera.
+  Eigen::Vector2d radiusOf(const Placement& placed, const DepthResult& r, int x, int y, int width) const {
+    const ImageF& radial = r.depth.radial;
+    const Eigen::Vector2d at = placed.at(x, y);
+    Eigen::Vector2d a = Eigen::Vector2d::Zero(), b = Eigen::Vector2d::Zero();
+    for (const auto& [nx, ny] : {std::pair{x + 1, y}, std::pair{x, y + 1}, std::pair{x - 1, y}, std::pair{x, y - 1}}) {
+      if (nx < 0 || ny < 0 || nx >= radial.width || ny >= radial.height || !r.valid(nx, ny)) continue;
+      if (!agrees(radial(nx, ny), radial(x, y)) || !rays(nx, ny).allFinite()) continue;
+      Eigen::Vector2d step = placed.at(nx, ny) - at;
+      // Across the longitude seam (remainder is exact, and the identity within half a turn).
+      if (std::abs(step.x()) > 0.5 * width) step.x() = std::remainder(step.x(), double(width));
+      Eigen::Vector2d& along = ny == y ? a : b;
+      along = along.cwiseMax(step.cwiseAbs());
+    }
+    return footprint(a + b, at.y(), width);
+  }
+};
+
+// What a fusion writes besides the panorama, kept from frame to frame: tens of megabytes that
+// a fresh allocation would page in again every frame.
+struct PanoramaFusion::Scratch {
+  std::vector<Placement> placed;          // per camera
+  std::vector<std::pair<int, int>> rows;  // (camera, row) over every camera
+  PanoramaAccumulator accumulator;
+};
+
+PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width) : rig_(rig), width_(width) {
+  if (width < 4 || width % 2 || width > 32768)
+    throw Error("panorama width must be even and 4 to 32768 px, got " + std::to_string(width));
+  scratch_ = std::make_unique<Scratch>(Scratch{{}, {}, PanoramaAccumulator(width)});
+  for (int k = 0; k < rig.size(); ++k) {
+    const BodyPose& pose = rig.poses[size_t(k)];
+    const Camera& cam = rig.cameras[size_t(k)];
+    // X_pano = Rf^T (R X_cam + p - centre).
+    views_.push_back({raysOf(cam), frame.R.transpose() * pose.R, frame.R.transpose() * (pose.p - frame.centre)});
+    scratch_->placed.push_back({Image<Eigen::Vector2d>(cam.width, cam.height, Eigen::Vector2d::Constant(kNaNf)),
+                                Image<Eigen::Vector2d>(cam.width, cam.height, Eigen::Vector2d::Constant(kNaNf)),
+                                ImageF(cam.width, cam.height), std::vector<Eigen::Vector2d>(size_t(cam.height))});
+    for (int y = 0; y < cam.height; ++y) scratch_->rows.emplace_back(k, y);
+  }
+}
+
+PanoramaFusion::~PanoramaFusion() = default;
+
+Panorama PanoramaFusion::fuse(const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
+                              float minConfidence) {
+  Panorama out;
+  fuse(cameras, images, out, minConfidence);
+  return out;
+}
+
+void PanoramaFusion::fuse(const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images, Panorama& out,
+                          float minConfidence) {
+  if (int(cameras.size()) != rig_.size() || (!images.empty() && int(images.size()) != rig_.size()))
+    throw Error("fusePanorama: " + std::to_string(cameras.size()) + " results and " + std::to_string(images.size()) +
+                " images for a rig of " + std::to_string(rig_.size()) + " cameras");
+  for (int k = 0; k < rig_.size(); ++k) {
+    const Camera& cam = rig_.cameras[size_t(k)];
+    checkResult(cameras[size_t(k)], cam, false, "fusePanorama");
+    if (!images.empty() && !sameSize(images[size_t(k)], cam))
+      throw Error("fusePanorama: image " + std::to_string(k) + " is not its camera's size");
+  }
+  std::vector<Placement>& placed = scratch_->placed;
+  const std::vector<std::pair<int, int>>& rows = scratch_->rows;
+  inChunks(int(rows.size()), [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) {
+      const auto [k, y] = rows[size_t(i)];
+      views_[size_t(k)].placeRow(cameras[size_t(k)], width_, y, placed[size_t(k)]);
+    }
+  });
+  inChunks(int(rows.size()), [&](int begin, int end) {  // the footprints need the neighbours placed
+    for (int i = begin; i < end; ++i) {
+      const auto [k, y] = rows[size_t(i)];
+      Placement& place = placed[size_t(k)];
+      for (int x = 0; x < place.at.width; ++x)
+        if (place.at(x, y).allFinite())
+          place.radius(x, y) = views_[size_t(k)].radiusOf(place, cameras[size_t(k)], x, y, width_);
+    }
+  });
+  for (ImageF* image : {&out.range, &out.grey, &out.confidence})
+    if (image->width != width_ || image->height != width_ / 2) *image = ImageF(width_, width_ / 2);
+  PanoramaAccumulator& acc = scratch_->accumulator;
+  inChunks(width_ / 2, [&](int rowBegin, int rowEnd) {
+    acc.reset(rowBegin, rowEnd);
+    auto pass = [&](auto member) {
+      for (int k = 0; k < rig_.size(); ++k) {
+        const Placement& place = placed[size_t(k)];
+        const DepthResult& r = cameras[size_t(k)];
+        const ImageF noImage, &image = images.empty() ? noImage : images[size_t(k)];
+        for (int y = 0; y < r.valid.height; ++y) {
+          const Eigen::Vector2d span = place.rowSpan[size_t(y)];
+          if (span.y() + kMaxSplatRadius < rowBegin || span.x() - kMaxSplatRadius > rowEnd - 1) continue;
+          for (int x = 0; x < r.valid.width; ++x) {
+            if (!place.at(x, y).allFinite()) continue;
+            const Splat s{place.at(x, y), place.radius(x, y), place.range(x, y), r.confidence(x, y),
+                          image.empty() ? kNaNf : image(x, y)};
+            if (s.confidence >= minConfidence || minConfidence <= 0.f) (acc.*member)(s, rowBegin, rowEnd);
+          }
+        }
+      }
+    };
+    pass(&PanoramaAccumulator::bestPass);
+    pass(&PanoramaAccumulator::nearestPass);
+    pass(&PanoramaAccumulator::meanPass);
+    acc.resolve(rowBegin, rowEnd, out);
+  });
+}
+
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
                       const PanoramaFrame& frame, int width, float minConfidence) {
   if (width < 4 || width % 2 || width > 32768)
@@ -307,25 +475,7 @@ Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& came
   if (int(cameras.size()) != rig.size() || (!images.empty() && int(images.size()) != rig.size()))
     throw Error("fusePanorama: " + std::to_string(cameras.size()) + " results and " + std::to_string(images.size()) +
                 " images for a rig of " + std::to_string(rig.size()) + " cameras");
-  std::vector<SplatSource> sources;
-  for (int k = 0; k < rig.size(); ++k) {
-    checkResult(cameras[size_t(k)], rig.cameras[size_t(k)], false, "fusePanorama");
-    if (!images.empty() && !sameSize(images[size_t(k)], rig.cameras[size_t(k)]))
-      throw Error("fusePanorama: image " + std::to_string(k) + " is not its camera's size");
-    sources.emplace_back(rig.cameras[size_t(k)], rig.poses[size_t(k)], frame, width);
-  }
-  PanoramaAccumulator acc(width);
-  auto pass = [&](auto member) {
-    for (int k = 0; k < rig.size(); ++k)
-      sources[size_t(k)].forEach(cameras[size_t(k)], images.empty() ? ImageF() : images[size_t(k)],
-                                 [&](const Splat& s) {
-                                   if (s.confidence >= minConfidence || minConfidence <= 0.f) (acc.*member)(s);
-                                 });
-  };
-  pass(&PanoramaAccumulator::bestPass);
-  pass(&PanoramaAccumulator::nearestPass);
-  pass(&PanoramaAccumulator::meanPass);
-  return acc.result();
+  return PanoramaFusion(rig, frame, width).fuse(cameras, images, minConfidence);
 }
 
 std::vector<RigPoint> mergedPoints(const CameraRig& rig, const std::vector<DepthResult>& cameras,

@@ -2,6 +2,7 @@
 // depth from its pairs, and the equirectangular panorama around the rig.
 #pragma once
 #include <Eigen/Core>
+#include <memory>
 #include <vector>
 
 #include "curvestereo/camera_rig.hpp"
@@ -18,10 +19,22 @@ namespace cs {
 DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates);
 constexpr double kAgreement = 0.05;
 
+// A camera's unit rays per pixel (NaN where it does not unproject): what the fusion reads of
+// the camera, as costly to compute as a fusion, so worth keeping for a stream of frames.
+using CameraRays = Image<Eigen::Vector3f>;
+CameraRays cameraRays(const Camera& cam);
+// The same fusion into `out` (its images reused when they are the camera's size), with the
+// camera's rays given. The estimates need only valid, radial depth and confidence; the
+// result has disparity and warp where every estimate has them (empty otherwise), and z and
+// points always, from the fused depth.
+void fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates, const CameraRays& rays,
+                         DepthResult& out);
+
 // The round trip between a pair's two directions, on the host, at no solve's cost: each pixel
 // of `forward` (camera i's depth from the pair with j; pair = pairRig(rig, i, j)) is carried
 // at its depth into camera j and compared with `backward` (camera j's depth from i) at the
-// nearest pixel. Where both have a depth and their inverse ranges differ by more than
+// nearest pixel (`forward` needs valid, radial depth and confidence; it may lack the other
+// outputs). Where both have a depth and their inverse ranges differ by more than
 // `tolerance` of the larger (plus 0.005 / m, so that far points compare in parallax), the
 // pixel becomes invalid in `forward` (every output NaN). Pixels whose point leaves camera j's
 // image or meets no estimate there stay. Returns how many were invalidated. Throws cs::Error
@@ -60,6 +73,31 @@ struct Panorama {
 // camera's size, or an image (optional: none gives NaN grey) is not that size.
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
                       const PanoramaFrame& frame, int width, float minConfidence = 0.f);
+
+// fusePanorama for a stream of frames: each camera's rays (as costly as a fusion) computed
+// once, at construction, and the working memory kept from frame to frame. fuse() is
+// fusePanorama with this rig, frame and width, spread over the machine's cores. One thread
+// at a time per object. Throws cs::Error for a width that is not even and 4 to 32768.
+class PanoramaFusion {
+ public:
+  PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width);
+  ~PanoramaFusion();
+  PanoramaFusion(const PanoramaFusion&) = delete;
+  PanoramaFusion& operator=(const PanoramaFusion&) = delete;
+  Panorama fuse(const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images, float minConfidence = 0.f);
+  // The same into `out`, its images reused when they are the panorama's size.
+  void fuse(const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images, Panorama& out,
+            float minConfidence = 0.f);
+  int width() const { return width_; }
+
+ private:
+  struct CameraView;
+  struct Scratch;
+  CameraRig rig_;
+  int width_;
+  std::vector<CameraView> views_;
+  std::unique_ptr<Scratch> scratch_;
+};
 
 // Every camera's points in the panorama frame, with their grey level, at least minConfidence.
 // Throws cs::Error when the results or images are not one per camera, at its size.

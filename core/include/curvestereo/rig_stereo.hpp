@@ -14,6 +14,7 @@
 #include "curvestereo/depth_result.hpp"
 #include "curvestereo/params.hpp"
 #include "curvestereo/pose.hpp"
+#include "curvestereo/rig_fusion.hpp"
 
 namespace cs {
 
@@ -50,17 +51,26 @@ class RigStereo {
 
   // images[k] is camera k's (float grey in [0, 1], its camera's size).
   RigResult compute(const std::vector<ImageF>& images);
+  // The same into `out`, whose images are reused from frame to frame (a real-time loop).
+  void compute(const std::vector<ImageF>& images, RigResult& out);
   // A frame of a sequence: every direction is its own Stereo sequence (Stereo::next: warm
   // start, temporal filter, the cold schedule and check), so each camera's depth is as
   // steady as a pair's. bodyPose (optional): the rig's pose in the world, T_world_body;
   // each direction's reference camera then moves by its own pose in the world
   // (T_world_body * the camera's BodyPose). compute() between frames does not disturb them.
   RigResult next(const std::vector<ImageF>& images, const Pose* bodyPose = nullptr);
+  void next(const std::vector<ImageF>& images, RigResult& out, const Pose* bodyPose = nullptr);
   // The next frame starts a new sequence (cold) in every direction.
   void resetSequence();
   // With a tolerance > 0, each camera's estimate from a pair is checked against the pair's
   // other direction before the fusion (crossCheck in rig_fusion.hpp); 0 (default) leaves it.
   void setCrossCheck(double tolerance);
+  // Whether each camera's result carries the disparity and warp of its most confident pair
+  // (default: on). Off, the solves return less: a panorama or a point cloud needs neither.
+  void setFlowOutputs(bool on);
+  // Whether the directions solve concurrently, one thread each (default: on). The results
+  // are the same either way; off, they run one after the other on the calling thread.
+  void setConcurrentSolves(bool on);
   // The backend the solves run on, as Stereo names it.
   std::string backendName() const;
 
@@ -70,11 +80,17 @@ class RigStereo {
     std::unique_ptr<Stereo> stereo;
   };
   template <class Solve>
-  RigResult solveAll(const std::vector<ImageF>& images, Solve&& solve);
+  void solveAll(const std::vector<ImageF>& images, RigResult& out, Solve&& solve);
+  void applyOutputs();
+  template <class Solve>
+  void solveDirections(std::vector<DepthResult>& estimates, Solve& solve);
 
   CameraRig rig_;
   std::vector<Direction> directions_;
+  std::vector<CameraRays> rays_;        // per camera, for the fusion
+  std::vector<DepthResult> estimates_;  // per direction, reused frame after frame
   double crossCheck_ = 0;
+  bool concurrent_ = true, flow_ = true;
 };
 
 }  // namespace cs
