@@ -280,29 +280,33 @@ class PanoramaAccumulator {
     const int x0 = int(std::ceil(s.at.x() - s.radius.x())), x1 = int(std::floor(s.at.x() + s.radius.x()));
     const int y0 = std::max({0, rowBegin, int(std::ceil(s.at.y() - s.radius.y()))}),
               y1 = std::min({height_ - 1, rowEnd - 1, int(std::floor(s.at.y() + s.radius.y()))});
+    const int first = ((x0 % width_) + width_) % width_;  // the column, wrapped round the seam
     for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) f(((x % width_) + width_) % width_, y);
+      for (int x = x0, wrapped = first; x <= x1; ++x, wrapped = wrapped + 1 == width_ ? 0 : wrapped + 1)
+        f(size_t(y) * size_t(width_) + size_t(wrapped));
   }
 
   void bestPass(const Splat& s, int rowBegin, int rowEnd) {
+    const float confidence = confidenceOf(s);
     cover(s, rowBegin, rowEnd,
-          [&](int x, int y) { bestConfidence_(x, y) = std::max(bestConfidence_(x, y), confidenceOf(s)); });
+          [&](size_t k) { bestConfidence_.data[k] = std::max(bestConfidence_.data[k], confidence); });
   }
   void nearestPass(const Splat& s, int rowBegin, int rowEnd) {
-    cover(s, rowBegin, rowEnd, [&](int x, int y) {
-      if (confident(s, x, y)) nearest_(x, y) = std::min(nearest_(x, y), s.range);
+    const float confidence = confidenceOf(s);
+    cover(s, rowBegin, rowEnd, [&](size_t k) {
+      if (confident(confidence, k)) nearest_.data[k] = std::min(nearest_.data[k], s.range);
     });
   }
   void meanPass(const Splat& s, int rowBegin, int rowEnd) {
-    const float w = float(weightOf(s.confidence));
+    const float confidence = confidenceOf(s), w = float(weightOf(s.confidence));
     // Inverse range, so that +inf samples average to +inf without NaN.
     const float inverse = w / s.range, grey = w * s.grey;
     const bool hasGrey = std::isfinite(s.grey);
-    cover(s, rowBegin, rowEnd, [&](int x, int y) {
-      if (!confident(s, x, y) || !agrees(s.range, nearest_(x, y))) return;
-      rangeSum_(x, y) += inverse;
-      weightSum_(x, y) += w;
-      if (hasGrey) greySum_(x, y) += grey, greyWeight_(x, y) += w;
+    cover(s, rowBegin, rowEnd, [&](size_t k) {
+      if (!confident(confidence, k) || !agrees(s.range, nearest_.data[k])) return;
+      rangeSum_.data[k] += inverse;
+      weightSum_.data[k] += w;
+      if (hasGrey) greySum_.data[k] += grey, greyWeight_.data[k] += w;
     });
   }
 
@@ -323,7 +327,7 @@ class PanoramaAccumulator {
 
   static float confidenceOf(const Splat& s) { return std::isfinite(s.confidence) ? s.confidence : 0.f; }
   // A sample well below the best one there is a likely mismatch: it must not hide the surface.
-  bool confident(const Splat& s, int x, int y) const { return confidenceOf(s) >= 0.5f * bestConfidence_(x, y); }
+  bool confident(float confidence, size_t k) const { return confidence >= 0.5f * bestConfidence_.data[k]; }
 };
 
 }  // namespace
