@@ -420,6 +420,16 @@ namespace {
 // 400 gave 9.12 ms of primal-dual a frame, 200 9.28 and 0 (never five) 10.16.
 constexpr uint32_t kConcurrentGroups = 400;
 
+// Work groups a device holds one a multiprocessor, about (an H100 or H200 has 132
+// multiprocessors): a level with no more five-iteration groups of a tile than this takes
+// the smallest such tile (VulkanBackend::iterate).
+constexpr uint32_t kOneGroupPerMultiprocessor = 128;
+
+// primal_dual.comp's cells a work group in each tile (-DCS_NARROW_TILE, the wide default,
+// -DCS_SQUARE_TILE).
+int pdCellsW(PdTile t) { return t == PdTile::Narrow ? 16 : 32; }
+int pdCellsH(PdTile t) { return t == PdTile::Square ? 32 : 16; }
+
 // Work groups of primal_dual.comp over a w x h level at `iterations` a dispatch.
 std::pair<uint32_t, uint32_t> pdGroups(int w, int h, int cellsW, int cellsH, int iterations) {
   const int tileW = cellsW + 1 - 2 * iterations, tileH = cellsH + 1 - 2 * iterations;
@@ -465,12 +475,28 @@ void VulkanBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& 
 
   // The square tile (32 x 32 cells) has less halo per written pixel than the wide one
   // (32 x 16: 58 % of its cells written at three iterations against 71 %): on the H100,
-  // 9.12 against 12.35 ms of primal-dual a frame at N = 30 (T265 pair).
-  const bool narrow = pdTile_ == PdTile::Narrow;
-  const int cellsW = narrow ? 16 : 32, cellsH = pdTile_ == PdTile::Square ? 32 : 16;
+  // 9.12 against 12.35 ms of primal-dual a frame at N = 30 (T265 pair). But a level whose
+  // five-iteration groups of a smaller tile fit one a multiprocessor takes the smallest
+  // such tile (PdTile's order: narrow, wide, square): there a dispatch lasts as long as one
+  // group's iterations, which grow with its invocations, and the smaller tile's extra halo
+  // runs on multiprocessors that would idle. On the H200 (T265 pair, realtime: 53 x 50
+  // narrow, 106 x 100 wide, 212 x 200 square as before) primal-dual took 1.20 ms a frame
+  // against 1.55 (CUDA 1.25); at most 64 groups 1.32, 264 1.19.
+  PdTile tile = pdTile_;
+  bool small = false;
+  for (PdTile t : {PdTile::Narrow, PdTile::Wide, PdTile::Square}) {
+    if (int(t) > int(pdTile_)) break;
+    const std::pair<uint32_t, uint32_t> g = pdGroups(w, h, pdCellsW(t), pdCellsH(t), kMaxPdIterations);
+    if (g.first * g.second <= kOneGroupPerMultiprocessor) {
+      tile = t, small = true;
+      break;
+    }
+  }
+  const bool narrow = tile == PdTile::Narrow;
+  const int cellsW = pdCellsW(tile), cellsH = pdCellsH(tile);
   const std::pair<uint32_t, uint32_t> deep = pdGroups(w, h, cellsW, cellsH, kMaxPdIterations);
-  const bool fits = !narrow && deep.first * deep.second <= kConcurrentGroups;
-  const std::vector<int> plan = pdPlan(n, fits ? kMaxPdIterations : 2, narrow ? 3 : kMaxPdIterations);
+  const bool fits = small || (!narrow && deep.first * deep.second <= kConcurrentGroups);
+  const std::vector<int> plan = pdPlan(n, fits ? kMaxPdIterations : 2, narrow && !small ? 3 : kMaxPdIterations);
   // Masked-out pixels never change: the first dispatch writes them only where the result
   // needs them (into the spare set when the result ends there, the bars into set 0 when
   // they are read from u, v).
@@ -490,7 +516,7 @@ void VulkanBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& 
       pc.step[i][3] = sigmaQ * prm.alpha0;
     }
     const std::pair<uint32_t, uint32_t> groups = pdGroups(w, h, cellsW, cellsH, plan[d]);
-    const Shader shader = pdTile_ == PdTile::Square ? kPrimalDualSquare : narrow ? kPrimalDualNarrow : kPrimalDual;
+    const Shader shader = tile == PdTile::Square ? kPrimalDualSquare : narrow ? kPrimalDualNarrow : kPrimalDual;
     dispatchGroups(shader, pc, groups.first, groups.second);
     k += plan[d];
   }
