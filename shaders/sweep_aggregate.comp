@@ -166,35 +166,28 @@ void subgroupStep(Line ln, int lane, int S, int step, float c[CS_J], float inMas
     return;
   }
   float localMin = posInf();
-  if (havePrevious) {
-    // The previous step's path costs of lanes l - 1 and l + 1 (rotating: lane 0 gets lane
-    // S - 1's, lane S - 1 lane 0's, of the same chunk).
-    const uint down = uint(lane == 0 ? S - 1 : lane - 1), up = uint(lane == S - 1 ? 0 : lane + 1);
-    float fromDown[CS_J], fromUp[CS_J];
-    [[unroll]] for (int j = 0; j < CS_J; ++j) {
-      fromDown[j] = subgroupShuffle(held[j], down);
-      fromUp[j] = subgroupShuffle(held[j], up);
-    }
-    [[unroll]] for (int j = 0; j < CS_J; ++j) {
-      const int k = lane + S * j;
-      const float below = lane == 0 ? (j > 0 ? fromDown[max(j - 1, 0)] : 0.0) : fromDown[j];
-      const float above = lane == S - 1 ? (j + 1 < CS_J ? fromUp[min(j + 1, CS_J - 1)] : 0.0) : fromUp[j];
-      const float l = pathCost(min(c[j], kCostCap), held[j], below, above, k > 0, k + 1 < pc.planes, previousMin);
-      held[j] = l;
-      if (k < pc.planes) {
-        localMin = min(localMin, l);
-        ln.paths.v[base + k] = l;
-      }
-    }
-  } else {
-    [[unroll]] for (int j = 0; j < CS_J; ++j) {
-      const int k = lane + S * j;
-      const float l = min(c[j], kCostCap);
-      held[j] = l;
-      if (k < pc.planes) {
-        localMin = min(localMin, l);
-        ln.paths.v[base + k] = l;
-      }
+  // The previous step's path costs of lanes l - 1 and l + 1 (rotating: lane 0 gets lane
+  // S - 1's, lane S - 1 lane 0's, of the same chunk). The shuffles and the path costs run
+  // at every step, a path's first taking its capped costs by a select (held is finite
+  // there): one body a step rather than two halves the unrolled walk's code (sweep:
+  // aggregate 0.33 -> 0.31 ms on the H200).
+  const uint down = uint(lane == 0 ? S - 1 : lane - 1), up = uint(lane == S - 1 ? 0 : lane + 1);
+  float fromDown[CS_J], fromUp[CS_J];
+  [[unroll]] for (int j = 0; j < CS_J; ++j) {
+    fromDown[j] = subgroupShuffle(held[j], down);
+    fromUp[j] = subgroupShuffle(held[j], up);
+  }
+  [[unroll]] for (int j = 0; j < CS_J; ++j) {
+    const int k = lane + S * j;
+    const float below = lane == 0 ? (j > 0 ? fromDown[max(j - 1, 0)] : 0.0) : fromDown[j];
+    const float above = lane == S - 1 ? (j + 1 < CS_J ? fromUp[min(j + 1, CS_J - 1)] : 0.0) : fromUp[j];
+    const float capped = min(c[j], kCostCap);
+    const float walked = pathCost(capped, held[j], below, above, k > 0, k + 1 < pc.planes, previousMin);
+    const float l = havePrevious ? walked : capped;
+    held[j] = l;
+    if (k < pc.planes) {
+      localMin = min(localMin, l);
+      ln.paths.v[base + k] = l;
     }
   }
   previousMin = subgroupMin(localMin);  // exact, as the oracle's running minimum
@@ -203,11 +196,14 @@ void subgroupStep(Line ln, int lane, int S, int step, float c[CS_J], float inMas
 
 // A step takes a few hundred cycles, a load from memory under this traffic about a
 // microsecond: each step's costs and mask are loaded kSlots - 1 steps ahead into a ring
-// of registers (as backend_cuda's Ring: about 60 registers of costs). The step loop is
-// unrolled by kSlots so that every slot index is a constant; the slot refilled at step s
-// is the one step s - 1 consumed, so no register waits on a load before its step (the
-// mask is compared only when its step runs).
-const int kSlots = 60 / CS_J < 2 ? 2 : (60 / CS_J > 12 ? 12 : 60 / CS_J);
+// of registers. The step loop is unrolled by kSlots so that every slot index is a
+// constant; the slot refilled at step s is the one step s - 1 consumed, so no register
+// waits on a load before its step (the mask is compared only when its step runs). About
+// 24 registers of costs, not backend_cuda's 60: NVIDIA's Vulkan compiler gave the 12-slot
+// ring of three planes a lane 82 registers and 74 KB of code, and the walk ran slower the
+// longer its unrolled loop (H200, the full sweep's 66 planes: sweep: aggregate 0.39 ms
+// with 12 slots, 0.46 with 16, 0.34 with 8, 0.32-0.33 with 6 or 4).
+const int kSlots = 24 / CS_J < 2 ? 2 : (24 / CS_J > 12 ? 12 : 24 / CS_J);
 
 void walkSubgroup(Line ln) {
   const int lane = int(gl_SubgroupInvocationID), S = int(gl_SubgroupSize);
