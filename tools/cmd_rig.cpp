@@ -1,7 +1,11 @@
 // curvestereo run --calib RIG IMG0 IMG1 ... -o OUTDIR [--pairs I-J,...] [--partners N]
 //                 [--panorama-width W] [solver options]
+// curvestereo run --sequence DIR [--calib RIG] -o OUTDIR [rig options]: a rig's recording
+// (cam0 ... cam<N-1>), frame after frame into OUTDIR/<t_ns>/.
 // A rig of N cameras: its pairs solved, each camera's outputs in OUTDIR/cam<k>/ under a pair
 // run's names, the panorama and the merged cloud in OUTDIR.
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,6 +18,7 @@
 #include "curvestereo/depth_views.hpp"
 #include "curvestereo/image_io.hpp"
 #include "curvestereo/rig_fusion.hpp"
+#include "curvestereo/rig_sequence.hpp"
 #include "curvestereo/rig_stereo.hpp"
 #include "rig_cli.hpp"
 
@@ -148,6 +153,27 @@ int runRig(const Args& args, const std::string& outDir) {
 
 namespace {
 
+// A frame's outputs: each camera's in DIR/cam<k>/ under a pair run's names, the panorama and
+// the merged cloud in DIR.
+void writeRigFrame(const std::string& dir, const CameraRig& rig, const RigResult& r, const std::vector<ImageF>& images,
+                   const Panorama& panorama, const PanoramaFrame& frame, float minConfidence) {
+  for (int k = 0; k < rig.size(); ++k) {
+    const std::string camDir = (std::filesystem::path(dir) / ("cam" + std::to_string(k))).string();
+    writeOutputs(camDir, r.cameras[size_t(k)], images[size_t(k)], minConfidence);
+    writeOrganisedCloud(camDir, r.cameras[size_t(k)], minConfidence);
+  }
+  writePanorama(dir, panorama);
+  writeMergedCloud(dir, mergedPoints(rig, r.cameras, images, frame, minConfidence));
+}
+
+// T_world_body from camera 0's pose in the world: T_world_cam0 * inverse(T_body_cam0).
+Pose bodyPoseFrom(const Pose& worldCam0, const BodyPose& cam0InBody) {
+  Pose body;
+  body.R = worldCam0.R * cam0InBody.R.transpose();
+  body.t = worldCam0.t - body.R * cam0InBody.p;
+  return body;
+}
+
 double medianOf(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
@@ -155,6 +181,81 @@ double medianOf(std::vector<double> v) {
 }
 
 }  // namespace
+
+bool isRigSequence(const Args& args) {
+  if (args.has("rig")) return true;
+  std::error_code ec;
+  const std::filesystem::path source = args.get("sequence", "");
+  for (const std::filesystem::path& mav0 : {source / "mav0", source})
+    if (std::filesystem::is_regular_file(mav0 / "cam2" / "data.csv", ec)) return true;
+  return false;
+}
+
+int runRigSequence(const Args& args, const std::string& outDir) {
+  const std::string source = args.get("sequence", "");
+  const CameraRig rig = loadCameraRig(sequenceCalibration(args, source));
+  SequenceOptions options;
+  options.poses = args.get("poses", "");
+  options.pairToleranceMs = args.getDouble("pair-tolerance-ms", options.pairToleranceMs);
+  const RigSequence sequence = RigSequence::open(source, rig.size(), options);
+  const auto [first, end] = frameRange(args, sequence.frames().size());  // checked before any output
+  for (const std::string& w : sequence.warnings()) std::fprintf(stderr, "curvestereo: warning: %s\n", w.c_str());
+  Params params = rigParamsFromArgs(args, rig);
+  const bool cold = args.has("cold");
+  if (cold) params.warmStart = false, params.temporalStrength = 0.f;  // every frame alone: the baseline
+  const std::vector<PairInfo> pairs = rigPairsFromArgs(args, rig);
+  const float minConfidence = minConfidenceFromArgs(args);
+  RigStereo stereo(rig, pairs, params, backendFromArgs(args));
+  stereo.setCrossCheck(crossCheckFromArgs(args));
+  const PanoramaFrame frame = panoramaFrame(rig);
+  PanoramaFusion fusion(rig, frame, panoramaWidth(args));
+  const float panoramaConfidence = panoramaMinConfidence(args);
+  std::printf("sequence: %s\n", sequence.summary().c_str());
+  std::printf("backend: %s; settings: %s; %s\n", stereo.backendName().c_str(), describe(params).c_str(),
+              cold ? "cold: every frame solved alone" : "warm start and temporal filter");
+  std::printf("pairs: %s\n", describePairs(pairs).c_str());
+  const bool tty = isatty(fileno(stderr));
+  const auto start = std::chrono::steady_clock::now();
+  int frames = 0, warmSolves = 0, coldSolves = 0, redone = 0;
+  double solveMs = 0;
+  std::vector<ImageF> images;
+  RigResult r;
+  Panorama panorama;
+  for (size_t i = first; i < end; ++i) {
+    const RigSequenceFrame& f = sequence.frames()[i];
+    const std::string name = std::to_string(f.timestampNs);
+    const std::string written = " (" + std::to_string(frames) + " frames before it are written)";
+    try {
+      sequence.load(i, images);  // its errors name the frame
+    } catch (const Error& e) {
+      if (tty) std::fputc('\n', stderr);
+      throw Error(e.what() + written);
+    }
+    try {
+      const Pose body = f.hasPose ? bodyPoseFrom(f.pose, rig.poses[0]) : Pose();
+      stereo.next(images, r, f.hasPose ? &body : nullptr);
+      fusion.fuse(r.cameras, images, panorama, panoramaConfidence);
+      writeRigFrame((std::filesystem::path(outDir) / name).string(), rig, r, images, panorama, frame, minConfidence);
+    } catch (const Error& e) {
+      if (tty) std::fputc('\n', stderr);
+      throw Error("frame " + std::to_string(i) + " (t " + name + " ns): " + e.what() + written);
+    }
+    ++frames;
+    solveMs += r.totalMs;
+    for (const RigResult::Solve& s : r.solves) (s.warm ? warmSolves : coldSolves) += 1, redone += s.redone;
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (tty || frames == int(end - first) || frames % 30 == 0)
+      std::fprintf(stderr, "%sframe %d/%zu  %.1f ms solved  %.1f frames/s%s", tty ? "\r" : "", frames, end - first,
+                   r.totalMs, frames / std::max(1e-9, seconds), tty ? "   " : "\n");
+  }
+  if (tty) std::fputc('\n', stderr);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf(
+      "%d frames in %.1f s: %.1f ms a frame solved and fused per camera; %d solves warm, %d cold, %d warm ones "
+      "redone cold; outputs in %s/<t_ns>/\n",
+      frames, seconds, frames ? solveMs / frames : 0.0, warmSolves, coldSolves, redone, outDir.c_str());
+  return 0;
+}
 
 int benchRig(const Args& args) {
   const CameraRig rig = loadCameraRig(args.require("calib"));

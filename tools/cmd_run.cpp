@@ -33,12 +33,6 @@ struct ViewOptions {
   DepthSampling sampling = DepthSampling::Nearest;
 };
 
-// A whole number that is all of text.
-bool wholeNumber(const std::string& text, int& out) {
-  const auto r = std::from_chars(text.data(), text.data() + text.size(), out);
-  return r.ec == std::errc() && r.ptr == text.data() + text.size();
-}
-
 // "FOV" or "FOV,WxH"; the size defaults to camera 0's.
 PinholeView parsePinhole(const std::string& text, const Camera& cam0) {
   const std::string usage =
@@ -120,24 +114,6 @@ struct SequenceTally {
 
 // "-o OUT.mcap": the depth goes into one MCAP log (DepthLogWriter) instead of folders.
 bool mcapOutput(const std::string& out) { return out.size() > 5 && out.compare(out.size() - 5, 5, ".mcap") == 0; }
-
-// --frames FIRST:END: frames FIRST .. END-1 alone (either may be left out), e.g. one part of
-// a long recording as a batch task; the warm start begins at FIRST.
-std::pair<size_t, size_t> frameRange(const Args& args, size_t n) {
-  if (!args.has("frames")) return {0, n};
-  const std::string text = args.get("frames", "");
-  const size_t colon = text.find(':');
-  int first = 0, end = int(std::min<size_t>(n, size_t(INT32_MAX)));
-  const bool endGiven = colon != std::string::npos && colon + 1 < text.size();
-  if (colon == std::string::npos || (colon > 0 && !wholeNumber(text.substr(0, colon), first)) ||
-      (endGiven && !wholeNumber(text.substr(colon + 1), end)) || first < 0 || (endGiven && end <= first))
-    throw UsageError("--frames expects FIRST:END, frame indexes with FIRST < END (either may be left out), got '" +
-                     text + "'");
-  if (size_t(first) >= n)
-    throw Error("--frames " + text + ": the sequence has " + std::to_string(n) + " frames (0 to " +
-                std::to_string(n - 1) + ")");
-  return {size_t(first), std::min(size_t(end), n)};
-}
 
 // --log FILE --topics LEFT,RIGHT, or --sequence SRC: the frames and the calibration's path.
 Sequence openFrames(const Args& args, std::string& calibPath) {
@@ -262,9 +238,18 @@ int cmdRun(const Args& args) {
     if (!args.positional().empty()) throw UsageError(std::string(which) + " takes no images: the source names them");
     for (const char* option : {"topics", "compression"})
       if (args.has(option) && !args.has("log")) throw UsageError(std::string("--") + option + " is for run --log");
+    if (args.has("sequence") && isRigSequence(args)) {
+      for (const char* option :
+           {"pinhole", "equirect", "sampling", "scale-intrinsics", "image-size", "mask", "read-threads"})
+        if (args.has(option)) throw UsageError(std::string("--") + option + " is for a pair, not a rig's sequence");
+      const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
+      requireOutputFolder(outDir);
+      return runRigSequence(args, outDir);
+    }
     for (const char* option : {"rig", "pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"})
       if (args.has(option))
-        throw UsageError(std::string("--") + option + " is for one frame of a rig: " + which + " solves a pair");
+        throw UsageError(std::string("--") + option + " is for a rig: " + which +
+                         " solves a pair (a rig's sequence: --sequence DIR --rig)");
     const std::string outDir = args.has("o") ? args.get("o", "") : args.require("output");
     if (!mcapOutput(outDir)) requireOutputFolder(outDir);
     if (args.has("compression") && !mcapOutput(outDir)) throw UsageError("--compression is for -o OUT.mcap");

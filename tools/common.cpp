@@ -289,4 +289,28 @@ int readThreads(const Args& args) {
   return n;
 }
 
+// A whole number that is all of text.
+bool wholeNumber(const std::string& text, int& out) {
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), out);
+  return r.ec == std::errc() && r.ptr == text.data() + text.size();
+}
+
+// --frames FIRST:END: frames FIRST .. END-1 alone (either may be left out), e.g. one part of
+// a long recording as a batch task; the warm start begins at FIRST.
+std::pair<size_t, size_t> frameRange(const Args& args, size_t n) {
+  if (!args.has("frames")) return {0, n};
+  const std::string text = args.get("frames", "");
+  const size_t colon = text.find(':');
+  int first = 0, end = int(std::min<size_t>(n, size_t(INT32_MAX)));
+  const bool endGiven = colon != std::string::npos && colon + 1 < text.size();
+  if (colon == std::string::npos || (colon > 0 && !wholeNumber(text.substr(0, colon), first)) ||
+      (endGiven && !wholeNumber(text.substr(colon + 1), end)) || first < 0 || (endGiven && end <= first))
+    throw UsageError("--frames expects FIRST:END, frame indexes with FIRST < END (either may be left out), got '" +
+                     text + "'");
+  if (size_t(first) >= n)
+    throw Error("--frames " + text + ": the sequence has " + std::to_string(n) + " frames (0 to " +
+                std::to_string(n - 1) + ")");
+  return {size_t(first), std::min(size_t(end), n)};
+}
+
 }  // namespace cs::cli

@@ -85,5 +85,10 @@ std::string sequenceCalibration(const Args& args, const std::string& source);
 // --read-threads N: the threads reading frames ahead of the solve (SequenceReader; 0 or
 // absent: chosen by the core count). Throws UsageError on anything but 0 to 64.
 int readThreads(const Args& args);
+// A whole number that is all of text.
+bool wholeNumber(const std::string& text, int& out);
+// --frames FIRST:END of a sequence of n frames: [FIRST, END) (either may be left out);
+// all of them without the option.
+std::pair<size_t, size_t> frameRange(const Args& args, size_t n);
 
 }  // namespace cs::cli

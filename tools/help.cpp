@@ -37,6 +37,7 @@ it and prints tau>1, tau>3, the end-point error, depth abs-rel and the time per 
      R"(usage: curvestereo run --calib CALIB LEFT RIGHT -o OUTDIR [options] [solver options]
        curvestereo run --calib RIG IMG0 IMG1 IMG2 ... -o OUTDIR [rig options] [solver options]
        curvestereo run --sequence SRC -o OUTDIR [--calib CALIB] [--poses FILE] [--cold] [solver options]
+       curvestereo run --sequence RIGDIR -o OUTDIR [--calib RIG] [--rig] [rig options] [solver options]
        curvestereo run --log FILE --topics LEFT,RIGHT --calib CALIB -o OUT.mcap|OUTDIR [--cold] [solver options]
 
 Writes depth.exr (radial metres), depth.png, disparity.exr, flow.flo, points.ply,
@@ -70,7 +71,10 @@ a rig of N cameras (three images or more, or --rig; docs/guide.md "run on a rig"
 sequences:
   --sequence SRC         an ASL/EuRoC folder (mav0/cam0, mav0/cam1; its poses_cam0.csv and
                          camchain.yaml are used) or "LEFT,RIGHT" folders or globs paired by
-                         sorted name; each frame's outputs go to OUTDIR/<t_ns>/
+                         sorted name; each frame's outputs go to OUTDIR/<t_ns>/. A rig's
+                         recording (an ASL folder with cam0 ... cam<N-1>, N >= 3, or --rig):
+                         each frame's cameras and panorama into OUTDIR/<t_ns>/, with the rig
+                         options above
   --poses FILE           camera 0's pose per frame, T_world_cam0: CSV t_ns,px,py,pz,qx,qy,qz,qw
                          or TUM text
   --pair-tolerance-ms T  left and right timestamps further apart are not paired (default 1)

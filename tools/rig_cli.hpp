@@ -12,6 +12,10 @@ namespace cs::cli {
 
 // run --calib RIG IMG0 ... IMGN-1 -o OUTDIR.
 int runRig(const Args& args, const std::string& outDir);
+// run --sequence DIR: whether it is a rig's (--rig, or an ASL folder with a cam2/).
+bool isRigSequence(const Args& args);
+// run --sequence DIR of a rig: every frame through RigStereo::next and the panorama.
+int runRigSequence(const Args& args, const std::string& outDir);
 // bench --calib RIG IMG0 ... IMGN-1: a rig's frames timed, solves and panorama.
 int benchRig(const Args& args);
 // eval RIGDIR (a folder with cam<k>.png, depth<k>.exr, camchain.yaml, panorama_range.exr).

@@ -357,30 +357,35 @@ Sequence Sequence::open(const std::string& source, const SequenceOptions& option
   return seq;
 }
 
+namespace detail {
+
+const Pose* nearestPose(const std::map<int64_t, Pose>& poses, int64_t t, double toleranceMs) {
+  auto it = poses.lower_bound(t);
+  if (it != poses.begin() && (it == poses.end() || t - std::prev(it)->first < it->first - t)) --it;
+  if (it == poses.end() || double(std::max(it->first, t) - std::min(it->first, t)) > toleranceMs * 1e6) return nullptr;
+  return &it->second;
+}
+
+std::string missingPosesText(const std::vector<int64_t>& missing, size_t frames, double toleranceMs,
+                             const std::string& path) {
+  std::string list;
+  for (size_t k = 0; k < missing.size() && k < 5; ++k) list += (k ? ", " : "") + std::to_string(missing[k]);
+  return std::to_string(missing.size()) + " of " + std::to_string(frames) + " frames have no pose within " +
+         msText(toleranceMs) + " in '" + path + "' (t_ns " + list + (missing.size() > 5 ? ", ..." : "") + ")";
+}
+
+}  // namespace detail
+
 void Sequence::attachPoses(const std::string& path, double toleranceMs) {
   posesGiven_ = true;
   const std::map<int64_t, Pose> poses = readPoses(path);
-  const double tolNs = toleranceMs * 1e6;
   std::vector<int64_t> missing;
   for (SequenceFrame& f : frames_) {
-    // The nearest pose: the first at or after the frame, or the one before it.
-    auto it = poses.lower_bound(f.timestampNs);
-    if (it != poses.begin() && (it == poses.end() || f.timestampNs - std::prev(it)->first < it->first - f.timestampNs))
-      --it;
-    if (it != poses.end() && double(std::max(it->first, f.timestampNs) - std::min(it->first, f.timestampNs)) <= tolNs) {
-      f.hasPose = true;
-      f.pose = it->second;
-    } else {
-      missing.push_back(f.timestampNs);
-    }
+    const Pose* pose = detail::nearestPose(poses, f.timestampNs, toleranceMs);
+    if (pose) f.hasPose = true, f.pose = *pose;
+    if (!pose) missing.push_back(f.timestampNs);
   }
-  if (!missing.empty()) {
-    std::string list;
-    for (size_t k = 0; k < missing.size() && k < 5; ++k) list += (k ? ", " : "") + std::to_string(missing[k]);
-    warnings_.push_back(std::to_string(missing.size()) + " of " + std::to_string(frames_.size()) +
-                        " frames have no pose within " + msText(toleranceMs) + " in '" + path + "' (t_ns " + list +
-                        (missing.size() > 5 ? ", ..." : "") + ")");
-  }
+  if (!missing.empty()) warnings_.push_back(detail::missingPosesText(missing, frames_.size(), toleranceMs, path));
 }
 
 std::string Sequence::summary() const {

@@ -1,10 +1,14 @@
-// Pairing two cameras' frames by timestamp, shared by ASL folders and logs (sequence_io.cpp).
+// Pairing cameras' frames by timestamp and frames with poses, shared by ASL folders, rig
+// folders and logs (sequence_io.cpp).
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "curvestereo/pose.hpp"
 
 namespace cs::detail {
 
@@ -18,5 +22,13 @@ struct TimePairs {
 TimePairs pairByTime(const std::vector<int64_t>& left, const std::vector<int64_t>& right, double toleranceMs);
 
 std::string msText(double ms);  // "1 ms"
+
+// The pose nearest to t (the first at or after it, or the one before) when it lies within
+// toleranceMs: no interpolation, since a pose from another instant is wrong for a moving rig.
+const Pose* nearestPose(const std::map<int64_t, Pose>& poses, int64_t t, double toleranceMs);
+// "3 of 16 frames have no pose within 5 ms in 'FILE' (t_ns 1, 2, 3)": the frames left
+// without one, at most five named.
+std::string missingPosesText(const std::vector<int64_t>& missing, size_t frames, double toleranceMs,
+                             const std::string& path);
 
 }  // namespace cs::detail

@@ -1,0 +1,132 @@
+// A rig's recorded sequence: ASL folders with N cameras (rig_sequence.hpp).
+#include "curvestereo/rig_sequence.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "calib_common.hpp"
+#include "curvestereo/image_io.hpp"
+#include "sequence_pairing.hpp"
+
+namespace cs {
+namespace {
+
+namespace fs = std::filesystem;
+using calib::oneLine;
+
+std::string cam(int k) { return "cam" + std::to_string(k); }
+
+// The folder that holds cam0/: source/mav0 or source itself.
+fs::path mav0Of(const std::string& source) {
+  std::error_code ec;
+  const fs::path inside = fs::path(source) / "mav0";
+  if (fs::is_directory(inside / "cam0", ec)) return inside;
+  if (fs::is_directory(fs::path(source) / "cam0", ec)) return source;
+  throw Error(oneLine("'" + source + "' is not an ASL/EuRoC folder (no mav0/cam0/ or cam0/ in it)"));
+}
+
+std::vector<AslRow> readCamera(const fs::path& mav0, int k) {
+  const fs::path csv = mav0 / cam(k) / "data.csv";
+  std::error_code ec;
+  if (!fs::is_regular_file(csv, ec))
+    throw Error(oneLine("ASL folder '" + mav0.string() + "' has no " + cam(k) + "/data.csv (the rig has a camera " +
+                        std::to_string(k) + ")"));
+  return parseAslCsv(calib::readTextFile(csv.string()), csv.string());
+}
+
+std::vector<int64_t> timesOf(const std::vector<AslRow>& rows) {
+  std::vector<int64_t> ns;
+  for (const AslRow& r : rows) ns.push_back(r.timestampNs);
+  return ns;
+}
+
+}  // namespace
+
+RigSequence RigSequence::open(const std::string& source, int cameras, const SequenceOptions& options) {
+  if (cameras < 2) throw Error("a rig sequence needs at least two cameras, got " + std::to_string(cameras));
+  if (!(options.pairToleranceMs >= 0) || !(options.poseToleranceMs >= 0) || !std::isfinite(options.pairToleranceMs) ||
+      !std::isfinite(options.poseToleranceMs))
+    throw Error("sequence tolerances must be finite and >= 0 ms");
+  const fs::path mav0 = mav0Of(source);
+  std::vector<std::vector<AslRow>> rows;
+  for (int k = 0; k < cameras; ++k) rows.push_back(readCamera(mav0, k));
+  RigSequence seq;
+  seq.cameras_ = cameras;
+  // partner[k][i]: camera k's image paired with camera 0's image i, or -1.
+  const std::vector<int64_t> reference = timesOf(rows[0]);
+  std::vector<std::vector<long long>> partner(size_t(cameras), std::vector<long long>(reference.size(), -1));
+  for (size_t i = 0; i < reference.size(); ++i) partner[0][i] = (long long)i;
+  const std::string within = " within " + detail::msText(options.pairToleranceMs);
+  for (int k = 1; k < cameras; ++k) {
+    const detail::TimePairs paired = detail::pairByTime(reference, timesOf(rows[size_t(k)]), options.pairToleranceMs);
+    for (const auto& [i, j] : paired.pairs) partner[size_t(k)][i] = (long long)j;
+    for (size_t j : paired.rightAlone)
+      seq.warnings_.push_back(cam(k) + " " + rows[size_t(k)][j].filename + ": no cam0 frame" + within);
+    seq.unpaired_ += paired.rightAlone.size();
+  }
+  for (size_t i = 0; i < reference.size(); ++i) {
+    RigSequenceFrame f;
+    f.timestampNs = reference[i];
+    for (int k = 0; k < cameras && f.paths.size() == size_t(k); ++k)
+      if (partner[size_t(k)][i] >= 0)
+        f.paths.push_back((mav0 / cam(k) / "data" / rows[size_t(k)][size_t(partner[size_t(k)][i])].filename).string());
+    if (f.paths.size() == size_t(cameras)) {
+      seq.frames_.push_back(std::move(f));
+      continue;
+    }
+    // Camera 0's image and every partner it has go unused: name the first camera missing.
+    seq.warnings_.push_back("cam0 " + rows[0][i].filename + ": no " + cam(int(f.paths.size())) + " frame" + within);
+    for (int k = 0; k < cameras; ++k) seq.unpaired_ += partner[size_t(k)][i] >= 0;
+  }
+  if (seq.frames_.empty())
+    throw Error(oneLine("ASL folder '" + mav0.string() + "': no frame has an image of all " + std::to_string(cameras) +
+                        " cameras" + within));
+  std::string posesPath = options.poses;
+  std::error_code ec;
+  if (posesPath.empty())
+    for (const fs::path& p : {fs::path(source) / "poses_cam0.csv", mav0 / "poses_cam0.csv"})
+      if (fs::is_regular_file(p, ec)) {
+        posesPath = p.string();
+        break;
+      }
+  if (!posesPath.empty()) {
+    seq.posesGiven_ = true;
+    const std::map<int64_t, Pose> poses = readPoses(posesPath);
+    std::vector<int64_t> missing;
+    for (RigSequenceFrame& f : seq.frames_) {
+      const Pose* pose = detail::nearestPose(poses, f.timestampNs, options.poseToleranceMs);
+      if (pose) f.hasPose = true, f.pose = *pose;
+      if (!pose) missing.push_back(f.timestampNs);
+    }
+    if (!missing.empty())
+      seq.warnings_.push_back(
+          detail::missingPosesText(missing, seq.frames_.size(), options.poseToleranceMs, posesPath));
+  }
+  return seq;
+}
+
+std::string RigSequence::summary() const {
+  const size_t posed = size_t(std::count_if(frames_.begin(), frames_.end(), [](const auto& f) { return f.hasPose; }));
+  return std::to_string(frames_.size()) + " frames of " + std::to_string(cameras_) + " cameras (ASL, " +
+         (posesGiven_ ? std::to_string(posed) + " with poses" : std::string("no poses")) + "); " +
+         std::to_string(unpaired_) + " images unpaired";
+}
+
+void RigSequence::load(size_t i, std::vector<ImageF>& images) const {
+  if (i >= frames_.size())
+    throw Error("rig sequence frame " + std::to_string(i) + " does not exist (" + std::to_string(frames_.size()) +
+                " frames)");
+  const RigSequenceFrame& f = frames_[i];
+  images.resize(f.paths.size());
+  for (size_t k = 0; k < f.paths.size(); ++k) {
+    try {
+      images[k] = readPngGray(f.paths[k]);
+    } catch (const Error& e) {  // e names the file
+      throw Error(oneLine("frame " + std::to_string(i) + " (t " + std::to_string(f.timestampNs) + " ns), " +
+                          cam(int(k)) + " image: " + e.what()));
+    }
+  }
+}
+
+}  // namespace cs
