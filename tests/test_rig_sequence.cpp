@@ -4,7 +4,6 @@
 // frame's cameras and panorama into OUT/<t_ns>/.
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <string>
 #include <vector>
 
@@ -16,6 +15,7 @@
 
 namespace fs = std::filesystem;
 using cs::test::checkRefused;
+using cs::test::errorOf;
 using cs::test::runCli;
 
 namespace {
@@ -37,15 +37,6 @@ void writeAsl(const fs::path& dir, const std::vector<std::vector<long long>>& ti
     }
     writeText(cam / "data.csv", csv);
   }
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const cs::Error& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -21,6 +22,16 @@ namespace cs::test {
 inline bool sameBits(const ImageF& a, const ImageF& b) {
   return a.width == b.width && a.height == b.height &&
          std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0;
+}
+
+// The message of the cs::Error that f throws, "" when it throws none.
+inline std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
 }
 
 // Path of a file in ../shared/data, or "" when the data set is not present.
