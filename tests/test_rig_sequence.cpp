@@ -39,6 +39,14 @@ void writeAsl(const fs::path& dir, const std::vector<std::vector<long long>>& ti
   }
 }
 
+// The first n cameras of ring6 (a rig for the reader: it reads the count and camera 0's pose).
+cs::CameraRig ringOf(int n) {
+  cs::CameraRig rig = cs::synth::rigLayout("ring6", 16).rig;
+  rig.cameras.resize(size_t(n));
+  rig.poses.resize(size_t(n));
+  return rig;
+}
+
 }  // namespace
 
 TEST_CASE("RigSequence pairs every camera to camera 0 and names each image it leaves out") {
@@ -47,14 +55,19 @@ TEST_CASE("RigSequence pairs every camera to camera 0 and names each image it le
   // cam1 is 0.2 ms late at frame 0; cam2 misses frame 2 and has one image of its own.
   writeAsl(dir, {{t0, t0 + dt, t0 + 2 * dt}, {t0 + 200'000, t0 + dt, t0 + 2 * dt}, {t0, t0 + dt, t0 + 5 * dt}});
   writeText(dir / "poses_cam0.csv", "# t_ns,px,py,pz,qx,qy,qz,qw\n" + std::to_string(t0) + ",1,2,3,0,0,0,1\n");
-  const cs::RigSequence seq = cs::RigSequence::open(dir.string(), 3);
+  const cs::CameraRig rig = ringOf(3);
+  const cs::RigSequence seq = cs::RigSequence::open(dir.string(), rig);
   REQUIRE(seq.frames().size() == 2);
   CHECK(seq.cameras() == 3);
   CHECK(seq.frames()[0].timestampNs == t0);
   CHECK(seq.frames()[0].paths[1].find("cam1/data/1000200000.png") != std::string::npos);
   CHECK(seq.frames()[1].paths[2].find("cam2/data/1033333333.png") != std::string::npos);
   CHECK(seq.frames()[0].hasPose);
-  CHECK(seq.frames()[0].pose.t.x() == 1.0);
+  // The rig's pose: camera 0's centre on the body lands where the file puts camera 0.
+  const cs::Pose& body = seq.frames()[0].bodyPose;
+  const Eigen::Vector3d cam0 = body.R * rig.poses[0].p + body.t;
+  CHECK((cam0 - Eigen::Vector3d(1, 2, 3)).norm() < 1e-12);
+  CHECK((body.R * rig.poses[0].R - Eigen::Matrix3d::Identity()).norm() < 1e-12);
   CHECK_FALSE(seq.frames()[1].hasPose);
   // cam0's and cam1's images of frame 2 and cam2's own one: three images in no frame.
   CHECK(seq.summary() == "2 frames of 3 cameras (ASL, 1 with poses); 3 images unpaired");
@@ -71,26 +84,31 @@ TEST_CASE("RigSequence pairs every camera to camera 0 and names each image it le
   // A wider tolerance is the user's to give; two cameras of the three make a rig too.
   cs::SequenceOptions loose;
   loose.pairToleranceMs = 0.1;
-  CHECK(cs::RigSequence::open(dir.string(), 3, loose).frames().size() == 1);  // cam1's late frame 0 drops out
-  CHECK(cs::RigSequence::open((dir / "mav0").string(), 2).frames().size() == 3);
+  CHECK(cs::RigSequence::open(dir.string(), rig, loose).frames().size() == 1);  // cam1's late frame 0 drops out
+  CHECK(cs::RigSequence::open((dir / "mav0").string(), ringOf(2)).frames().size() == 3);
 }
 
 TEST_CASE("RigSequence refuses what it cannot read in one line naming the camera, file and frame") {
   const fs::path dir = cs::test::tempDir("rig_sequence_errors");
   constexpr long long t0 = 2'000'000'000;
   writeAsl(dir, {{t0, t0 + 1000}, {t0, t0 + 1000}});
-  CHECK(errorOf([&] { cs::RigSequence::open(dir.string(), 3); }).find("has no cam2/data.csv") != std::string::npos);
-  CHECK(errorOf([&] { cs::RigSequence::open(dir.string(), 1); }) == "a rig sequence needs at least two cameras, got 1");
-  CHECK(errorOf([&] { cs::RigSequence::open((dir / "nope").string(), 2); }).find("is not an ASL/EuRoC folder") !=
+  CHECK(errorOf([&] { cs::RigSequence::open(dir.string(), ringOf(3)); }).find("has no cam2/data.csv") !=
         std::string::npos);
+  CHECK(errorOf([&] { cs::RigSequence::open(dir.string(), ringOf(1)); }) ==
+        "a rig sequence needs at least two cameras, got 1");
+  CHECK(errorOf([&] {
+          cs::RigSequence::open((dir / "nope").string(), ringOf(2));
+        }).find("is not an ASL/EuRoC folder") != std::string::npos);
   writeText(dir / "mav0/cam1/data.csv", "#timestamp [ns],filename\n5,a.png\nnot a row\n");
-  CHECK(errorOf([&] { cs::RigSequence::open(dir.string(), 2); }).find("cam1/data.csv line 3:") != std::string::npos);
-  writeText(dir / "mav0/cam1/data.csv", "#timestamp [ns],filename\n5,a.png\n");
-  CHECK(errorOf([&] { cs::RigSequence::open(dir.string(), 2); }).find("no frame has an image of all 2 cameras") !=
+  CHECK(errorOf([&] { cs::RigSequence::open(dir.string(), ringOf(2)); }).find("cam1/data.csv line 3:") !=
         std::string::npos);
+  writeText(dir / "mav0/cam1/data.csv", "#timestamp [ns],filename\n5,a.png\n");
+  CHECK(errorOf([&] {
+          cs::RigSequence::open(dir.string(), ringOf(2));
+        }).find("no frame has an image of all 2 cameras") != std::string::npos);
   writeAsl(dir, {{t0, t0 + 1000}, {t0, t0 + 1000}});
   fs::remove(dir / "mav0/cam1/data" / (std::to_string(t0 + 1000) + ".png"));
-  const cs::RigSequence seq = cs::RigSequence::open(dir.string(), 2);
+  const cs::RigSequence seq = cs::RigSequence::open(dir.string(), ringOf(2));
   std::vector<cs::ImageF> images;
   seq.load(0, images);
   const std::string e = errorOf([&] { seq.load(1, images); });

@@ -166,14 +166,6 @@ void writeRigFrame(const std::string& dir, const CameraRig& rig, const RigResult
   writeMergedCloud(dir, mergedPoints(rig, r.cameras, images, frame, minConfidence));
 }
 
-// T_world_body from camera 0's pose in the world: T_world_cam0 * inverse(T_body_cam0).
-Pose bodyPoseFrom(const Pose& worldCam0, const BodyPose& cam0InBody) {
-  Pose body;
-  body.R = worldCam0.R * cam0InBody.R.transpose();
-  body.t = worldCam0.t - body.R * cam0InBody.p;
-  return body;
-}
-
 double medianOf(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
@@ -197,7 +189,7 @@ int runRigSequence(const Args& args, const std::string& outDir) {
   SequenceOptions options;
   options.poses = args.get("poses", "");
   options.pairToleranceMs = args.getDouble("pair-tolerance-ms", options.pairToleranceMs);
-  const RigSequence sequence = RigSequence::open(source, rig.size(), options);
+  const RigSequence sequence = RigSequence::open(source, rig, options);
   const auto [first, end] = frameRange(args, sequence.frames().size());  // checked before any output
   for (const std::string& w : sequence.warnings()) std::fprintf(stderr, "curvestereo: warning: %s\n", w.c_str());
   Params params = rigParamsFromArgs(args, rig);
@@ -232,8 +224,7 @@ int runRigSequence(const Args& args, const std::string& outDir) {
       throw Error(e.what() + written);
     }
     try {
-      const Pose body = f.hasPose ? bodyPoseFrom(f.pose, rig.poses[0]) : Pose();
-      stereo.next(images, r, f.hasPose ? &body : nullptr);
+      stereo.next(images, r, f.hasPose ? &f.bodyPose : nullptr);
       fusion.fuse(r.cameras, images, panorama, panoramaConfidence);
       writeRigFrame((std::filesystem::path(outDir) / name).string(), rig, r, images, panorama, frame, minConfidence);
     } catch (const Error& e) {

@@ -41,9 +41,18 @@ std::vector<int64_t> timesOf(const std::vector<AslRow>& rows) {
   return ns;
 }
 
+// T_world_body from camera 0's pose in the world: T_world_cam0 * inverse(T_body_cam0).
+Pose bodyPoseFrom(const Pose& worldCam0, const BodyPose& cam0OnBody) {
+  Pose body;
+  body.R = worldCam0.R * cam0OnBody.R.transpose();
+  body.t = worldCam0.t - body.R * cam0OnBody.p;
+  return body;
+}
+
 }  // namespace
 
-RigSequence RigSequence::open(const std::string& source, int cameras, const SequenceOptions& options) {
+RigSequence RigSequence::open(const std::string& source, const CameraRig& rig, const SequenceOptions& options) {
+  const int cameras = rig.size();
   if (cameras < 2) throw Error("a rig sequence needs at least two cameras, got " + std::to_string(cameras));
   if (!(options.pairToleranceMs >= 0) || !(options.poseToleranceMs >= 0) || !std::isfinite(options.pairToleranceMs) ||
       !std::isfinite(options.poseToleranceMs))
@@ -96,7 +105,7 @@ RigSequence RigSequence::open(const std::string& source, int cameras, const Sequ
     std::vector<int64_t> missing;
     for (RigSequenceFrame& f : seq.frames_) {
       const Pose* pose = detail::nearestPose(poses, f.timestampNs, options.poseToleranceMs);
-      if (pose) f.hasPose = true, f.pose = *pose;
+      if (pose) f.hasPose = true, f.bodyPose = bodyPoseFrom(*pose, rig.poses[0]);
       if (!pose) missing.push_back(f.timestampNs);
     }
     if (!missing.empty())

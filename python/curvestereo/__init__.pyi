@@ -326,6 +326,51 @@ class RigStereo:
     @property
     def backend(self) -> str: ...
 
+class RigFrame:
+    """One frame of a RigSequence: one image per camera, read on first use, then kept."""
+
+    @property
+    def index(self) -> int: ...
+    @property
+    def timestamp_ns(self) -> int:
+        """Camera 0's timestamp."""
+    @property
+    def images(self) -> list[_F32]:
+        """One float32 H x W image in [0, 1] per camera, in order."""
+    @property
+    def pose(self) -> npt.NDArray[np.float64] | None:
+        """The rig's T_world_body, 4 x 4 (what RigStereo.next takes), or None."""
+    @property
+    def paths(self) -> list[str]: ...
+
+class RigSequence:
+    """A rig's recording: an ASL / EuRoC folder with one cam<k> per camera.
+
+        rig = curvestereo.load_rig("rec/camchain.yaml")
+        stereo = curvestereo.RigStereo(rig)
+        for f in curvestereo.RigSequence("rec", rig):
+            r = stereo.next(f.images, pose=f.pose)
+    """
+
+    def __init__(
+        self,
+        source: _Path,
+        rig: CameraRig,
+        poses: _Path | None = None,
+        pair_tolerance_ms: float = 1.0,
+        pose_tolerance_ms: float = 5.0,
+    ) -> None:
+        """source: the folder holding mav0/ (or mav0/ itself) with cam0 ... cam<N-1>. poses:
+        camera 0's (T_world_cam0; default the folder's poses_cam0.csv)."""
+    def __len__(self) -> int: ...
+    def __getitem__(self, index: int) -> RigFrame: ...
+    def __iter__(self) -> Iterator[RigFrame]: ...
+    @property
+    def warnings(self) -> list[str]:
+        """Images in no frame, frames without a pose: one line each."""
+    @property
+    def summary(self) -> str: ...
+
 class Frame:
     """One stereo frame of a Sequence; left / right are read on first use, then kept."""
 

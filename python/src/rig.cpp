@@ -15,6 +15,7 @@
 #include "binding.hpp"
 #include "curvestereo/camera_rig.hpp"
 #include "curvestereo/rig_fusion.hpp"
+#include "curvestereo/rig_sequence.hpp"
 #include "curvestereo/rig_stereo.hpp"
 
 namespace cs::py {
@@ -283,7 +284,118 @@ void bindCameraRig(pb::module_& m) {
 
 }  // namespace
 
+// One frame of a RigSequence: the images are read on first use of `images` and kept.
+struct PyRigFrame {
+  std::shared_ptr<const RigSequence> sequence;
+  size_t index = 0;
+  pb::object images = pb::none();
+
+  const RigSequenceFrame& frame() const { return sequence->frames()[index]; }
+  pb::object loaded() {
+    if (!images.is_none()) return images;
+    std::vector<ImageF> read;
+    {
+      pb::gil_scoped_release nogil;  // PNG decoding
+      sequence->load(index, read);
+    }
+    pb::list list;
+    for (ImageF& image : read) list.append(floatArray(std::move(image)));
+    images = list;
+    return images;
+  }
+};
+
+class PyRigSequence {
+ public:
+  PyRigSequence(const std::filesystem::path& source, const CameraRig& rig, pb::object poses, double pairToleranceMs,
+                double poseToleranceMs) {
+    SequenceOptions options;
+    options.pairToleranceMs = pairToleranceMs;
+    options.poseToleranceMs = poseToleranceMs;
+    if (!poses.is_none()) options.poses = poses.cast<std::filesystem::path>().string();
+    pb::gil_scoped_release nogil;  // a long recording's listing takes a moment
+    sequence_ = std::make_shared<const RigSequence>(RigSequence::open(source.string(), rig, options));
+  }
+  size_t size() const { return sequence_->frames().size(); }
+  PyRigFrame at(long long i) const {
+    const long long n = (long long)size();
+    if (i < 0) i += n;
+    if (i < 0 || i >= n) throw pb::index_error("frame index out of range (the sequence has " + std::to_string(n) + ")");
+    return PyRigFrame{sequence_, size_t(i)};
+  }
+  const RigSequence& sequence() const { return *sequence_; }
+
+ private:
+  std::shared_ptr<const RigSequence> sequence_;
+};
+
+struct RigFrameIterator {
+  PyRigSequence sequence;
+  size_t next = 0;
+};
+
+void bindRigSequence(pb::module_& m) {
+  pb::class_<PyRigFrame>(m, "RigFrame",
+                         "One frame of a RigSequence: one image per camera, read on first use of `images`.")
+      .def_property_readonly(
+          "index", [](const PyRigFrame& f) { return f.index; }, "Position in the sequence.")
+      .def_property_readonly(
+          "timestamp_ns", [](const PyRigFrame& f) { return f.frame().timestampNs; }, "Camera 0's timestamp, ns.")
+      .def_property_readonly("images", &PyRigFrame::loaded,
+                             "One float32 H x W image in [0, 1] per camera, in order (read on first use, then kept).")
+      .def_property_readonly(
+          "pose",
+          [](const PyRigFrame& f) -> pb::object {
+            if (!f.frame().hasPose) return pb::none();
+            return poseArray(f.frame().bodyPose);
+          },
+          "The rig's pose T_world_body as a 4 x 4 float64 array (what RigStereo.next takes), from camera 0's in "
+          "the poses file; None when the frame has none.")
+      .def_property_readonly(
+          "paths", [](const PyRigFrame& f) { return f.frame().paths; }, "The image files, one per camera.")
+      .def("__repr__", [](const PyRigFrame& f) {
+        return "<curvestereo.RigFrame " + std::to_string(f.index) + " t=" + std::to_string(f.frame().timestampNs) +
+               " ns" + (f.frame().hasPose ? ", posed" : "") + ">";
+      });
+  pb::class_<RigFrameIterator>(m, "_RigFrameIterator")
+      .def("__iter__", [](RigFrameIterator& it) -> RigFrameIterator& { return it; })
+      .def("__next__", [](RigFrameIterator& it) {
+        if (it.next >= it.sequence.size()) throw pb::stop_iteration();
+        return it.sequence.at((long long)it.next++);
+      });
+  pb::class_<PyRigSequence>(m, "RigSequence",
+                            R"doc(A rig's recorded sequence: an ASL / EuRoC folder with one cam<k> per camera.
+
+RigSequence(source, rig, poses=None, pair_tolerance_ms=1.0, pose_tolerance_ms=5.0)
+
+source: the folder holding mav0/ (or mav0/ itself) with cam0/data.csv ... cam<N-1>/data.csv
+and their data/ folders, for the N cameras of `rig` (a CameraRig, load_rig). Camera k's
+images are paired to camera 0's by timestamp (within pair_tolerance_ms); every image left
+out is named in .warnings. poses: camera 0's poses (T_world_cam0; EuRoC CSV or TUM), by
+default the folder's poses_cam0.csv; each frame's .pose is the rig's, T_world_body.
+
+    rig = curvestereo.load_rig("rec/camchain.yaml")
+    stereo = curvestereo.RigStereo(rig)
+    for f in curvestereo.RigSequence("rec", rig):
+        r = stereo.next(f.images, pose=f.pose))doc")
+      .def(pb::init<const std::filesystem::path&, const CameraRig&, pb::object, double, double>(), pb::arg("source"),
+           pb::arg("rig"), pb::arg("poses") = pb::none(), pb::arg("pair_tolerance_ms") = 1.0,
+           pb::arg("pose_tolerance_ms") = 5.0)
+      .def("__len__", &PyRigSequence::size)
+      .def("__getitem__", &PyRigSequence::at, pb::arg("index"))
+      .def("__iter__", [](const PyRigSequence& s) { return RigFrameIterator{s}; })
+      .def_property_readonly(
+          "warnings", [](const PyRigSequence& s) { return s.sequence().warnings(); },
+          "Notes to show, one line each: images in no frame, frames without a pose although poses were given.")
+      .def_property_readonly(
+          "summary", [](const PyRigSequence& s) { return s.sequence().summary(); },
+          "One line, e.g. '16 frames of 4 cameras (ASL, 16 with poses); 0 images unpaired'.")
+      .def("__repr__",
+           [](const PyRigSequence& s) { return "<curvestereo.RigSequence " + s.sequence().summary() + ">"; });
+}
+
 void bindRigs(pb::module_& m) {
+  bindRigSequence(m);
   bindCameraRig(m);
   m.def("load_rig", &loadRigFile, pb::arg("path"),
         "Read an N-camera calibration as a CameraRig: a Kalibr camchain with cam0..camN-1 or a Basalt "

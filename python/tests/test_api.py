@@ -216,7 +216,8 @@ def test_stubs_match_the_module():
     # DeviceArray is stubbed always but exists only in builds with the CUDA backend.
     cuda_only = set() if hasattr(cs, "DeviceArray") else {"DeviceArray"}
     assert {n for n in top if not n.startswith("_")} - cuda_only <= public
-    classes = ("Rig", "Stereo", "Result", "Sequence", "Frame", "CameraRig", "RigStereo", "RigResult", "Panorama")
+    classes = ("Rig", "Stereo", "Result", "Sequence", "Frame", "CameraRig", "RigStereo", "RigResult", "Panorama",
+               "RigSequence", "RigFrame")
     for name in classes + (("DeviceArray",) if hasattr(cs, "DeviceArray") else ()):
         members = {m for m in dir(getattr(cs, name)) if not m.startswith("_")}
         stubbed = {n.name for n in top[name].body if isinstance(n, ast.FunctionDef) and not n.name.startswith("_")}

@@ -150,3 +150,37 @@ def test_field_of_view_as_the_cli(cli, tmp_path):
     assert cs.preset_params("fast")["max_fov_deg"] == 180
     assert cs.RigStereo(rig, "fast", "cpu").params["max_fov_deg"] > 200
     assert cs.RigStereo(rig, "fast", "cpu", max_fov=120).params["max_fov_deg"] == 120
+
+
+def test_rig_sequence_frames_feed_next(ring4, tmp_path):
+    """RigSequence: an ASL folder with one cam<k> per camera, each frame's images and the
+    rig's pose (T_world_body from camera 0's poses) ready for RigStereo.next."""
+    import shutil
+
+    rig = cs.load_rig(ring4 / "camchain.yaml")
+    times = [5_000_000_000, 5_033_333_333]
+    for k in range(len(rig)):
+        data = tmp_path / "mav0" / f"cam{k}" / "data"
+        data.mkdir(parents=True)
+        rows = ["#timestamp [ns],filename"]
+        for t in times:
+            shutil.copy(ring4 / f"cam{k}.png", data / f"{t}.png")
+            rows.append(f"{t},{t}.png")
+        (data.parent / "data.csv").write_text("\n".join(rows) + "\n")
+    (tmp_path / "poses_cam0.csv").write_text("".join(f"{t},1,2,3,0,0,0,1\n" for t in times))
+    seq = cs.RigSequence(tmp_path, rig)
+    assert len(seq) == 2 and seq.warnings == [] and "2 frames of 4 cameras" in seq.summary
+    f = seq[-1]
+    assert f.timestamp_ns == times[1] and len(f.paths) == 4
+    images = f.images
+    assert len(images) == 4 and images[2].shape == (SIZE, SIZE) and images[2].dtype == np.float32
+    assert same_bits(images[2], cs.read_image(ring4 / "cam2.png"))
+    # The rig's pose puts camera 0's centre on the body where the file puts camera 0.
+    body, cam0 = f.pose, rig.poses[0]
+    assert np.allclose(body[:3, :3] @ cam0[:3, 3] + body[:3, 3], [1, 2, 3])
+    stereo = cs.RigStereo(rig, "realtime", "cpu", levels=3, min_width=16)
+    solves = [stereo.next(frame.images, pose=frame.pose).solves for frame in seq]
+    assert not any(s["warm"] for s in solves[0]) and all(s["warm"] for s in solves[1])
+    with pytest.raises(cs.Error, match="cam3/data.csv"):
+        shutil.rmtree(tmp_path / "mav0" / "cam3")
+        cs.RigSequence(tmp_path, rig)
