@@ -63,12 +63,20 @@ void CameraRig::validate() const {
         throw Error(camName(i) + " and " + camName(j) + " sit at one centre (zero baseline, " +
                     calib::formatNumber(baseline, 3) + " m): no depth from them");
     }
+  // A pair's share is the smaller of its two directions' overlaps, the same for (i, j) and
+  // (j, i): each pair's computed once (the overlaps are most of a rig's validation).
+  const size_t n = size_t(size());
+  std::vector<double> shares(n * n, 0.0);
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = i + 1; j < n; ++j)
+      shares[i * n + j] = shares[j * n + i] =
+          std::min(pairOverlap(*this, int(i), int(j)), pairOverlap(*this, int(j), int(i)));
   for (int i = 0; i < size(); ++i) {
     double best = 0;
     int partner = -1;
     for (int j = 0; j < size(); ++j) {
       if (j == i) continue;
-      const double share = std::min(pairOverlap(*this, i, j), pairOverlap(*this, j, i));
+      const double share = shares[size_t(i) * n + size_t(j)];
       if (share > best) best = share, partner = j;
     }
     if (best < kMinOverlap)
