@@ -25,10 +25,10 @@ using cs::test::runCli;
 namespace {
 
 // rig4_urban_dev at a quarter of its resolution, in the rig folder layout; "" without the data.
-fs::path smallRigFolder(const std::string& name) {
+fs::path makeSmallRigFolder() {
   const std::string source = cs::test::sharedData("rigs/rig4_urban_dev");
   if (source.empty()) return {};
-  const fs::path dir = cs::test::tempDir(name);
+  const fs::path dir = cs::test::tempDir("cli_rig_small");
   cs::CameraRig rig = cs::loadCameraRig(source + "/camchain.yaml");
   for (cs::Camera& cam : rig.cameras) cam = cam.scaled(0.25);
   cs::saveKalibrRig(rig, (dir / "camchain.yaml").string());
@@ -41,6 +41,16 @@ fs::path smallRigFolder(const std::string& name) {
   }
   cs::writeExr((dir / "panorama_range.exr").string(),
                cs::test::shrink(cs::readExr(source + "/panorama_range.exr"), 4, false));
+  return dir;
+}
+
+// A copy of that folder for one case (each writes its own outputs there): made once, as
+// reading and shrinking the full-resolution files is most of its time.
+fs::path smallRigFolder(const std::string& name) {
+  static const fs::path made = makeSmallRigFolder();
+  if (made.empty()) return {};
+  const fs::path dir = cs::test::tempDir(name);
+  fs::copy(made, dir, fs::copy_options::recursive);
   return dir;
 }
 
