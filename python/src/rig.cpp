@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -105,12 +106,34 @@ struct PyPanorama {
   pb::object centre;  // float64 (3,)
 };
 
+// The panorama fusion of one RigStereo's results, kept for the next call with the same width
+// and centre: the cameras' rays and the working memory are most of a fusion's setup. Shared
+// by the results (a result may outlive its RigStereo); one fusion at a time.
+struct PanoramaCache {
+  std::mutex busy;
+  std::unique_ptr<PanoramaFusion> fusion;
+  int width = 0;
+  Eigen::Vector3d centre = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+
+  Panorama fuse(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::vector<DepthResult>& cameras,
+                const std::vector<ImageF>& images, float minConfidence) {
+    const std::lock_guard<std::mutex> lock(busy);
+    if (!fusion || width != this->width || frame.centre != centre) {
+      fusion.reset();  // a width the fusion refuses leaves no stale one behind
+      fusion = std::make_unique<PanoramaFusion>(rig, frame, width);
+      this->width = width, centre = frame.centre;
+    }
+    return fusion->fuse(cameras, images, minConfidence);
+  }
+};
+
 // What the panorama is fused from: the per-camera results and images as the library has them
 // (Result's arrays own moved copies; these stay for any number of panorama() calls).
 struct RigFusionInput {
   CameraRig rig;
   std::vector<DepthResult> cameras;
   std::vector<ImageF> images;
+  std::shared_ptr<PanoramaCache> cache;
 };
 
 struct PyRigResult {
@@ -126,7 +149,7 @@ struct PyRigResult {
     Panorama p;
     {
       pb::gil_scoped_release nogil;  // a forward projection of every camera's pixels
-      p = fusePanorama(input->rig, input->cameras, input->images, frame, width, minConfidence);
+      p = input->cache->fuse(input->rig, frame, width, input->cameras, input->images, minConfidence);
     }
     return {floatArray(std::move(p.range)), floatArray(std::move(p.grey)), floatArray(std::move(p.confidence)), width,
             vectorArray(frame.centre)};
@@ -213,7 +236,7 @@ class PyRigStereo {
     PyRigResult out;
     out.totalMs = r.totalMs;
     for (const RigResult::Solve& s : r.solves) out.solves.append(solveDict(s));
-    auto input = std::make_shared<RigFusionInput>(RigFusionInput{rig_, r.cameras, std::move(images)});
+    auto input = std::make_shared<RigFusionInput>(RigFusionInput{rig_, r.cameras, std::move(images), panoramas_});
     for (DepthResult& camera : r.cameras) out.cameras.append(pb::cast(resultFromDepth(std::move(camera))));
     out.input = std::move(input);
     return out;
@@ -239,6 +262,7 @@ class PyRigStereo {
   double crossCheck_ = 0;
   std::unique_ptr<RigStereo> stereo_;
   std::mutex busy_;
+  std::shared_ptr<PanoramaCache> panoramas_ = std::make_shared<PanoramaCache>();
 };
 
 void bindCameraRig(pb::module_& m) {
@@ -426,7 +450,8 @@ void bindRigs(pb::module_& m) {
 The same fusion as `curvestereo run --calib rig.yaml ...`'s panorama_range.exr (width:
 --panorama-width, even, 4 to 32768; min_confidence: --panorama-min-confidence, samples
 below it are left out). centre: 3 values in the body frame, default the rig's centre. The
-GIL is released while it runs.)doc");
+GIL is released while it runs. The fusion (the cameras' rays, its working memory) is kept
+by the RigStereo for the next call with the same width and centre.)doc");
 
   pb::class_<PyRigStereo>(m, "RigStereo",
                           R"doc(The solver for a rig of N cameras: every pair solved both ways by Stereo,

@@ -82,6 +82,14 @@ def test_panorama_matches_the_cli_and_the_truth(ring4, solved):
     # Leaving the less confident samples out leaves more holes, never fewer.
     strict = r.panorama(width=PANORAMA, min_confidence=0.9)
     assert np.isfinite(strict.range).sum() < np.isfinite(p.range).sum()
+    # The fusion is kept between calls (same width and centre): the same panorama again,
+    # and another width or the first centre back gives its own.
+    assert same_bits(r.panorama(width=PANORAMA).range, p.range)
+    assert r.panorama(width=PANORAMA // 2).range.shape == (PANORAMA // 4, PANORAMA // 2)
+    assert same_bits(r.panorama(width=PANORAMA).confidence, p.confidence)
+    with pytest.raises(cs.Error, match="panorama width must be even"):
+        r.panorama(width=PANORAMA + 1)
+    assert same_bits(r.panorama(width=PANORAMA).range, p.range)
 
 
 def test_uint8_images_and_chosen_pairs(ring4, solved):
