@@ -35,14 +35,7 @@ CameraRig ring(int n, double fovDeg) {
   return rig;
 }
 
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const cs::Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using cs::test::errorOf;
 
 std::string kalibrText(const CameraRig& rig) {
   const std::string path = (cs::test::tempDir("rig_kalibr") / "camchain.yaml").string();

@@ -68,14 +68,7 @@ std::string readAll(const fs::path& p) {
 }
 void writeAll(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
 
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const cs::Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using cs::test::errorOf;
 
 }  // namespace
 
