@@ -124,6 +124,14 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
   if (int(images.size()) != rig_.size())
     throw Error("a rig of " + std::to_string(rig_.size()) + " cameras needs " + std::to_string(rig_.size()) +
                 " images, got " + std::to_string(images.size()));
+  for (int k = 0; k < rig_.size(); ++k) {  // named by camera here, not by a pair direction's left and right
+    const ImageF& image = images[size_t(k)];
+    const Camera& cam = rig_.cameras[size_t(k)];
+    if (image.width != cam.width || image.height != cam.height)
+      throw Error("cam" + std::to_string(k) + "'s image is " + std::to_string(image.width) + "x" +
+                  std::to_string(image.height) + " but the camera is " + std::to_string(cam.width) + "x" +
+                  std::to_string(cam.height));
+  }
   const auto start = std::chrono::steady_clock::now();
   std::vector<DepthResult>& estimates = estimates_;  // reused: a frame allocates nothing
   solveDirections(estimates, solve);

@@ -3,6 +3,7 @@
 // any backend here; PanoramaFusion computes the cameras' rays once and must fuse as
 // fusePanorama does.
 #include <cstring>
+#include <limits>
 
 #include "curvestereo/backends.hpp"
 #include "curvestereo/rig_fusion.hpp"
@@ -75,7 +76,12 @@ TEST_CASE("a direction's error reaches the caller once every solve has ended, an
   const CameraRig& rig = synthetic.layout.rig;
   RigStereo stereo(rig, choosePairs(rig), shortSolve(rig), "cpu");
   std::vector<ImageF> images = synthetic.images;
-  images[2] = ImageF(32, 32, 0.5f);  // camera 2 is 64 px: every direction with camera 2 fails
+  images[2] = ImageF(32, 32, 0.5f);  // camera 2 is 64 px: refused before any solve, by camera
+  CHECK(test::errorOf([&] { stereo.compute(images); }) == "cam2's image is 32x32 but the camera is 64x64");
+  // An error inside one direction's solve (here a NaN pixel, which every solve refuses)
+  // reaches the caller once every direction has ended.
+  images[2] = synthetic.images[2];
+  images[1].data[0] = std::numeric_limits<float>::quiet_NaN();
   CHECK_THROWS_AS(stereo.compute(images), Error);
   const RigResult r = stereo.compute(synthetic.images);
   for (const DepthResult& cam : r.cameras) {
