@@ -34,10 +34,11 @@ void inChunks(int n, F&& f) {
   for (std::thread& w : workers) w.join();
 }
 
-// The unit rays of a camera's pixels (NaN where it does not unproject).
-Image<Eigen::Vector3f> raysOf(const Camera& cam) {
+}  // namespace
+
+CameraRays cameraRays(const Camera& cam) {
   const BuiltCamera built(cam);
-  Image<Eigen::Vector3f> rays(cam.width, cam.height, Eigen::Vector3f::Constant(kNaNf));
+  CameraRays rays(cam.width, cam.height, Eigen::Vector3f::Constant(kNaNf));
   inChunks(cam.height, [&](int y0, int y1) {
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < cam.width; ++x) {
@@ -47,6 +48,8 @@ Image<Eigen::Vector3f> raysOf(const Camera& cam) {
   });
   return rays;
 }
+
+namespace {
 
 template <class T>
 bool sameSize(const Image<T>& image, const Camera& cam) {
@@ -121,8 +124,6 @@ void fusePixel(const std::vector<const DepthResult*>& estimates, const Eigen::Ve
 
 }  // namespace
 
-CameraRays cameraRays(const Camera& cam) { return raysOf(cam); }
-
 void fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates, const CameraRays& rays,
                          DepthResult& out) {
   if (estimates.empty()) throw Error("fuseCameraEstimates: no estimates");
@@ -163,7 +164,7 @@ bool consistent(double inverseA, double inverseB, double tolerance) {
 long long crossCheck(const Rig& pair, DepthResult& forward, const DepthResult& backward, double tolerance) {
   checkResult(forward, pair.cam0, false, "crossCheck");
   checkResult(backward, pair.cam1, false, "crossCheck");
-  const Image<Eigen::Vector3f> rays = raysOf(pair.cam0);
+  const Image<Eigen::Vector3f> rays = cameraRays(pair.cam0);
   const BuiltCamera other(pair.cam1);
   long long invalidated = 0;
   for (int y = 0; y < forward.valid.height; ++y)
@@ -398,7 +399,7 @@ PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame,
     const BodyPose& pose = rig.poses[size_t(k)];
     const Camera& cam = rig.cameras[size_t(k)];
     // X_pano = Rf^T (R X_cam + p - centre).
-    views_.push_back({raysOf(cam), frame.R.transpose() * pose.R, frame.R.transpose() * (pose.p - frame.centre)});
+    views_.push_back({cameraRays(cam), frame.R.transpose() * pose.R, frame.R.transpose() * (pose.p - frame.centre)});
     scratch_->placed.push_back({Image<Eigen::Vector2d>(cam.width, cam.height, Eigen::Vector2d::Constant(kNaNf)),
                                 Image<Eigen::Vector2d>(cam.width, cam.height, Eigen::Vector2d::Constant(kNaNf)),
                                 ImageF(cam.width, cam.height), std::vector<Eigen::Vector2d>(size_t(cam.height))});
@@ -474,11 +475,6 @@ void PanoramaFusion::fuse(const std::vector<DepthResult>& cameras, const std::ve
 
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
                       const PanoramaFrame& frame, int width, float minConfidence) {
-  if (width < 4 || width % 2 || width > 32768)
-    throw Error("panorama width must be even and 4 to 32768 px, got " + std::to_string(width));
-  if (int(cameras.size()) != rig.size() || (!images.empty() && int(images.size()) != rig.size()))
-    throw Error("fusePanorama: " + std::to_string(cameras.size()) + " results and " + std::to_string(images.size()) +
-                " images for a rig of " + std::to_string(rig.size()) + " cameras");
   return PanoramaFusion(rig, frame, width).fuse(cameras, images, minConfidence);
 }
 
