@@ -84,9 +84,7 @@ Stamped stampOf(const logio::MessageRef& ref, const uint8_t* p, size_t n, const 
 
 Sequence Sequence::openLog(const std::string& path, const std::string& leftTopic, const std::string& rightTopic,
                            const SequenceOptions& options) {
-  if (!(options.pairToleranceMs >= 0) || !std::isfinite(options.pairToleranceMs) || !(options.poseToleranceMs >= 0) ||
-      !std::isfinite(options.poseToleranceMs))
-    throw Error("sequence tolerances must be finite and >= 0 ms");
+  detail::checkTolerances(options);
   if (leftTopic == rightTopic) throw Error("the left and right topics are the same ('" + shown(leftTopic) + "')");
   auto log = std::make_shared<LogFrames>();
   log->path = path;

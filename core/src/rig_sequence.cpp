@@ -2,7 +2,6 @@
 #include "curvestereo/rig_sequence.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <filesystem>
 
 #include "calib_common.hpp"
@@ -17,30 +16,6 @@ using calib::oneLine;
 
 std::string cam(int k) { return "cam" + std::to_string(k); }
 
-// The folder that holds cam0/: source/mav0 or source itself.
-fs::path mav0Of(const std::string& source) {
-  std::error_code ec;
-  const fs::path inside = fs::path(source) / "mav0";
-  if (fs::is_directory(inside / "cam0", ec)) return inside;
-  if (fs::is_directory(fs::path(source) / "cam0", ec)) return source;
-  throw Error(oneLine("'" + source + "' is not an ASL/EuRoC folder (no mav0/cam0/ or cam0/ in it)"));
-}
-
-std::vector<AslRow> readCamera(const fs::path& mav0, int k) {
-  const fs::path csv = mav0 / cam(k) / "data.csv";
-  std::error_code ec;
-  if (!fs::is_regular_file(csv, ec))
-    throw Error(oneLine("ASL folder '" + mav0.string() + "' has no " + cam(k) + "/data.csv (the rig has a camera " +
-                        std::to_string(k) + ")"));
-  return parseAslCsv(calib::readTextFile(csv.string()), csv.string());
-}
-
-std::vector<int64_t> timesOf(const std::vector<AslRow>& rows) {
-  std::vector<int64_t> ns;
-  for (const AslRow& r : rows) ns.push_back(r.timestampNs);
-  return ns;
-}
-
 // T_world_body from camera 0's pose in the world: T_world_cam0 * inverse(T_body_cam0).
 Pose bodyPoseFrom(const Pose& worldCam0, const BodyPose& cam0OnBody) {
   Pose body;
@@ -54,21 +29,21 @@ Pose bodyPoseFrom(const Pose& worldCam0, const BodyPose& cam0OnBody) {
 RigSequence RigSequence::open(const std::string& source, const CameraRig& rig, const SequenceOptions& options) {
   const int cameras = rig.size();
   if (cameras < 2) throw Error("a rig sequence needs at least two cameras, got " + std::to_string(cameras));
-  if (!(options.pairToleranceMs >= 0) || !(options.poseToleranceMs >= 0) || !std::isfinite(options.pairToleranceMs) ||
-      !std::isfinite(options.poseToleranceMs))
-    throw Error("sequence tolerances must be finite and >= 0 ms");
-  const fs::path mav0 = mav0Of(source);
+  detail::checkTolerances(options);
+  const fs::path mav0 = detail::aslMav0(source);
+  if (mav0.empty()) throw Error(oneLine("'" + source + "' is not an ASL/EuRoC folder (no mav0/cam0/ or cam0/ in it)"));
   std::vector<std::vector<AslRow>> rows;
-  for (int k = 0; k < cameras; ++k) rows.push_back(readCamera(mav0, k));
+  for (int k = 0; k < cameras; ++k) rows.push_back(detail::readAslCamera(mav0, cam(k)));
   RigSequence seq;
   seq.cameras_ = cameras;
   // partner[k][i]: camera k's image paired with camera 0's image i, or -1.
-  const std::vector<int64_t> reference = timesOf(rows[0]);
+  const std::vector<int64_t> reference = detail::timesOf(rows[0]);
   std::vector<std::vector<long long>> partner(size_t(cameras), std::vector<long long>(reference.size(), -1));
   for (size_t i = 0; i < reference.size(); ++i) partner[0][i] = (long long)i;
   const std::string within = " within " + detail::msText(options.pairToleranceMs);
   for (int k = 1; k < cameras; ++k) {
-    const detail::TimePairs paired = detail::pairByTime(reference, timesOf(rows[size_t(k)]), options.pairToleranceMs);
+    const detail::TimePairs paired =
+        detail::pairByTime(reference, detail::timesOf(rows[size_t(k)]), options.pairToleranceMs);
     for (const auto& [i, j] : paired.pairs) partner[size_t(k)][i] = (long long)j;
     for (size_t j : paired.rightAlone)
       seq.warnings_.push_back(cam(k) + " " + rows[size_t(k)][j].filename + ": no cam0 frame" + within);
@@ -91,14 +66,7 @@ RigSequence RigSequence::open(const std::string& source, const CameraRig& rig, c
   if (seq.frames_.empty())
     throw Error(oneLine("ASL folder '" + mav0.string() + "': no frame has an image of all " + std::to_string(cameras) +
                         " cameras" + within));
-  std::string posesPath = options.poses;
-  std::error_code ec;
-  if (posesPath.empty())
-    for (const fs::path& p : {fs::path(source) / "poses_cam0.csv", mav0 / "poses_cam0.csv"})
-      if (fs::is_regular_file(p, ec)) {
-        posesPath = p.string();
-        break;
-      }
+  const std::string posesPath = options.poses.empty() ? detail::aslPoses(source, mav0) : options.poses;
   if (!posesPath.empty()) {
     seq.posesGiven_ = true;
     const std::map<int64_t, Pose> poses = readPoses(posesPath);

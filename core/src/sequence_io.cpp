@@ -159,15 +159,43 @@ std::vector<std::string> listImages(const std::string& spec) {
   return files;
 }
 
-std::vector<AslRow> readAslCamera(const fs::path& mav0, const char* cam) {
-  const fs::path csv = mav0 / cam / "data.csv";
-  if (!fs::is_regular_file(csv)) throw Error(oneLine("ASL folder '" + mav0.string() + "' has no " + cam + "/data.csv"));
-  return parseAslCsv(calib::readTextFile(csv.string()), csv.string());
-}
-
 }  // namespace
 
 namespace detail {
+
+void checkTolerances(const SequenceOptions& options) {
+  if (!(options.pairToleranceMs >= 0) || !(options.poseToleranceMs >= 0) || !std::isfinite(options.pairToleranceMs) ||
+      !std::isfinite(options.poseToleranceMs))
+    throw Error("sequence tolerances must be finite and >= 0 ms");
+}
+
+fs::path aslMav0(const std::string& source) {
+  std::error_code ec;
+  for (const fs::path& mav0 : {fs::path(source) / "mav0", fs::path(source)})
+    if (fs::is_directory(mav0 / "cam0", ec)) return mav0;
+  return {};
+}
+
+std::string aslPoses(const std::string& source, const fs::path& mav0) {
+  std::error_code ec;
+  for (const fs::path& p : {fs::path(source) / "poses_cam0.csv", mav0 / "poses_cam0.csv"})
+    if (fs::is_regular_file(p, ec)) return p.string();
+  return "";
+}
+
+std::vector<AslRow> readAslCamera(const fs::path& mav0, const std::string& cam) {
+  const fs::path csv = mav0 / cam / "data.csv";
+  std::error_code ec;
+  if (!fs::is_regular_file(csv, ec))
+    throw Error(oneLine("ASL folder '" + mav0.string() + "' has no " + cam + "/data.csv"));
+  return parseAslCsv(calib::readTextFile(csv.string()), csv.string());
+}
+
+std::vector<int64_t> timesOf(const std::vector<AslRow>& rows) {
+  std::vector<int64_t> ns;
+  for (const AslRow& r : rows) ns.push_back(r.timestampNs);
+  return ns;
+}
 
 std::string msText(double ms) {
   char buf[32];
@@ -268,31 +296,21 @@ std::map<int64_t, Pose> parsePoses(const std::string& text, const std::string& n
 std::map<int64_t, Pose> readPoses(const std::string& path) { return parsePoses(calib::readTextFile(path), path); }
 
 Sequence Sequence::open(const std::string& source, const SequenceOptions& options) {
-  if (!(options.pairToleranceMs >= 0) || !(options.poseToleranceMs >= 0) || !std::isfinite(options.pairToleranceMs) ||
-      !std::isfinite(options.poseToleranceMs))
-    throw Error("sequence tolerances must be finite and >= 0 ms");
+  detail::checkTolerances(options);
   Sequence seq;
   std::string posesPath = options.poses;
   std::error_code ec;
   if (fs::is_directory(source, ec)) {
     // (a) ASL/EuRoC: the folder holding mav0/, or mav0/ itself.
-    fs::path mav0 = fs::path(source) / "mav0";
-    if (!fs::is_directory(mav0 / "cam0", ec)) mav0 = source;
-    if (!fs::is_directory(mav0 / "cam0", ec))
+    const fs::path mav0 = detail::aslMav0(source);
+    if (mav0.empty())
       throw Error(oneLine("'" + source + "' is not an ASL/EuRoC folder (no mav0/cam0/ or cam0/ in it); for two image " +
                           "folders give \"LEFT,RIGHT\""));
-    if (posesPath.empty())
-      for (const fs::path& p : {fs::path(source) / "poses_cam0.csv", mav0 / "poses_cam0.csv"})
-        if (fs::is_regular_file(p, ec)) {
-          posesPath = p.string();
-          break;
-        }
+    if (posesPath.empty()) posesPath = detail::aslPoses(source, mav0);
     seq.kind_ = "ASL";
-    const std::vector<AslRow> left = readAslCamera(mav0, "cam0"), right = readAslCamera(mav0, "cam1");
-    std::vector<int64_t> leftNs, rightNs;
-    for (const AslRow& r : left) leftNs.push_back(r.timestampNs);
-    for (const AslRow& r : right) rightNs.push_back(r.timestampNs);
-    const detail::TimePairs paired = detail::pairByTime(leftNs, rightNs, options.pairToleranceMs);
+    const std::vector<AslRow> left = detail::readAslCamera(mav0, "cam0"), right = detail::readAslCamera(mav0, "cam1");
+    const detail::TimePairs paired =
+        detail::pairByTime(detail::timesOf(left), detail::timesOf(right), options.pairToleranceMs);
     for (const auto& [i, j] : paired.pairs) {
       SequenceFrame f;
       f.timestampNs = left[i].timestampNs;
