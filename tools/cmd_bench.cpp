@@ -20,17 +20,6 @@ namespace cs::cli {
 
 namespace {
 
-struct Summary {
-  double median, min, max;
-};
-
-Summary summarize(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  size_t n = v.size();
-  double med = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-  return {med, v.front(), v.back()};
-}
-
 struct Inputs {
   Rig rig;
   ImageF left, right;

@@ -56,6 +56,19 @@ void writeMergedCloud(const std::string& dir, const std::vector<RigPoint>& point
   if (!points.empty()) writePcd((std::filesystem::path(dir) / "points.pcd").string(), pcd);
 }
 
+// A frame's outputs: each camera's in DIR/cam<k>/ under a pair run's names, the panorama and
+// the merged cloud in DIR.
+void writeRigFrame(const std::string& dir, const CameraRig& rig, const RigResult& r, const std::vector<ImageF>& images,
+                   const Panorama& panorama, const PanoramaFrame& frame, float minConfidence) {
+  for (int k = 0; k < rig.size(); ++k) {
+    const std::string camDir = (std::filesystem::path(dir) / ("cam" + std::to_string(k))).string();
+    writeOutputs(camDir, r.cameras[size_t(k)], images[size_t(k)], minConfidence);
+    writeOrganisedCloud(camDir, r.cameras[size_t(k)], minConfidence);
+  }
+  writePanorama(dir, panorama);
+  writeMergedCloud(dir, mergedPoints(rig, r.cameras, images, frame, minConfidence));
+}
+
 }  // namespace
 
 std::vector<PairInfo> rigPairsFromArgs(const Args& args, const CameraRig& rig) {
@@ -138,41 +151,13 @@ int runRig(const Args& args, const std::string& outDir) {
   const double panoramaMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fuseStart).count();
 
-  for (int k = 0; k < rig.size(); ++k) {
-    const std::string dir = (std::filesystem::path(outDir) / ("cam" + std::to_string(k))).string();
-    writeOutputs(dir, r.cameras[size_t(k)], images[size_t(k)], minConfidence);
-    writeOrganisedCloud(dir, r.cameras[size_t(k)], minConfidence);
+  writeRigFrame(outDir, rig, r, images, panorama, frame, minConfidence);
+  for (int k = 0; k < rig.size(); ++k)
     std::printf("cam%d: %.1f %% of the image has a depth\n", k, 100.0 * validShare(r.cameras[size_t(k)]));
-  }
-  writePanorama(outDir, panorama);
-  writeMergedCloud(outDir, mergedPoints(rig, r.cameras, images, frame, minConfidence));
   std::printf("total %.1f ms (pairs and per-camera fusion) + %.1f ms panorama %dx%d (host); outputs in %s\n", r.totalMs,
               panoramaMs, width, width / 2, outDir.c_str());
   return 0;
 }
-
-namespace {
-
-// A frame's outputs: each camera's in DIR/cam<k>/ under a pair run's names, the panorama and
-// the merged cloud in DIR.
-void writeRigFrame(const std::string& dir, const CameraRig& rig, const RigResult& r, const std::vector<ImageF>& images,
-                   const Panorama& panorama, const PanoramaFrame& frame, float minConfidence) {
-  for (int k = 0; k < rig.size(); ++k) {
-    const std::string camDir = (std::filesystem::path(dir) / ("cam" + std::to_string(k))).string();
-    writeOutputs(camDir, r.cameras[size_t(k)], images[size_t(k)], minConfidence);
-    writeOrganisedCloud(camDir, r.cameras[size_t(k)], minConfidence);
-  }
-  writePanorama(dir, panorama);
-  writeMergedCloud(dir, mergedPoints(rig, r.cameras, images, frame, minConfidence));
-}
-
-double medianOf(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-}  // namespace
 
 bool isRigSequence(const Args& args) {
   if (args.has("rig")) return true;
@@ -290,12 +275,12 @@ int benchRig(const Args& args) {
     progress(double(i) / runs);
   }
   progress.done();
-  std::printf("frame:    median %.2f ms (%.1f fps), images in memory to the panorama on the host\n", medianOf(totals),
-              1000.0 / medianOf(totals));
-  std::printf("  solves and per-camera fusion: median %.2f ms (the slowest solve %.2f ms)\n", medianOf(solves),
-              medianOf(slowest));
+  std::printf("frame:    median %.2f ms (%.1f fps), images in memory to the panorama on the host\n",
+              summarize(totals).median, 1000.0 / summarize(totals).median);
+  std::printf("  solves and per-camera fusion: median %.2f ms (the slowest solve %.2f ms)\n", summarize(solves).median,
+              summarize(slowest).median);
   std::printf("  panorama %dx%d (host):        median %.2f ms\n", fusion.width(), fusion.width() / 2,
-              medianOf(panoramas));
+              summarize(panoramas).median);
   return 0;
 }
 

@@ -313,4 +313,11 @@ std::pair<size_t, size_t> frameRange(const Args& args, size_t n) {
   return {size_t(first), std::min(size_t(end), n)};
 }
 
+Summary summarize(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  const double median = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  return {median, v.front(), v.back()};
+}
+
 }  // namespace cs::cli

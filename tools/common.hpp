@@ -2,6 +2,7 @@
 #pragma once
 #include <set>
 #include <string>
+#include <vector>
 
 #include "args.hpp"
 #include "curvestereo/params.hpp"
@@ -85,6 +86,12 @@ std::string sequenceCalibration(const Args& args, const std::string& source);
 // --read-threads N: the threads reading frames ahead of the solve (SequenceReader; 0 or
 // absent: chosen by the core count). Throws UsageError on anything but 0 to 64.
 int readThreads(const Args& args);
+// The median, min and max of a benchmark's timings (at least one).
+struct Summary {
+  double median, min, max;
+};
+Summary summarize(std::vector<double> v);
+
 // A whole number that is all of text.
 bool wholeNumber(const std::string& text, int& out);
 // --frames FIRST:END of a sequence of n frames: [FIRST, END) (either may be left out);
