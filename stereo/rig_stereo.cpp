@@ -97,11 +97,11 @@ void RigStereo::resetSequence() {
 // 848x800 solve leaves most of a large GPU idle between its small kernels. The first error
 // (in direction order) is rethrown once all have finished.
 template <class Solve>
-void RigStereo::solveDirections(std::vector<DepthResult>& estimates, Solve& solve) {
+void RigStereo::solveDirections(Solve& solve) {
   std::vector<std::exception_ptr> errors(directions_.size());
   auto run = [&](size_t d) {
     try {
-      solve(directions_[d], estimates[d]);
+      solve(directions_[d], estimates_[d]);
     } catch (...) {
       errors[d] = std::current_exception();
     }
@@ -133,27 +133,27 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
                   std::to_string(cam.height));
   }
   const auto start = std::chrono::steady_clock::now();
-  std::vector<DepthResult>& estimates = estimates_;  // reused: a frame allocates nothing
-  solveDirections(estimates, solve);
+  solveDirections(solve);  // into estimates_, reused: a frame allocates nothing
   out.solves.clear();
   for (size_t d = 0; d < directions_.size(); ++d) {
     const Direction& dir = directions_[d];
-    out.solves.push_back({dir.reference, dir.other, estimates[d].totalMs, 0, estimates[d].warm, estimates[d].redone});
+    out.solves.push_back(
+        {dir.reference, dir.other, estimates_[d].totalMs, 0, estimates_[d].warm, estimates_[d].redone});
   }
   if (crossCheck_ > 0) {
     // Against the other directions as solved, not as already checked.
-    const std::vector<DepthResult> solved = estimates;
+    const std::vector<DepthResult> solved = estimates_;
     for (size_t d = 0; d < directions_.size(); ++d)
       for (size_t back = 0; back < directions_.size(); ++back)
         if (directions_[back].reference == directions_[d].other && directions_[back].other == directions_[d].reference)
           out.solves[d].crossCheckInvalidated = crossCheck(
-              pairRig(rig_, directions_[d].reference, directions_[d].other), estimates[d], solved[back], crossCheck_);
+              pairRig(rig_, directions_[d].reference, directions_[d].other), estimates_[d], solved[back], crossCheck_);
   }
   out.cameras.resize(size_t(rig_.size()));
   for (int k = 0; k < rig_.size(); ++k) {
     std::vector<const DepthResult*> mine;
     for (size_t d = 0; d < directions_.size(); ++d)
-      if (directions_[d].reference == k) mine.push_back(&estimates[d]);
+      if (directions_[d].reference == k) mine.push_back(&estimates_[d]);
     fuseCameraEstimates(rig_.cameras[size_t(k)], mine, rays_[size_t(k)], out.cameras[size_t(k)]);
   }
   out.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -83,7 +83,7 @@ class RigStereo {
   void solveAll(const std::vector<ImageF>& images, RigResult& out, Solve&& solve);
   void applyOutputs();
   template <class Solve>
-  void solveDirections(std::vector<DepthResult>& estimates, Solve& solve);
+  void solveDirections(Solve& solve);  // into estimates_
 
   CameraRig rig_;
   std::vector<Direction> directions_;
