@@ -14,6 +14,7 @@
 #include "curvestereo/image.hpp"
 #include "curvestereo/params.hpp"
 #include "curvestereo/pose.hpp"
+#include "curvestereo/sequence.hpp"
 #include "curvestereo/stereo.hpp"
 #include "pixels.hpp"
 
@@ -158,6 +159,10 @@ pb::dict cameraDict(const Camera& c);
 std::optional<Pose> poseFrom(pb::handle obj);
 // T_world_cam0 as a 4 x 4 float64 array.
 pb::array poseArray(const Pose& pose);
+// A Sequence's or RigSequence's options from their Python arguments (poses: None or a path).
+SequenceOptions sequenceOptions(pb::object poses, double pairToleranceMs, double poseToleranceMs);
+// Python's index i (negative from the end) into a sequence of n frames; IndexError outside.
+size_t frameIndex(long long i, size_t n);
 
 #ifdef CS_PY_CUDA
 // The CUDA device path of one Stereo (created on first use): device or host inputs,

@@ -112,16 +112,15 @@ struct PyPanorama {
 struct PanoramaCache {
   std::mutex busy;
   std::unique_ptr<PanoramaFusion> fusion;
-  int width = 0;
   Eigen::Vector3d centre = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
 
   Panorama fuse(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::vector<DepthResult>& cameras,
                 const std::vector<ImageF>& images, float minConfidence) {
     const std::lock_guard<std::mutex> lock(busy);
-    if (!fusion || width != this->width || frame.centre != centre) {
+    if (!fusion || width != fusion->width() || frame.centre != centre) {
       fusion.reset();  // a width the fusion refuses leaves no stale one behind
       fusion = std::make_unique<PanoramaFusion>(rig, frame, width);
-      this->width = width, centre = frame.centre;
+      centre = frame.centre;
     }
     return fusion->fuse(cameras, images, minConfidence);
   }
@@ -333,20 +332,12 @@ class PyRigSequence {
  public:
   PyRigSequence(const std::filesystem::path& source, const CameraRig& rig, pb::object poses, double pairToleranceMs,
                 double poseToleranceMs) {
-    SequenceOptions options;
-    options.pairToleranceMs = pairToleranceMs;
-    options.poseToleranceMs = poseToleranceMs;
-    if (!poses.is_none()) options.poses = poses.cast<std::filesystem::path>().string();
+    const SequenceOptions options = sequenceOptions(poses, pairToleranceMs, poseToleranceMs);
     pb::gil_scoped_release nogil;  // a long recording's listing takes a moment
     sequence_ = std::make_shared<const RigSequence>(RigSequence::open(source.string(), rig, options));
   }
   size_t size() const { return sequence_->frames().size(); }
-  PyRigFrame at(long long i) const {
-    const long long n = (long long)size();
-    if (i < 0) i += n;
-    if (i < 0 || i >= n) throw pb::index_error("frame index out of range (the sequence has " + std::to_string(n) + ")");
-    return PyRigFrame{sequence_, size_t(i)};
-  }
+  PyRigFrame at(long long i) const { return PyRigFrame{sequence_, frameIndex(i, size())}; }
   const RigSequence& sequence() const { return *sequence_; }
 
  private:

@@ -87,6 +87,22 @@ std::optional<Pose> poseFrom(pb::handle obj) {
   return pose;
 }
 
+SequenceOptions sequenceOptions(pb::object poses, double pairToleranceMs, double poseToleranceMs) {
+  SequenceOptions options;
+  options.pairToleranceMs = pairToleranceMs;
+  options.poseToleranceMs = poseToleranceMs;
+  if (!poses.is_none()) options.poses = poses.cast<Path>().string();
+  return options;
+}
+
+size_t frameIndex(long long i, size_t n) {
+  const long long count = (long long)n;
+  if (i < 0) i += count;
+  if (i < 0 || i >= count)
+    throw pb::index_error("frame index out of range (the sequence has " + std::to_string(count) + ")");
+  return size_t(i);
+}
+
 pb::array poseArray(const Pose& pose) {
   pb::array a = pb::array_t<double>({4, 4});
   double* o = static_cast<double*>(a.mutable_data());
@@ -120,10 +136,7 @@ struct PyFrame {
 class PySequence {
  public:
   PySequence(pb::handle source, pb::object poses, double pairToleranceMs, double poseToleranceMs) {
-    SequenceOptions options;
-    options.pairToleranceMs = pairToleranceMs;
-    options.poseToleranceMs = poseToleranceMs;
-    if (!poses.is_none()) options.poses = poses.cast<Path>().string();
+    const SequenceOptions options = sequenceOptions(poses, pairToleranceMs, poseToleranceMs);
     if (!(pairToleranceMs >= 0) || !(poseToleranceMs >= 0))
       throw Error("Sequence: pair_tolerance_ms and pose_tolerance_ms must be >= 0");
     // A (left, right) pair of folders or globs: the library's "LEFT,RIGHT".
@@ -141,10 +154,7 @@ class PySequence {
   // A recorded log's frames (Sequence::openLog); source is "LOG:LEFT,RIGHT" for the repr.
   static PySequence fromLog(const Path& path, const std::pair<std::string, std::string>& topics, pb::object poses,
                             double pairToleranceMs, double poseToleranceMs) {
-    SequenceOptions options;
-    options.pairToleranceMs = pairToleranceMs;
-    options.poseToleranceMs = poseToleranceMs;
-    if (!poses.is_none()) options.poses = poses.cast<Path>().string();
+    const SequenceOptions options = sequenceOptions(poses, pairToleranceMs, poseToleranceMs);
     PySequence s;
     s.source_ = path.string() + ":" + topics.first + "," + topics.second;
     pb::gil_scoped_release nogil;  // reads every message's header
@@ -154,12 +164,7 @@ class PySequence {
   }
 
   size_t size() const { return sequence_->frames().size(); }
-  PyFrame at(long long i) const {
-    const long long n = (long long)size();
-    if (i < 0) i += n;
-    if (i < 0 || i >= n) throw pb::index_error("frame index out of range (the sequence has " + std::to_string(n) + ")");
-    return PyFrame{sequence_, size_t(i)};
-  }
+  PyFrame at(long long i) const { return PyFrame{sequence_, frameIndex(i, size())}; }
   const Sequence& sequence() const { return *sequence_; }
   const std::string& source() const { return source_; }
 
