@@ -3,91 +3,13 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <condition_variable>
 #include <fstream>
-#include <mutex>
 #include <new>
-#include <thread>
 
 #include "curvestereo/image.hpp"
+#include "curvestereo/parallel.hpp"
 
 namespace cs::cpu {
-
-namespace {
-
-// A persistent pool: kernels run thousands of times per frame, too often to start
-// threads for each. Worker t (the caller is worker 0) takes rows t, t + n, t + 2n, ...
-class RowPool {
- public:
-  RowPool() : workers_(int(std::max(1u, std::thread::hardware_concurrency()))) {
-    for (int t = 1; t < workers_; ++t) threads_.emplace_back([this, t] { serve(t); });
-  }
-  ~RowPool() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stopping_ = true;
-    }
-    wake_.notify_all();
-    for (auto& th : threads_) th.join();
-  }
-
-  void run(int height, const std::function<void(int)>& body) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    body_ = &body;
-    height_ = height;
-    pending_ = workers_ - 1;
-    ++generation_;
-    lock.unlock();
-    wake_.notify_all();
-    rows(0, height, body);
-    lock.lock();
-    finished_.wait(lock, [this] { return pending_ == 0; });
-    body_ = nullptr;
-  }
-
-  int workers() const { return workers_; }
-
- private:
-  void rows(int t, int height, const std::function<void(int)>& body) const {
-    for (int y = t; y < height; y += workers_) body(y);
-  }
-
-  void serve(int t) {
-    unsigned seen = 0;
-    for (;;) {
-      std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [&] { return stopping_ || generation_ != seen; });
-      if (stopping_) return;
-      seen = generation_;
-      const std::function<void(int)>* body = body_;
-      const int height = height_;
-      lock.unlock();
-      rows(t, height, *body);
-      lock.lock();
-      if (--pending_ == 0) finished_.notify_one();
-    }
-  }
-
-  const int workers_;
-  std::vector<std::thread> threads_;
-  std::mutex mutex_;
-  std::condition_variable wake_, finished_;
-  const std::function<void(int)>* body_ = nullptr;
-  int height_ = 0, pending_ = 0;
-  unsigned generation_ = 0;
-  bool stopping_ = false;
-};
-
-RowPool& pool() {
-  static RowPool instance;
-  return instance;
-}
-
-// One frame at a time uses the pool; a second Stereo object in another thread runs its
-// kernels on its own thread rather than waiting (results are the same either way).
-std::mutex poolInUse;
-
-}  // namespace
 
 unsigned long long usableMemoryBytes() {
   unsigned long long bytes = 0;
@@ -102,17 +24,10 @@ unsigned long long usableMemoryBytes() {
   return bytes;
 }
 
-void parallelRows(int height, const std::function<void(int)>& body) {
-  std::unique_lock<std::mutex> lock(poolInUse, std::try_to_lock);
-  if (!lock.owns_lock() || pool().workers() == 1 || height < 32) {
-    for (int y = 0; y < height; ++y) body(y);
-    return;
-  }
-  pool().run(height, body);
-}
+void parallelRows(int height, const std::function<void(int)>& body) { detail::parallelFor(height, body, 32); }
 
 std::string CpuBackend::device() const {
-  return "CPU, " + std::to_string(std::max(1u, std::thread::hardware_concurrency())) + " threads (scalar reference)";
+  return "CPU, " + std::to_string(detail::parallelWorkers()) + " threads (scalar reference)";
 }
 
 Buffer CpuBackend::doCreate(int width, int height, int channels) {

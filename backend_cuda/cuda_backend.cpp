@@ -8,6 +8,7 @@
 
 #include "curvestereo/camera.hpp"
 #include "curvestereo/image.hpp"
+#include "curvestereo/parallel.hpp"
 #include "kernels.hpp"
 
 namespace cs {
@@ -281,7 +282,7 @@ void CudaBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
   if (!s.bytes) ok(cudaMalloc(&s.bytes, n), "cudaMalloc (byte upload)");
   uint8_t* staging = reinterpret_cast<uint8_t*>(pinnedFor(s));
   ok(cudaEventSynchronize(s.staged), "cudaEventSynchronize");  // the previous upload left the staging area
-  std::memcpy(staging, host, n);
+  copyBytes(staging, host, n);
   ok(cudaMemcpyAsync(s.bytes, staging, n, cudaMemcpyHostToDevice, stream_), "upload");
   ok(cudaEventRecord(s.staged, stream_), "cudaEventRecord");
   check(cudak::launchFloatsFromBytes(stream_, s.dev, s.bytes, n), "upload (bytes to floats)");
@@ -290,9 +291,10 @@ void CudaBackend::doUploadBytes(const Buffer& dst, const uint8_t* host) {
 void CudaBackend::doDownload(const Buffer& src, float* host) { doDownloadAll({{src, host}}); }
 
 // Every transfer queued at once, in pieces of at most kDownloadPiece floats each followed by
-// an event: the host copies a piece out of the pinned staging memory while the next ones
-// are still crossing the bus, so the frame's copies out and its transfers overlap.
-constexpr size_t kDownloadPiece = size_t(1) << 18;  // 1 MiB
+// an event. The host's threads (detail::parallelFor) take the pieces in order, each waiting
+// for its event and copying it out of the pinned staging memory while the next ones are
+// still crossing the bus: the copies out overlap the transfers and each other.
+constexpr size_t kDownloadPiece = size_t(1) << 16;  // 256 KiB
 
 void CudaBackend::doDownloadAll(const std::vector<Download>& downloads) {
   flush();
@@ -317,10 +319,13 @@ void CudaBackend::doDownloadAll(const std::vector<Download>& downloads) {
       pieces.push_back({d.host + at, staging + at, n});
     }
   }
-  for (size_t i = 0; i < pieces.size(); ++i) {
-    ok(cudaEventSynchronize(downloadEvents_[i]), "download (synchronize)");
-    std::memcpy(pieces[i].host, pieces[i].staged, pieces[i].floats * sizeof(float));
-  }
+  std::vector<cudaError_t> waited(pieces.size(), cudaSuccess);  // a worker may not throw
+  detail::parallelFor(int(pieces.size()), [&](int i) {
+    waited[size_t(i)] = cudaEventSynchronize(downloadEvents_[size_t(i)]);
+    if (waited[size_t(i)] == cudaSuccess)
+      std::memcpy(pieces[size_t(i)].host, pieces[size_t(i)].staged, pieces[size_t(i)].floats * sizeof(float));
+  });
+  for (cudaError_t e : waited) ok(e, "download (synchronize)");
 }
 
 void CudaBackend::copyFromDevice(const Buffer& dst, const float* src, size_t srcPitchBytes) {

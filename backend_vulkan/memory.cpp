@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "curvestereo/image.hpp"
+#include "curvestereo/parallel.hpp"
 #include "vulkan_impl.hpp"
 
 namespace cs::vk {
@@ -239,7 +240,7 @@ void VulkanBackend::doDownloadAll(const std::vector<Download>& downloads) {
   copyPiecesOut(pieces);
 }
 
-constexpr VkDeviceSize kDownloadPiece = VkDeviceSize(1) << 20;  // 1 MiB
+constexpr VkDeviceSize kDownloadPiece = VkDeviceSize(1) << 18;  // 256 KiB: a piece per host thread
 
 // The downloads' pieces in order, each buffer staged after the one before (256-aligned),
 // from offset 0 of the region the caller claims.
@@ -285,26 +286,33 @@ void VulkanBackend::recordPieces(const std::vector<Piece>& pieces) {
   }
 }
 
-// The pieces into the user's memory in order, each as soon as its event is set: the host
-// polls for at most spinNs_ in all (none on a CPU device, whose work the polling would
-// slow); past that it waits for the fences (flush: the frame's and the copies', with the
-// hang timeout) and copies the rest. flush() either way: every state back to idle.
+// The pieces into the user's memory on the host's threads (detail::parallelFor), each as
+// soon as its event is set, by the worker that polls it: the copies out overlap the later
+// pieces' transfers and each other (on one thread they took ~0.3 ms of a 3 ms warm frame).
+// Polling lasts at most spinNs_ from the start (none on a CPU device, whose work the
+// polling would slow); past that the fences are waited for (flush: the frame's and the
+// copies', with the hang timeout) and the pieces not yet copied are. flush() either way:
+// every state back to idle. A worker may not throw: its errors are checked afterwards.
 void VulkanBackend::copyPiecesOut(const std::vector<Piece>& pieces) {
   const auto start = std::chrono::steady_clock::now();
-  size_t i = 0;
-  for (; i < pieces.size(); ++i) {
-    const VkEvent e = pieceEvents_[i];
-    const bool set = spinUntil(start, spinNs_, [&] {
-      const VkResult r = inst_.fn.vkGetEventStatus(dev_, e);
-      if (r != VK_EVENT_SET && r != VK_EVENT_RESET) check(r, "vkGetEventStatus");
-      return r == VK_EVENT_SET;
+  auto copy = [&](const Piece& p) {
+    std::memcpy(p.host, static_cast<const char*>(staging_.mapped) + p.staged, p.bytes);
+  };
+  std::vector<VkResult> polled(pieces.size(), VK_EVENT_RESET);
+  detail::parallelFor(int(pieces.size()), [&](int i) {
+    VkResult& r = polled[size_t(i)];
+    spinUntil(start, spinNs_, [&] {
+      r = inst_.fn.vkGetEventStatus(dev_, pieceEvents_[size_t(i)]);
+      return r != VK_EVENT_RESET;
     });
-    if (!set) break;
-    std::memcpy(pieces[i].host, static_cast<const char*>(staging_.mapped) + pieces[i].staged, pieces[i].bytes);
-  }
+    if (r == VK_EVENT_SET) copy(pieces[size_t(i)]);
+  });
+  for (VkResult r : polled)
+    if (r != VK_EVENT_SET && r != VK_EVENT_RESET) check(r, "vkGetEventStatus");
   flush();
-  for (; i < pieces.size(); ++i)
-    std::memcpy(pieces[i].host, static_cast<const char*>(staging_.mapped) + pieces[i].staged, pieces[i].bytes);
+  detail::parallelFor(int(pieces.size()), [&](int i) {
+    if (polled[size_t(i)] != VK_EVENT_SET) copy(pieces[size_t(i)]);
+  });
 }
 
 void VulkanBackend::doFill(const Buffer& dst, float value) {

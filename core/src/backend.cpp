@@ -5,9 +5,11 @@
 #include "curvestereo/camera.hpp"
 #include "curvestereo/camera_models.hpp"
 #include "curvestereo/image.hpp"
+#include "curvestereo/parallel.hpp"
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -41,25 +43,37 @@ void floatsFromBytes(float* dst, const uint8_t* src, size_t n) {
   for (size_t i = 0; i < n; ++i) dst[i] = table[src[i]];
 }
 
-void copyFloats(float* dst, const float* src, size_t n, bool* finite) {
-  if (!finite) {
-    std::memcpy(dst, src, n * sizeof(float));
-    return;
-  }
-  // Branch-free within a block, so the compiler vectorises it: v - v is 0 for a finite v
-  // and NaN for NaN or +-inf, which compares unequal to 0. (A float sum of v - v would not
-  // vectorise: without -ffast-math the additions must stay in order.)
-  constexpr size_t kBlock = 4096;
+// A memcpy on one thread moves a few GB/s, far below the memory's bandwidth: a frame's
+// 2.7 MB depth took ~0.3 ms of a 2.5 ms warm frame. In pieces of 256 KiB across the pool,
+// large enough that waking the workers costs little beside each piece.
+constexpr size_t kCopyPieceBytes = size_t(1) << 18;
+
+void copyBytes(void* dst, const void* src, size_t bytes) {
+  detail::parallelPieces(bytes, kCopyPieceBytes, [&](size_t begin, size_t end) {
+    std::memcpy(static_cast<char*>(dst) + begin, static_cast<const char*>(src) + begin, end - begin);
+  });
+}
+
+// Branch-free, so the compiler vectorises it: v - v is 0 for a finite v and NaN for NaN or
+// +-inf, which compares unequal to 0. (A float sum of v - v would not vectorise: without
+// -ffast-math the additions must stay in order.)
+static bool copyFiniteFloats(float* dst, const float* src, size_t n) {
   int bad = 0;
-  for (size_t start = 0; start < n; start += kBlock) {
-    const size_t end = std::min(n, start + kBlock);
-    for (size_t i = start; i < end; ++i) {
-      const float v = src[i];
-      dst[i] = v;
-      bad |= !(v - v == 0.f);
-    }
+  for (size_t i = 0; i < n; ++i) {
+    const float v = src[i];
+    dst[i] = v;
+    bad |= !(v - v == 0.f);
   }
-  *finite = !bad;
+  return !bad;
+}
+
+void copyFloats(float* dst, const float* src, size_t n, bool* finite) {
+  if (!finite) return copyBytes(dst, src, n * sizeof(float));
+  std::atomic<bool> allFinite{true};
+  detail::parallelPieces(n, kCopyPieceBytes / sizeof(float), [&](size_t begin, size_t end) {
+    if (!copyFiniteFloats(dst + begin, src + begin, end - begin)) allFinite = false;
+  });
+  *finite = allFinite;
 }
 
 std::vector<float> gaussianTaps(float sigma) {

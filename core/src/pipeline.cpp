@@ -1,11 +1,13 @@
 #include "pipeline.hpp"
 
+#include "curvestereo/parallel.hpp"
 #include "stereo_core.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numeric>
 #include <type_traits>
 
 namespace cs {
@@ -251,21 +253,34 @@ long long Pipeline::countMask(const Buffer& mask, long long& counted) {
   return counted;
 }
 
+// The frame's figures, counted on the host's threads (detail::parallelPieces) over fixed
+// pieces summed in order: the same value on any machine.
+constexpr size_t kCountPiece = size_t(1) << 16;
+
 template <class Predicate>
 static double shareOf(const std::vector<float>& values, Predicate counts, long long maskPixels) {
-  const long long counted = (long long)std::count_if(values.begin(), values.end(), counts);
-  return maskPixels ? double(counted) / double(maskPixels) : 0.0;
+  std::vector<long long> counted((values.size() + kCountPiece - 1) / kCountPiece);
+  detail::parallelPieces(values.size(), kCountPiece, [&](size_t begin, size_t end) {
+    counted[begin / kCountPiece] =
+        std::count_if(values.begin() + ptrdiff_t(begin), values.begin() + ptrdiff_t(end), counts);
+  });
+  const long long total = std::accumulate(counted.begin(), counted.end(), 0LL);
+  return maskPixels ? double(total) / double(maskPixels) : 0.0;
 }
 
-// Four running sums: one would be a chain of dependent additions (the compiler may not
-// reorder floating-point sums), four times slower on every warm frame's read.
+// Four running sums a piece: one would be a chain of dependent additions (the compiler may
+// not reorder floating-point sums), four times slower on every warm frame's read.
 static double sumOf(const std::vector<float>& values) {
-  double lanes[4] = {0, 0, 0, 0};
-  size_t i = 0;
-  for (; i + 4 <= values.size(); i += 4)
-    for (size_t k = 0; k < 4; ++k) lanes[k] += values[i + k];
-  for (; i < values.size(); ++i) lanes[0] += values[i];
-  return (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+  std::vector<double> sums((values.size() + kCountPiece - 1) / kCountPiece);
+  detail::parallelPieces(values.size(), kCountPiece, [&](size_t begin, size_t end) {
+    double lanes[4] = {0, 0, 0, 0};
+    size_t i = begin;
+    for (; i + 4 <= end; i += 4)
+      for (size_t k = 0; k < 4; ++k) lanes[k] += values[i + k];
+    for (; i < end; ++i) lanes[0] += values[i];
+    sums[begin / kCountPiece] = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+  });
+  return std::accumulate(sums.begin(), sums.end(), 0.0);
 }
 
 void Pipeline::stage(const char* name) {
@@ -660,12 +675,14 @@ static_assert(sizeof(Vec2f) == 2 * sizeof(float) && std::is_standard_layout_v<Ve
 static_assert(sizeof(Point3f) == 3 * sizeof(float) && std::is_standard_layout_v<Point3f>, "Point3f must be 3 floats");
 
 // The valid mask from the finished radial depth (NaN exactly where unsolved), so that it
-// need not be downloaded: one branch-free pass the compiler vectorises.
+// need not be downloaded: a branch-free loop the compiler vectorises, in pieces across the
+// host's threads (on one it took 0.4 ms of a 2.6 ms warm frame on the H200's host).
 static void validFromRadial(DepthResult& out) {
-  const size_t n = out.depth.radial.size();
   const float* __restrict radial = out.depth.radial.data.data();
   uint8_t* __restrict valid = fitImage(out.valid, out.depth.radial.width, out.depth.radial.height);
-  for (size_t i = 0; i < n; ++i) valid[i] = uint8_t(radial[i] == radial[i]);
+  detail::parallelPieces(out.depth.radial.size(), kCountPiece, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) valid[i] = uint8_t(radial[i] == radial[i]);
+  });
 }
 
 // One downloadAll for the frame: the selected results and, where asked, the buffers its

@@ -66,8 +66,10 @@ struct WarpBuffers {
 // channels and sizes named, parameters in range) and throws cs::Error with one line
 // naming the kernel and the problem; then it calls the protected virtual of the same
 // name with a "do" prefix, which a backend implements knowing its arguments are valid.
-// The backends' upload copy: n floats from src to dst; with `finite`, also whether all of
-// them were finite, in the same pass (vectorised: no extra read of a large image).
+// The backends' copies between the caller's memory and staging memory, split across the
+// host's threads (detail::parallelFor). copyFloats: n floats; with `finite`, also whether
+// all of them were finite, in the same pass (no extra read of a large image).
+void copyBytes(void* dst, const void* src, size_t bytes);
 void copyFloats(float* dst, const float* src, size_t n, bool* finite);
 // The byte upload's conversion on the host: dst[i] = unitFromByte(src[i]).
 void floatsFromBytes(float* dst, const uint8_t* src, size_t n);
