@@ -5,7 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <thread>
+
+#include "curvestereo/parallel.hpp"
 
 namespace cs {
 
@@ -22,16 +23,12 @@ bool agrees(double a, double b) {
 // Confidence as a weight: never zero, so that a lone estimate of confidence 0 still counts.
 double weightOf(float confidence) { return std::isfinite(confidence) ? std::max(double(confidence), 1e-6) : 1e-6; }
 
-// f(begin, end) over [0, n) in contiguous chunks, one thread each, as many as the machine has
-// (the fusion is per pixel and independent, and a rig's frame is millions of them).
+// f(begin, end) over [0, n) in contiguous chunks, one per thread of the host's pool (the
+// fusion is per pixel and independent, and a rig's frame is millions of them).
 template <class F>
 void inChunks(int n, F&& f) {
-  const int threads = std::clamp(int(std::thread::hardware_concurrency()), 1, std::max(1, n));
-  std::vector<std::thread> workers;
-  for (int t = 1; t < threads; ++t)
-    workers.emplace_back([&, t] { f(int(1LL * n * t / threads), int(1LL * n * (t + 1) / threads)); });
-  f(0, int(1LL * n / threads));
-  for (std::thread& w : workers) w.join();
+  const int chunks = std::clamp(detail::parallelWorkers(), 1, std::max(1, n));
+  detail::parallelFor(chunks, [&](int t) { f(int(1LL * n * t / chunks), int(1LL * n * (t + 1) / chunks)); });
 }
 
 }  // namespace
