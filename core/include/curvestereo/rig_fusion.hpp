@@ -93,6 +93,7 @@ class PanoramaFusion {
  private:
   struct CameraView;
   struct Scratch;
+  void listSplats(const std::vector<DepthResult>& cameras, float minConfidence);
   CameraRig rig_;
   int width_;
   std::vector<CameraView> views_;
