@@ -219,7 +219,7 @@ namespace {
 // A camera pixel's footprint in the panorama: its centre there, its half-width and
 // half-height (px) and its range.
 struct Splat {
-  Eigen::Vector2d at, radius;
+  Eigen::Vector2f at, radius;
   float range, confidence, grey;
 };
 
@@ -230,20 +230,27 @@ constexpr double kMaxSplatRadius = 3.0;
 // The footprint's half-sizes: half the spacing to the neighbours on the same surface, at
 // least half a pixel, at most kMaxSplatRadius of the sphere's arc. A column's arc shrinks
 // with cos(latitude), so near the poles a camera pixel spans many columns.
-Eigen::Vector2d footprint(const Eigen::Vector2d& spacing, double row, int width) {
+Eigen::Vector2f footprint(const Eigen::Vector2f& spacing, double row, int width) {
   const double height = width / 2, latitude = M_PI / 2 - M_PI * (row + 0.5) / height;
   const double columns = kMaxSplatRadius / std::max(std::cos(latitude), 2.0 * kMaxSplatRadius / width);
-  return {std::clamp(0.5 * spacing.x(), 0.5, columns), std::clamp(0.5 * spacing.y(), 0.5, kMaxSplatRadius)};
+  return {float(std::clamp(0.5 * spacing.x(), 0.5, columns)),
+          float(std::clamp(0.5 * spacing.y(), 0.5, kMaxSplatRadius))};
+}
+
+// panoramaPixel in float, for the millions of pixels a rig's frame places: float's 1e-7
+// of a turn is 1e-4 px at 2048 columns, and it takes half the time.
+Eigen::Vector2f panoramaPixelF(const Eigen::Vector3f& d, int width) {
+  const float height = float(width / 2), pi = float(M_PI);
+  const float lon = std::atan2(d.x(), d.z()), lat = std::atan2(-d.y(), std::sqrt(d.x() * d.x() + d.z() * d.z()));
+  return {(lon + pi) / (2.f * pi) * float(width) - 0.5f, (pi / 2.f - lat) / pi * height - 0.5f};
 }
 
 // Where one camera's pixels land in the panorama: each pixel's position there (NaN where the
-// pixel has no depth or the camera does not unproject it) and its range from the centre, and
-// per camera row the panorama rows its pixels reach (min, max; empty when min > max), so that
-// a band of the panorama reads only the camera rows that reach it.
+// pixel has no depth or the camera does not unproject it), its footprint's half-sizes and its
+// range from the centre.
 struct Placement {
-  Image<Eigen::Vector2d> at, radius;  // the footprint: centre and half-sizes (Splat)
+  Image<Eigen::Vector2f> at, radius;  // the footprint: centre and half-sizes (Splat)
   ImageF range;
-  std::vector<Eigen::Vector2d> rowSpan;
 };
 
 // A camera pixel that splats: camera k, pixel index y * width + x.
@@ -346,48 +353,43 @@ class PanoramaAccumulator {
 
 // A camera as the panorama sees it: its rays and its pose in the panorama's frame.
 struct PanoramaFusion::CameraView {
-  Image<Eigen::Vector3f> rays;
-  Eigen::Matrix3d R;  // X_pano = R X_cam + p
-  Eigen::Vector3d p;
+  Image<Eigen::Vector3f> rays;        // the camera's, in its frame
+  Image<Eigen::Vector3f> turnedRays;  // R rays: the same in the panorama's frame
+  Eigen::Vector3f p;                  // X_pano = R X_cam + p
 
   // The point in the panorama frame; a point at infinity is seen along its direction from
   // anywhere, so it is that direction.
-  Eigen::Vector3d pointOf(int x, int y, float range) const {
-    const Eigen::Vector3d ray = rays(x, y).cast<double>();
-    return std::isfinite(range) ? Eigen::Vector3d(R * (double(range) * ray) + p) : Eigen::Vector3d(R * ray);
+  Eigen::Vector3f pointOf(int x, int y, float range) const {
+    return std::isfinite(range) ? Eigen::Vector3f(range * turnedRays(x, y) + p) : turnedRays(x, y);
   }
 
   // Camera row y of `out`.
   void placeRow(const DepthResult& r, int width, int y, Placement& out) const {
-    Eigen::Vector2d span(INFINITY, -INFINITY);
     for (int x = 0; x < r.valid.width; ++x) {
-      out.at(x, y) = Eigen::Vector2d::Constant(kNaNf);
+      out.at(x, y) = Eigen::Vector2f::Constant(kNaNf);
       if (!r.valid(x, y) || !rays(x, y).allFinite()) continue;
       const float radial = r.depth.radial(x, y);
-      const Eigen::Vector3d point = pointOf(x, y, radial);
-      const Eigen::Vector2d at = panoramaPixel(point, width);
-      out.at(x, y) = at;
-      out.range(x, y) = std::isfinite(radial) ? float(point.norm()) : INFINITY;
-      if (at.allFinite()) span = {std::min(span.x(), at.y()), std::max(span.y(), at.y())};
+      const Eigen::Vector3f point = pointOf(x, y, radial);
+      out.at(x, y) = panoramaPixelF(point, width);
+      out.range(x, y) = std::isfinite(radial) ? point.norm() : INFINITY;
     }
-    out.rowSpan[size_t(y)] = span;
   }
 
   // The half-sizes of pixel (x, y)'s footprint, whose position is finite. The steps to the neighbours on
   // the same surface along the camera's rows (a) and columns (b) set it: a box of half-size
   // (|a| + |b|) / 2 per axis covers the cell they span however the camera's grid lies in the
   // panorama, so the panorama has no holes where it samples more finely than the camera.
-  Eigen::Vector2d radiusOf(const Placement& placed, const DepthResult& r, int x, int y, int width) const {
+  Eigen::Vector2f radiusOf(const Placement& placed, const DepthResult& r, int x, int y, int width) const {
     const ImageF& radial = r.depth.radial;
-    const Eigen::Vector2d at = placed.at(x, y);
-    Eigen::Vector2d a = Eigen::Vector2d::Zero(), b = Eigen::Vector2d::Zero();
+    const Eigen::Vector2f at = placed.at(x, y);
+    Eigen::Vector2f a = Eigen::Vector2f::Zero(), b = Eigen::Vector2f::Zero();
     for (const auto& [nx, ny] : {std::pair{x + 1, y}, std::pair{x, y + 1}, std::pair{x - 1, y}, std::pair{x, y - 1}}) {
       if (nx < 0 || ny < 0 || nx >= radial.width || ny >= radial.height || !r.valid(nx, ny)) continue;
       if (!agrees(radial(nx, ny), radial(x, y)) || !rays(nx, ny).allFinite()) continue;
-      Eigen::Vector2d step = placed.at(nx, ny) - at;
+      Eigen::Vector2f step = placed.at(nx, ny) - at;
       // Across the longitude seam (remainder is exact, and the identity within half a turn).
-      if (std::abs(step.x()) > 0.5 * width) step.x() = std::remainder(step.x(), double(width));
-      Eigen::Vector2d& along = ny == y ? a : b;
+      if (std::abs(step.x()) > 0.5f * float(width)) step.x() = std::remainder(step.x(), float(width));
+      Eigen::Vector2f& along = ny == y ? a : b;
       along = along.cwiseMax(step.cwiseAbs());
     }
     return footprint(a + b, at.y(), width);
@@ -414,10 +416,14 @@ PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame,
     const BodyPose& pose = rig.poses[size_t(k)];
     const Camera& cam = rig.cameras[size_t(k)];
     // X_pano = Rf^T (R X_cam + p - centre).
-    views_.push_back({cameraRays(cam), frame.R.transpose() * pose.R, frame.R.transpose() * (pose.p - frame.centre)});
-    scratch_->placed.push_back({Image<Eigen::Vector2d>(cam.width, cam.height, Eigen::Vector2d::Constant(kNaNf)),
-                                Image<Eigen::Vector2d>(cam.width, cam.height, Eigen::Vector2d::Constant(kNaNf)),
-                                ImageF(cam.width, cam.height), std::vector<Eigen::Vector2d>(size_t(cam.height))});
+    const Eigen::Matrix3d R = frame.R.transpose() * pose.R;
+    CameraRays rays = cameraRays(cam), turned(cam.width, cam.height, Eigen::Vector3f::Constant(kNaNf));
+    for (size_t i = 0; i < rays.data.size(); ++i) turned.data[i] = (R * rays.data[i].cast<double>()).cast<float>();
+    views_.push_back(
+        {std::move(rays), std::move(turned), (frame.R.transpose() * (pose.p - frame.centre)).cast<float>()});
+    scratch_->placed.push_back({Image<Eigen::Vector2f>(cam.width, cam.height, Eigen::Vector2f::Constant(kNaNf)),
+                                Image<Eigen::Vector2f>(cam.width, cam.height, Eigen::Vector2f::Constant(kNaNf)),
+                                ImageF(cam.width, cam.height)});
     for (int y = 0; y < cam.height; ++y) scratch_->rows.emplace_back(k, y);
   }
 }
@@ -507,7 +513,7 @@ void PanoramaFusion::listSplats(const std::vector<DepthResult>& cameras, float m
       const ImageF& confidence = cameras[size_t(k)].confidence;
       for (int x = 0; x < place.at.width; ++x) {
         const size_t p = size_t(y) * size_t(place.at.width) + size_t(x);
-        const Eigen::Vector2d at = place.at.data[p], radius = place.radius.data[p];
+        const Eigen::Vector2f at = place.at.data[p], radius = place.radius.data[p];
         if (!at.allFinite() || !(confidence.data[p] >= minConfidence || minConfidence <= 0.f)) continue;
         const int y0 = std::max(0, int(std::ceil(at.y() - radius.y())));
         const int y1 = std::min(height - 1, int(std::floor(at.y() + radius.y())));
