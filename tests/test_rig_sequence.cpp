@@ -88,6 +88,17 @@ TEST_CASE("RigSequence pairs every camera to camera 0 and names each image it le
   CHECK(cs::RigSequence::open((dir / "mav0").string(), ringOf(2)).frames().size() == 3);
 }
 
+TEST_CASE("RigSequence::camerasIn counts the cam<k> folders of an ASL folder or its mav0") {
+  const fs::path dir = cs::test::tempDir("rig_sequence_count");
+  CHECK(cs::RigSequence::camerasIn(dir.string()) == 0);
+  CHECK(cs::RigSequence::camerasIn((dir / "missing").string()) == 0);
+  writeAsl(dir, {{1}, {1}, {1}});
+  CHECK(cs::RigSequence::camerasIn(dir.string()) == 3);
+  CHECK(cs::RigSequence::camerasIn((dir / "mav0").string()) == 3);
+  fs::remove(dir / "mav0" / "cam1" / "data.csv");  // the count stops at the first gap
+  CHECK(cs::RigSequence::camerasIn(dir.string()) == 1);
+}
+
 TEST_CASE("RigSequence refuses what it cannot read in one line naming the camera, file and frame") {
   const fs::path dir = cs::test::tempDir("rig_sequence_errors");
   constexpr long long t0 = 2'000'000'000;

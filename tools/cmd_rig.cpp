@@ -159,14 +159,7 @@ int runRig(const Args& args, const std::string& outDir) {
   return 0;
 }
 
-bool isRigSequence(const Args& args) {
-  if (args.has("rig")) return true;
-  std::error_code ec;
-  const std::filesystem::path source = args.get("sequence", "");
-  for (const std::filesystem::path& mav0 : {source / "mav0", source})
-    if (std::filesystem::is_regular_file(mav0 / "cam2" / "data.csv", ec)) return true;
-  return false;
-}
+bool isRigSequence(const Args& args) { return args.has("rig") || RigSequence::camerasIn(args.get("sequence", "")) > 2; }
 
 int runRigSequence(const Args& args, const std::string& outDir) {
   const std::string source = args.get("sequence", "");

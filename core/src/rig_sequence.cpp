@@ -26,6 +26,15 @@ Pose bodyPoseFrom(const Pose& worldCam0, const BodyPose& cam0OnBody) {
 
 }  // namespace
 
+int RigSequence::camerasIn(const std::string& source) {
+  const fs::path mav0 = detail::aslMav0(source);
+  if (mav0.empty()) return 0;
+  std::error_code ec;
+  int k = 0;
+  while (fs::is_regular_file(mav0 / cam(k) / "data.csv", ec)) ++k;
+  return k;
+}
+
 RigSequence RigSequence::open(const std::string& source, const CameraRig& rig, const SequenceOptions& options) {
   const int cameras = rig.size();
   if (cameras < 2) throw Error("a rig sequence needs at least two cameras, got " + std::to_string(cameras));

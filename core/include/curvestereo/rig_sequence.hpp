@@ -34,6 +34,11 @@ class RigSequence {
   // fewer than two cameras, a missing cam<k>/data.csv, a malformed line, no complete frame.
   static RigSequence open(const std::string& source, const CameraRig& rig, const SequenceOptions& options = {});
 
+  // How many cameras the ASL folder `source` (or its mav0/) records: cam0, cam1, ... up to
+  // the first missing cam<k>/data.csv; 0 when it is no ASL folder. A pair sequence has 2, a
+  // rig's more. Reads no file.
+  static int camerasIn(const std::string& source);
+
   const std::vector<RigSequenceFrame>& frames() const { return frames_; }
   int cameras() const { return cameras_; }
   // One line each: every image that is in no frame ("cam2 1000033333333.png: no cam0 frame
