@@ -13,6 +13,7 @@
 #include <map>
 #include <mutex>
 
+#include "curvestereo/image.hpp"
 #include "vulkan_backend.hpp"
 
 namespace cs {
@@ -313,4 +314,86 @@ std::string vulkanValidationLastMessage() {
 }
 bool vulkanValidationLayerActive() { return vk::gLayerActive.load(); }
 
+}  // namespace cs
+
+namespace cs::vk {
+
+namespace {
+
+std::mutex sharingLock;  // the two registries below
+std::weak_ptr<Instance> liveInstance;
+std::map<VkPhysicalDevice, std::weak_ptr<SharedDevice>> liveDevices;
+
+}  // namespace
+
+std::shared_ptr<Instance> sharedInstance() {
+  std::lock_guard<std::mutex> lock(sharingLock);
+  if (std::shared_ptr<Instance> alive = liveInstance.lock()) return alive;
+  auto made = std::make_shared<Instance>();
+  const std::string why = made->create(validationRequested());
+  if (!why.empty()) throw Error("vulkan backend: " + why);
+  liveInstance = made;
+  return made;
+}
+
+SharedDevice::~SharedDevice() {
+  if (!device || abandoned) return;
+  instance->fn.vkDeviceWaitIdle(device);
+  instance->fn.vkDestroyDevice(device, nullptr);
+}
+
+std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& instance, const Candidate& c,
+                                           SharedDevice::Queue*& queue) {
+  std::lock_guard<std::mutex> lock(sharingLock);
+  std::shared_ptr<SharedDevice> d = liveDevices[c.device].lock();
+  if (!d) {
+    d = std::make_shared<SharedDevice>();
+    d->instance = instance;
+    uint32_t nq = 0;
+    instance->fn.vkGetPhysicalDeviceQueueFamilyProperties(c.device, &nq, nullptr);
+    std::vector<VkQueueFamilyProperties> qf(nq);
+    instance->fn.vkGetPhysicalDeviceQueueFamilyProperties(c.device, &nq, qf.data());
+    const std::vector<float> priorities(std::max(1u, qf[c.queueFamily].queueCount), 1.f);
+    auto qci = vkStruct<VkDeviceQueueCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO);
+    qci.queueFamilyIndex = c.queueFamily;
+    qci.queueCount = uint32_t(priorities.size());
+    qci.pQueuePriorities = priorities.data();
+    auto f12 = vkStruct<VkPhysicalDeviceVulkan12Features>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES);
+    f12.bufferDeviceAddress = VK_TRUE;
+    auto f2 = vkStruct<VkPhysicalDeviceFeatures2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2);
+    f2.pNext = &f12;
+    f2.features.shaderFloat64 = c.float64 ? VK_TRUE : VK_FALSE;  // triangulate.comp uses it
+    f2.features.shaderInt64 = c.int64 ? VK_TRUE : VK_FALSE;
+    auto dci = vkStruct<VkDeviceCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO);
+    dci.pNext = &f2;
+    dci.queueCreateInfoCount = 1;
+    dci.pQueueCreateInfos = &qci;
+    const VkResult r = instance->fn.vkCreateDevice(c.device, &dci, nullptr, &d->device);
+    if (r != VK_SUCCESS) {
+      d->device = VK_NULL_HANDLE;
+      throw Error("vulkan backend: vkCreateDevice failed: " + resultText(r));
+    }
+    for (uint32_t i = 0; i < qci.queueCount; ++i) {
+      auto q = std::make_unique<SharedDevice::Queue>();
+      q->family = c.queueFamily;
+      instance->fn.vkGetDeviceQueue(d->device, q->family, i, &q->queue);
+      d->queues.push_back(std::move(q));
+    }
+    liveDevices[c.device] = d;
+  }
+  queue = d->queues[d->queuesTaken++ % d->queues.size()].get();
+  return d;
+}
+
+int sharedDevicesAlive() {
+  std::lock_guard<std::mutex> lock(sharingLock);
+  int alive = 0;
+  for (const auto& [phys, d] : liveDevices) alive += !d.expired();
+  return alive;
+}
+
+}  // namespace cs::vk
+
+namespace cs {
+int vulkanDevicesAlive() { return vk::sharedDevicesAlive(); }
 }  // namespace cs

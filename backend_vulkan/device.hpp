@@ -6,6 +6,8 @@
 #define VK_NO_PROTOTYPES
 #include <vulkan/vulkan.h>
 
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -75,6 +77,7 @@ namespace cs::vk {
   X(vkCmdSetEvent)                            \
   X(vkResetFences)                            \
   X(vkQueueSubmit)                            \
+  X(vkQueueWaitIdle)                          \
   X(vkDeviceWaitIdle)
 
 #define CS_VK_DECLARE(name) PFN_##name name = nullptr;
@@ -155,5 +158,47 @@ const Candidate* selectDevice(const std::vector<Candidate>& all, const std::stri
                               std::string& why);
 // "" when a device matching `device` can be used, else why not (cached per process).
 std::string probe(const std::string& device, bool autoMode);
+
+// ---------------------------------------------------------------------------------------
+// One instance, and one logical device per physical device, for the whole process.
+//
+// Every backend on a GPU shares its VkDevice, one context per GPU as CUDA has: a rig's
+// directions pay a device's start-up once, and can come to share memory (a camera's image,
+// which each of its directions uploads today). A backend takes a queue of its own while the
+// family has one left, then shares one round-robin (lavapipe has a single queue); a queue's
+// submissions and waits hold its lock (Vulkan asks the host to synchronise a queue's use).
+// Measured on an H200 (2026-11-27, rig4_urban_dev): eight directions on eight queues of one
+// device took as long as on eight devices (solves 39-40 against 42 ms): the driver ran them
+// one after another either way, where CUDA's streams overlap them (20 ms).
+
+// The process's instance, made with the validation layer when validationRequested();
+// alive while a backend holds it. Throws cs::Error.
+std::shared_ptr<Instance> sharedInstance();
+
+struct SharedDevice {
+  std::shared_ptr<Instance> instance;  // outlives the device
+  VkDevice device = VK_NULL_HANDLE;
+  struct Queue {
+    VkQueue queue = VK_NULL_HANDLE;
+    uint32_t family = 0;
+    std::mutex lock;
+  };
+  std::vector<std::unique_ptr<Queue>> queues;  // every queue of the candidate's family
+  bool abandoned = false;                      // set by a backend that saw the device hang: never destroyed (leaked)
+  unsigned queuesTaken = 0;
+
+  SharedDevice() = default;
+  SharedDevice(const SharedDevice&) = delete;
+  SharedDevice& operator=(const SharedDevice&) = delete;
+  ~SharedDevice();
+};
+
+// The logical device of candidate c (made on first use, with every queue of its family and
+// the features the backend enables), and the queue this caller is to use.
+// Throws cs::Error.
+std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& instance, const Candidate& c,
+                                           SharedDevice::Queue*& queue);
+// How many logical devices are alive in the process (the tests' view of the sharing).
+int sharedDevicesAlive();
 
 }  // namespace cs::vk

@@ -118,6 +118,7 @@ void VulkanBackend::submit(VkCommandBuffer cb, VkFence fence) {
   auto si = vkStruct<VkSubmitInfo>(VK_STRUCTURE_TYPE_SUBMIT_INFO);
   si.commandBufferCount = 1;
   si.pCommandBuffers = &cb;
+  std::lock_guard<std::mutex> lock(*queueLock_);
   check(inst_.fn.vkQueueSubmit(queue_, 1, &si, fence), "vkQueueSubmit");
 }
 

@@ -24,15 +24,13 @@ void VulkanBackend::ensureUsable() const {
   if (health_ == Health::Lost) throw Error("vulkan backend: the device was lost earlier; create a new backend");
 }
 
-VulkanBackend::VulkanBackend(const std::string& spec) {
-  std::string why = inst_.create(validationRequested());
-  if (!why.empty()) throw Error("vulkan backend: " + why);
+VulkanBackend::VulkanBackend(const std::string& spec) : instance_(sharedInstance()), inst_(*instance_) {
+  std::string why;
   const std::vector<Candidate> all = candidates(inst_);
   const Candidate* c = selectDevice(all, spec, false, why);
   if (!c) throw Error("vulkan backend: " + why);
   phys_ = c->device;
   props_ = c->props;
-  queueFamily_ = c->queueFamily;
   // The camera models run in float unless CURVESTEREO_VULKAN_DOUBLE_MODELS asks for double
   // (where the device has shaderFloat64: the oracle's precision, for the tests). GLSL has no
   // double sin, cos or atan, so real.glsl writes them out as long polynomials: in double the
@@ -88,23 +86,12 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
                  std::to_string(VK_API_VERSION_PATCH(props_.apiVersion)) + ", " + driver.driverName + " " +
                  driver.driverInfo + (float64_ ? ", camera models in double" : ", camera models in float") + ")";
 
-  const float priority = 1.f;
-  auto qci = vkStruct<VkDeviceQueueCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO);
-  qci.queueFamilyIndex = queueFamily_;
-  qci.queueCount = 1;
-  qci.pQueuePriorities = &priority;
-  auto f12 = vkStruct<VkPhysicalDeviceVulkan12Features>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES);
-  f12.bufferDeviceAddress = VK_TRUE;
-  auto f2 = vkStruct<VkPhysicalDeviceFeatures2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2);
-  f2.pNext = &f12;
-  f2.features.shaderFloat64 = deviceFloat64_ ? VK_TRUE : VK_FALSE;  // triangulate.comp uses it
-  f2.features.shaderInt64 = c->int64 ? VK_TRUE : VK_FALSE;
-  auto dci = vkStruct<VkDeviceCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO);
-  dci.pNext = &f2;
-  dci.queueCreateInfoCount = 1;
-  dci.pQueueCreateInfos = &qci;
-  check(inst_.fn.vkCreateDevice(phys_, &dci, nullptr, &dev_), "vkCreateDevice");
-  inst_.fn.vkGetDeviceQueue(dev_, queueFamily_, 0, &queue_);
+  SharedDevice::Queue* queue = nullptr;
+  device_ = sharedDevice(instance_, *c, queue);
+  dev_ = device_->device;
+  queue_ = queue->queue;
+  queueLock_ = &queue->lock;
+  queueFamily_ = queue->family;
 
   auto pci = vkStruct<VkCommandPoolCreateInfo>(VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO);
   pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
@@ -149,8 +136,14 @@ VulkanBackend::VulkanBackend(const std::string& spec) {
 
 VulkanBackend::~VulkanBackend() {
   if (!dev_) return;
-  if (health_ == Health::Hung) return;  // work may still run on the device: leak rather than free memory in use
-  inst_.fn.vkDeviceWaitIdle(dev_);
+  if (health_ == Health::Hung) {  // work may still run on the device: leak rather than free memory in use
+    device_->abandoned = true;
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(*queueLock_);
+    inst_.fn.vkQueueWaitIdle(queue_);
+  }
   for (VkPipeline p : pipelines_)
     if (p) inst_.fn.vkDestroyPipeline(dev_, p, nullptr);
   for (Arena& a : arenas_) destroyBuffer(a);
@@ -165,7 +158,6 @@ VulkanBackend::~VulkanBackend() {
   for (FrameSlot& f : frames_)
     if (f.fence) inst_.fn.vkDestroyFence(dev_, f.fence, nullptr);
   if (pool_) inst_.fn.vkDestroyCommandPool(dev_, pool_, nullptr);
-  inst_.fn.vkDestroyDevice(dev_, nullptr);
 }
 
 }  // namespace vk

@@ -34,6 +34,8 @@ std::unique_ptr<Backend> createVulkanBackend(const std::string& device);
 // Validation-layer messages (warnings and errors) seen by this process, and whether the
 // layer was available when the last Vulkan instance was created with validation asked for.
 long long vulkanValidationMessageCount();
+// Vulkan logical devices alive in this process: one per GPU in use, shared by its backends.
+int vulkanDevicesAlive();
 std::string vulkanValidationLastMessage();
 bool vulkanValidationLayerActive();
 

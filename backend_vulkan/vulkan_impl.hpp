@@ -186,17 +186,20 @@ class VulkanBackend final : public Backend {
   Buffer scratch(int slot, int w, int h, int channels = 1);
 
   std::string description_;
-  Instance inst_;
+  std::shared_ptr<Instance> instance_;  // the process's (sharedInstance)
+  const Instance& inst_;
   VkPhysicalDevice phys_ = VK_NULL_HANDLE;
   VkPhysicalDeviceProperties props_{};
   VkPhysicalDeviceMemoryProperties memProps_{};
-  bool float64_ = false;             // the camera models in double (CURVESTEREO_VULKAN_DOUBLE_MODELS)
-  bool deviceFloat64_ = false;       // the device has shaderFloat64 (triangulate always uses it)
-  PdTile pdTile_ = PdTile::Narrow;   // the largest tile of primal_dual.comp the device holds
-  bool subgroupArithmetic_ = false;  // subgroup arithmetic and shuffles in compute shaders
-  uint32_t subgroupSize_ = 1;        // the device's subgroup size (VkPhysicalDeviceSubgroupProperties)
-  VkDevice dev_ = VK_NULL_HANDLE;
-  VkQueue queue_ = VK_NULL_HANDLE;
+  bool float64_ = false;                  // the camera models in double (CURVESTEREO_VULKAN_DOUBLE_MODELS)
+  bool deviceFloat64_ = false;            // the device has shaderFloat64 (triangulate always uses it)
+  PdTile pdTile_ = PdTile::Narrow;        // the largest tile of primal_dual.comp the device holds
+  bool subgroupArithmetic_ = false;       // subgroup arithmetic and shuffles in compute shaders
+  uint32_t subgroupSize_ = 1;             // the device's subgroup size (VkPhysicalDeviceSubgroupProperties)
+  std::shared_ptr<SharedDevice> device_;  // shared with the other backends on this GPU
+  VkDevice dev_ = VK_NULL_HANDLE;         // device_'s
+  VkQueue queue_ = VK_NULL_HANDLE;        // one of device_'s queues, maybe shared
+  std::mutex* queueLock_ = nullptr;       // held around queue_'s submissions and waits
   uint32_t queueFamily_ = 0;
   VkCommandPool pool_ = VK_NULL_HANDLE;
   VkCommandBuffer immCmd_ = VK_NULL_HANDLE;
