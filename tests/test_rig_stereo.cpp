@@ -91,22 +91,24 @@ TEST_CASE("a direction's error reaches the caller once every solve has ended, an
   }
 }
 
-TEST_CASE("PanoramaFusion reused over frames fuses as fusePanorama, bit for bit") {
+TEST_CASE("PanoramaFusion reused over frames, or from RigStereo's rays, fuses as fusePanorama, bit for bit") {
   const synth::SynthRig& synthetic = ring4();
   const CameraRig& rig = synthetic.layout.rig;
   RigStereo stereo(rig, choosePairs(rig), shortSolve(rig), "cpu");
   const RigResult r = stereo.compute(synthetic.images);
   const PanoramaFrame frame = panoramaFrame(rig);
-  PanoramaFusion fusion(rig, frame, 128);
+  PanoramaFusion fusion(rig, frame, 128), fromStereosRays(rig, frame, 128, stereo.rays());
   for (float minConfidence : {0.f, 0.3f}) {
     CAPTURE(minConfidence);
     const Panorama once = fusePanorama(rig, r.cameras, synthetic.images, frame, 128, minConfidence);
     Panorama again;  // reused: the second frame writes over the first
     for (int frameIndex = 0; frameIndex < 2; ++frameIndex) {
-      fusion.fuse(r.cameras, synthetic.images, again, minConfidence);
-      CHECK(test::sameBits(again.range, once.range));
-      CHECK(test::sameBits(again.grey, once.grey));
-      CHECK(test::sameBits(again.confidence, once.confidence));
+      for (PanoramaFusion* f : {&fusion, &fromStereosRays}) {
+        f->fuse(r.cameras, synthetic.images, again, minConfidence);
+        CHECK(test::sameBits(again.range, once.range));
+        CHECK(test::sameBits(again.grey, once.grey));
+        CHECK(test::sameBits(again.confidence, once.confidence));
+      }
     }
     long long ranged = 0;
     for (float v : once.range.data) ranged += !std::isnan(v);
@@ -115,4 +117,7 @@ TEST_CASE("PanoramaFusion reused over frames fuses as fusePanorama, bit for bit"
   CHECK_THROWS_WITH_AS(PanoramaFusion(rig, frame, 127), "panorama width must be even and 4 to 32768 px, got 127",
                        Error);
   CHECK_THROWS_AS(fusion.fuse({r.cameras[0]}, {}), Error);
+  const std::vector<CameraRays> tooFew(stereo.rays().begin(), stereo.rays().end() - 1);
+  CHECK_THROWS_WITH_AS(PanoramaFusion(rig, frame, 128, tooFew),
+                       "PanoramaFusion: the rays given are not one per camera, each its camera's size", Error);
 }

@@ -147,7 +147,8 @@ int runRig(const Args& args, const std::string& outDir) {
 
   const auto fuseStart = std::chrono::steady_clock::now();
   const PanoramaFrame frame = panoramaFrame(rig);
-  const Panorama panorama = fusePanorama(rig, r.cameras, images, frame, width, panoramaConfidence);
+  const Panorama panorama =
+      PanoramaFusion(rig, frame, width, stereo.rays()).fuse(r.cameras, images, panoramaConfidence);
   const double panoramaMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fuseStart).count();
 
@@ -178,7 +179,7 @@ int runRigSequence(const Args& args, const std::string& outDir) {
   RigStereo stereo(rig, pairs, params, backendFromArgs(args));
   stereo.setCrossCheck(crossCheckFromArgs(args));
   const PanoramaFrame frame = panoramaFrame(rig);
-  PanoramaFusion fusion(rig, frame, panoramaWidth(args));
+  PanoramaFusion fusion(rig, frame, panoramaWidth(args), stereo.rays());
   const float panoramaConfidence = panoramaMinConfidence(args);
   std::printf("sequence: %s\n", sequence.summary().c_str());
   std::printf("backend: %s; settings: %s; %s\n", stereo.backendName().c_str(), describe(params).c_str(),
@@ -242,7 +243,7 @@ int benchRig(const Args& args) {
   const bool serial = args.has("serial");
   stereo.setConcurrentSolves(!serial);
   stereo.setFlowOutputs(false);  // a panorama needs neither disparity nor warp
-  PanoramaFusion fusion(rig, panoramaFrame(rig), panoramaWidth(args));
+  PanoramaFusion fusion(rig, panoramaFrame(rig), panoramaWidth(args), stereo.rays());
   const int runs = args.getInt("runs", stereo.backendName() == "cpu" ? 1 : 20);
   std::printf("backend:  %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
   std::printf("input:    %d cameras, %s\n", rig.size(), describePairs(pairs).c_str());

@@ -184,7 +184,8 @@ int evalRig(const Args& args) {
   const RigResult r = stereo.compute(f.images);
   const auto start = std::chrono::steady_clock::now();
   const PanoramaFrame frame = panoramaFrame(f.rig);
-  const Panorama panorama = fusePanorama(f.rig, r.cameras, f.images, frame, f.panoramaRange.width, panoramaConfidence);
+  const Panorama panorama =
+      PanoramaFusion(f.rig, frame, f.panoramaRange.width, stereo.rays()).fuse(r.cameras, f.images, panoramaConfidence);
   const double panoramaMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
   std::string csv = "camera,tau1,tau3,density,pixels\n";

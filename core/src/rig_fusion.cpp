@@ -408,7 +408,17 @@ struct PanoramaFusion::Scratch {
   std::vector<std::vector<std::vector<SplatRef>>> lists;
 };
 
-PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width) : rig_(rig), width_(width) {
+PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width)
+    : PanoramaFusion(rig, frame, width, {}) {}
+
+PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width,
+                               const std::vector<CameraRays>& given)
+    : rig_(rig), width_(width) {
+  if (!given.empty()) {
+    bool fits = int(given.size()) == rig.size();
+    for (int k = 0; fits && k < rig.size(); ++k) fits = sameSize(given[size_t(k)], rig.cameras[size_t(k)]);
+    if (!fits) throw Error("PanoramaFusion: the rays given are not one per camera, each its camera's size");
+  }
   if (width < 4 || width % 2 || width > 32768)
     throw Error("panorama width must be even and 4 to 32768 px, got " + std::to_string(width));
   scratch_ = std::make_unique<Scratch>(Scratch{{}, {}, PanoramaAccumulator(width), {}});
@@ -417,7 +427,8 @@ PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame,
     const Camera& cam = rig.cameras[size_t(k)];
     // X_pano = Rf^T (R X_cam + p - centre).
     const Eigen::Matrix3d R = frame.R.transpose() * pose.R;
-    CameraRays rays = cameraRays(cam), turned(cam.width, cam.height, Eigen::Vector3f::Constant(kNaNf));
+    CameraRays rays = given.empty() ? cameraRays(cam) : given[size_t(k)],
+               turned(cam.width, cam.height, Eigen::Vector3f::Constant(kNaNf));
     for (size_t i = 0; i < rays.data.size(); ++i) turned.data[i] = (R * rays.data[i].cast<double>()).cast<float>();
     views_.push_back(
         {std::move(rays), std::move(turned), (frame.R.transpose() * (pose.p - frame.centre)).cast<float>()});

@@ -81,6 +81,10 @@ Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& came
 class PanoramaFusion {
  public:
   PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width);
+  // The same from each camera's cameraRays() that the caller already has (RigStereo::rays()),
+  // rather than computing them again. Throws cs::Error when they are not one per camera, each
+  // its camera's size.
+  PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::vector<CameraRays>& rays);
   ~PanoramaFusion();
   PanoramaFusion(const PanoramaFusion&) = delete;
   PanoramaFusion& operator=(const PanoramaFusion&) = delete;

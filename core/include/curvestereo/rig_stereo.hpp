@@ -73,6 +73,9 @@ class RigStereo {
   void setConcurrentSolves(bool on);
   // The backend the solves run on, as Stereo names it.
   std::string backendName() const;
+  // Each camera's cameraRays(), computed at construction for the fusion: a PanoramaFusion of
+  // the same rig can take them rather than computing them again.
+  const std::vector<CameraRays>& rays() const { return rays_; }
 
  private:
   struct Direction {
