@@ -319,9 +319,12 @@ void CudaBackend::doDownloadAll(const std::vector<Download>& downloads) {
       pieces.push_back({d.host + at, staging + at, n});
     }
   }
-  std::vector<cudaError_t> waited(pieces.size(), cudaSuccess);  // a worker may not throw
+  // A worker may not throw: its errors are checked after. It makes this backend's device its
+  // own first: a pool thread's first CUDA call would otherwise open a context on device 0.
+  std::vector<cudaError_t> waited(pieces.size(), cudaSuccess);
   detail::parallelFor(int(pieces.size()), [&](int i) {
-    waited[size_t(i)] = cudaEventSynchronize(downloadEvents_[size_t(i)]);
+    waited[size_t(i)] = cudaSetDevice(device_);
+    if (waited[size_t(i)] == cudaSuccess) waited[size_t(i)] = cudaEventSynchronize(downloadEvents_[size_t(i)]);
     if (waited[size_t(i)] == cudaSuccess)
       std::memcpy(pieces[size_t(i)].host, pieces[size_t(i)].staged, pieces[size_t(i)].floats * sizeof(float));
   });
