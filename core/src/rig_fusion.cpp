@@ -237,8 +237,8 @@ Eigen::Vector2f footprint(const Eigen::Vector2f& spacing, double row, int width)
           float(std::clamp(0.5 * spacing.y(), 0.5, kMaxSplatRadius))};
 }
 
-// panoramaPixel in float, for the millions of pixels a rig's frame places: float's 1e-7
-// of a turn is 1e-4 px at 2048 columns, and it takes half the time.
+// panoramaPixel in float, for the millions of pixels a rig's frame places: float's 1e-7 of
+// a turn is 1e-4 px at 2048 columns, ample for footprints of at least half a pixel.
 Eigen::Vector2f panoramaPixelF(const Eigen::Vector3f& d, int width) {
   const float height = float(width / 2), pi = float(M_PI);
   const float lon = std::atan2(d.x(), d.z()), lat = std::atan2(-d.y(), std::sqrt(d.x() * d.x() + d.z() * d.z()));
