@@ -222,7 +222,7 @@ std::vector<Candidate> candidates(const Instance& inst) {
     inst.fn.vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, qf.data());
     bool compute = false;
     for (uint32_t i = 0; i < nq && !compute; ++i)
-      if (qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT) compute = true, c.queueFamily = i;
+      if (qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT) compute = true, c.queueFamily = i, c.queueCount = qf[i].queueCount;
     if (c.props.apiVersion < VK_API_VERSION_1_2)
       c.unusable = "supports only Vulkan < 1.2";
     else if (!f12.bufferDeviceAddress)
@@ -349,11 +349,7 @@ std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& inst
   if (!d) {
     d = std::make_shared<SharedDevice>();
     d->instance = instance;
-    uint32_t nq = 0;
-    instance->fn.vkGetPhysicalDeviceQueueFamilyProperties(c.device, &nq, nullptr);
-    std::vector<VkQueueFamilyProperties> qf(nq);
-    instance->fn.vkGetPhysicalDeviceQueueFamilyProperties(c.device, &nq, qf.data());
-    const std::vector<float> priorities(std::max(1u, qf[c.queueFamily].queueCount), 1.f);
+    const std::vector<float> priorities(std::max(1u, c.queueCount), 1.f);
     auto qci = vkStruct<VkDeviceQueueCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO);
     qci.queueFamilyIndex = c.queueFamily;
     qci.queueCount = uint32_t(priorities.size());
@@ -375,8 +371,7 @@ std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& inst
     }
     for (uint32_t i = 0; i < qci.queueCount; ++i) {
       auto q = std::make_unique<SharedDevice::Queue>();
-      q->family = c.queueFamily;
-      instance->fn.vkGetDeviceQueue(d->device, q->family, i, &q->queue);
+      instance->fn.vkGetDeviceQueue(d->device, c.queueFamily, i, &q->queue);
       d->queues.push_back(std::move(q));
     }
     liveDevices[c.device] = d;

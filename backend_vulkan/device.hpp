@@ -147,7 +147,7 @@ const char* typeName(VkPhysicalDeviceType t);
 struct Candidate {
   VkPhysicalDevice device = VK_NULL_HANDLE;
   VkPhysicalDeviceProperties props{};
-  uint32_t queueFamily = 0;
+  uint32_t queueFamily = 0, queueCount = 0;  // the first family that computes, and its queues
   bool float64 = false, int64 = false;
   std::string unusable;  // why this device cannot run the backend ("" if it can)
 };
@@ -180,7 +180,6 @@ struct SharedDevice {
   VkDevice device = VK_NULL_HANDLE;
   struct Queue {
     VkQueue queue = VK_NULL_HANDLE;
-    uint32_t family = 0;
     std::mutex lock;
   };
   std::vector<std::unique_ptr<Queue>> queues;  // every queue of the candidate's family

@@ -91,7 +91,7 @@ VulkanBackend::VulkanBackend(const std::string& spec) : instance_(sharedInstance
   dev_ = device_->device;
   queue_ = queue->queue;
   queueLock_ = &queue->lock;
-  queueFamily_ = queue->family;
+  queueFamily_ = c->queueFamily;
 
   auto pci = vkStruct<VkCommandPoolCreateInfo>(VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO);
   pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
