@@ -99,6 +99,16 @@ void CpuBackend::doFinishResult(const Buffer& valid, const Buffer& z, const Buff
   cpu::finishResult(view(valid), view(z), view(radial), view(points), view(disparity), view(warp), view(confidence));
 }
 
+void CpuBackend::doPlainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
+                                const Buffer& levelImage, const Buffer& levelMask) {
+  cpu::plainSupport(view(support), view(confidence), view(w), view(mask), view(levelImage), view(levelMask));
+}
+
+void CpuBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
+                              const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) {
+  cpu::fillPlanes(view(u), view(w), view(labels), view(planes), view(mask), cam0, tPrime);
+}
+
 void CpuBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                              const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
   cpu::roundTrip(view(error), view(w), view(calibration), view(reverseW), view(reverseCalibration), view(reverseMask),

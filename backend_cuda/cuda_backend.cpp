@@ -399,6 +399,21 @@ void CudaBackend::doFinishResult(const Buffer& valid, const Buffer& z, const Buf
         "finishResult");
 }
 
+void CudaBackend::doPlainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
+                                 const Buffer& levelImage, const Buffer& levelMask) {
+  flush();
+  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
+  check(cudak::launchPlainSupport(stream_, on(support), on(confidence), on(w), on(mask), on(levelImage), on(levelMask)),
+        "plainSupport");
+}
+
+void CudaBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
+                               const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) {
+  flush();
+  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
+  check(cudak::launchFillPlanes(stream_, on(u), on(w), on(labels), on(planes), on(mask), cam0, tPrime), "fillPlanes");
+}
+
 void CudaBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                               const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
   flush();

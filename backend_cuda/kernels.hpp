@@ -101,6 +101,11 @@ cudaError_t launchCarryEstimate(cudaStream_t s, Img dst, Img src, Img guess, con
 // confidence.data null: 1 everywhere.
 cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img prior, Img radial, Img points,
                                  Img confidence, Img mask, const TemporalParams& p);
+// Plain regions (plain_fill.cu; backend.hpp plainSupport, fillPlanes).
+cudaError_t launchPlainSupport(cudaStream_t s, Img support, Img confidence, Img w, Img mask, Img levelImage,
+                               Img levelMask);
+cudaError_t launchFillPlanes(cudaStream_t s, Img u, Img w, Img labels, Img planes, Img mask, const CameraParams& cam0,
+                             const double tPrime[3]);
 // The result's confidence (round_trip.cu, result_confidence.cu; backend.hpp roundTrip,
 // resultConfidence).
 cudaError_t launchRoundTrip(cudaStream_t s, Img error, Img w, Img calibration, Img reverseW, Img reverseCalibration,

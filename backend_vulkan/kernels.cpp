@@ -229,6 +229,14 @@ struct PcRoundTrip {
   Addr error, w, calibration, reverseW, reverseCalibration, reverseMask, mask;
   int32_t width, height, reverseWidth, reverseHeight;
 };
+struct PcPlainSupport {
+  Addr support, confidence, w, mask, levelImage, levelMask;
+  int32_t width, height, fullWidth, fullHeight;
+};
+struct PcFillPlanes {
+  Addr u, w, labels, planes, mask, params;
+  int32_t width, height, labelWidth, labelHeight, planeValues;
+};
 struct PcFinishResult {
   Addr valid, z, radial, points, disparity, warp, confidence;
   int32_t width, height;
@@ -762,6 +770,34 @@ void VulkanBackend::doFinishResult(const Buffer& valid, const Buffer& z, const B
   PcFinishResult pc{addr(valid), addr(z),          addr(radial), addr(points), addr(disparity),
                     addr(warp),  addr(confidence), radial.width, radial.height};
   dispatch(kFinishResult, pc, radial.width, radial.height);
+}
+
+void VulkanBackend::doPlainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
+                                   const Buffer& levelImage, const Buffer& levelMask) {
+  PcPlainSupport pc{addr(support),   addr(confidence), addr(w),        addr(mask), addr(levelImage),
+                    addr(levelMask), support.width,    support.height, mask.width, mask.height};
+  dispatch(kPlainSupport, pc, support.width, support.height);
+}
+
+void VulkanBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
+                                 const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) {
+  // In double where the device has it, as triangulate: the same camera equations.
+  const bool inDouble = deviceFloat64_;
+  Addr block;
+  if (inDouble) {
+    VkTriangulateParams<double> prm{};
+    prm.cam0 = toVkCam<double>(cam0);
+    for (int i = 0; i < 3; ++i) prm.tPrime[i] = tPrime[i];
+    block = paramBlock(&prm, sizeof(prm));
+  } else {
+    VkTriangulateParams<float> prm{};
+    prm.cam0 = toVkCam<float>(cam0);
+    for (int i = 0; i < 3; ++i) prm.tPrime[i] = float(tPrime[i]);
+    block = paramBlock(&prm, sizeof(prm));
+  }
+  PcFillPlanes pc{addr(u),  addr(w),      addr(labels),  addr(planes),           addr(mask), block, u.width,
+                  u.height, labels.width, labels.height, int32_t(planes.count())};
+  dispatch(inDouble ? kFillPlanesF64 : kFillPlanesF32, pc, u.width, u.height);
 }
 
 void VulkanBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,

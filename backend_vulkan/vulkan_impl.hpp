@@ -109,6 +109,10 @@ class VulkanBackend final : public Backend {
                         const TemporalParams& p) override;
   void doFinishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
                       const Buffer& disparity, const Buffer& warp, const Buffer& confidence) override;
+  void doPlainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
+                      const Buffer& levelImage, const Buffer& levelMask) override;
+  void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes, const Buffer& mask,
+                    const CameraParams& cam0, const double tPrime[3]) override;
   void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                    const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) override;
   void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,

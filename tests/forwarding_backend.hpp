@@ -104,6 +104,14 @@ class ForwardingBackend : public Backend {
                       const Buffer& w, const Buffer& c) override {
     b_.finishResult(v, z, r, pt, u, w, c);
   }
+  void doPlainSupport(const Buffer& s, const Buffer& c, const Buffer& w, const Buffer& m, const Buffer& li,
+                      const Buffer& lm) override {
+    b_.plainSupport(s, c, w, m, li, lm);
+  }
+  void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& l, const Buffer& p, const Buffer& m,
+                    const CameraParams& cam, const double t[3]) override {
+    b_.fillPlanes(u, w, l, p, m, cam, t);
+  }
   void doRoundTrip(const Buffer& e, const Buffer& w, const Buffer& c, const Buffer& rw, const Buffer& rc,
                    const Buffer& rm, const Buffer& m) override {
     b_.roundTrip(e, w, c, rw, rc, rm, m);

@@ -711,6 +711,8 @@ const std::vector<KernelCase>& kernelCases() {
       {"carryEstimate", carryEstimateCase},
       {"carryEstimate, coarser grid of camera 1'", carryEstimateCoarseCase},
       {"temporalFilter", temporalFilterCase},
+      {"plainSupport", plainSupportCase},
+      {"fillPlanes", fillPlanesCase},
       {"roundTrip", roundTripCase},
       {"resultConfidence", resultConfidenceCase},
       {"resultConfidence, no sweep or round trip, radius 1", resultConfidenceAloneCase},

@@ -103,6 +103,53 @@ std::vector<Output> temporalFilterCase(Backend& b) {
   return out;
 }
 
+// --- plain regions ---
+
+// Confidences with ties, NaN and a block with nothing masked, under a coarse grid a quarter
+// of the size (rounded up: the last blocks are narrower) and under one of an uneven ratio.
+std::vector<Output> plainSupportCase(Backend& b) {
+  Session s{b};
+  Host confidence = noise(kW, kH, 1, 91, 0.5f), w = noise(kW, kH, 2, 92, 3.f), mask = discMask(kW, kH);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      float& c = confidence.at(x, y);
+      c = 0.5f + c;
+      if ((x + 3 * y) % 13 == 0) c = std::numeric_limits<float>::quiet_NaN();
+      if (x >= 8 && x < 12 && y >= 8 && y < 12) c = 0.75f;  // a block of equals: the first wins
+    }
+  Buffer cb = s.put(confidence), wb = s.put(w), mb = s.put(mask);
+  const int qw = (kW + 3) / 4, qh = (kH + 3) / 4;
+  Host quarterImage = texture(qw, qh, 95), quarterMask = discMask(qw, qh);
+  Host unevenImage = texture(13, 11, 96), unevenMask = discMask(13, 11);
+  for (int x = 0; x < 6; ++x) quarterImage.at(x, 5) = 0.5f;  // a plain row: variance near 0
+  Buffer quarter = s.make(qw, qh, 6), uneven = s.make(13, 11, 6);
+  b.plainSupport(quarter, cb, wb, mb, s.put(quarterImage), s.put(quarterMask));
+  b.plainSupport(uneven, cb, wb, mb, s.put(unevenImage), s.put(unevenMask));
+  // Comparisons and copies but for the variance (channel 5, values about 1e-3): float sums
+  // in the oracle's order; Vulkan's division may round to 2.5 ulp.
+  return within({s.get("plain_support", quarter), s.get("plain_support_uneven", uneven)}, {1e-9, 1e-12});
+}
+
+// Three planes over a coarse grid of labels (-1 and NaN: none; 5: beyond the planes given):
+// a floor, a wall, and a plane behind some rays (q < 0: those keep their values).
+std::vector<Output> fillPlanesCase(Backend& b) {
+  Session s{b};
+  const int lw = (kW + 3) / 4, lh = (kH + 3) / 4;
+  Host u = noise(kW, kH, 1, 93, 2.f), w = noise(kW, kH, 2, 94, 2.f), mask = discMask(kW, kH), labels(lw, lh, 1);
+  for (int y = 0; y < lh; ++y)
+    for (int x = 0; x < lw; ++x) labels.at(x, y) = float((x + 2 * y) % 5) - 1.f;  // -1, 0, 1, 2, 3
+  labels.at(1, 1) = 5.f;
+  labels.at(2, 1) = std::numeric_limits<float>::quiet_NaN();
+  Host planes(9, 1, 1);
+  const float a[9] = {0.f, 0.6f, 0.05f, 0.02f, -0.01f, 0.4f, -0.9f, 0.1f, 0.2f};
+  std::copy(a, a + 9, planes.v.begin());
+  Buffer ub = s.put(u), wb = s.put(w);
+  const FieldsParams f = fieldsParams();
+  b.fillPlanes(ub, wb, s.put(labels), s.put(planes), s.put(mask), f.cam0, f.t);
+  // Double geometry on every backend, rounded to float once (as carryEstimate).
+  return within({s.get("fill_planes_u", ub), s.get("fill_planes_w", wb)}, {1e-5, 1e-12});
+}
+
 // --- the result's confidence ---
 
 // A small displacement field and a calibration field that nearly undo each other's

@@ -116,6 +116,8 @@ inline FieldsParams fieldsParams() {
 std::vector<Output> carryEstimateCase(Backend& b);
 std::vector<Output> carryEstimateCoarseCase(Backend& b);
 std::vector<Output> temporalFilterCase(Backend& b);
+std::vector<Output> plainSupportCase(Backend& b);
+std::vector<Output> fillPlanesCase(Backend& b);
 std::vector<Output> roundTripCase(Backend& b);
 std::vector<Output> resultConfidenceCase(Backend& b);
 std::vector<Output> resultConfidenceAloneCase(Backend& b);

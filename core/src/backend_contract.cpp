@@ -444,6 +444,27 @@ void Backend::temporalFilter(const Buffer& state, const Buffer& u, const Buffer&
 
 namespace cs {
 
+void Backend::plainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
+                           const Buffer& levelImage, const Buffer& levelMask) {
+  const BackendContract c(*this, "plainSupport");
+  c.buffer(mask, "mask", 1).sameGrid(confidence, "confidence", 1, mask, "mask").sameGrid(w, "w", 2, mask, "mask");
+  c.buffer(support, "support", 6).sameGrid(levelImage, "levelImage", 1, support, "support");
+  c.sameGrid(levelMask, "levelMask", 1, support, "support");
+  c.require(support.width <= mask.width && support.height <= mask.height, "support is larger than the mask's grid");
+  doPlainSupport(support, confidence, w, mask, levelImage, levelMask);
+}
+
+void Backend::fillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
+                         const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) {
+  const BackendContract c(*this, "fillPlanes");
+  c.buffer(mask, "mask", 1).sameGrid(u, "u", 1, mask, "mask").sameGrid(w, "w", 2, mask, "mask");
+  c.buffer(labels, "labels", 1).buffer(planes, "planes", 1).camera(cam0, "cam0", &mask, "mask");
+  c.require(labels.width <= mask.width && labels.height <= mask.height, "labels is larger than the mask's grid");
+  c.require(planes.count() >= 3, "planes holds no plane");
+  c.require(std::isfinite(tPrime[0]) && std::isfinite(tPrime[1]) && std::isfinite(tPrime[2]), "tPrime is not finite");
+  doFillPlanes(u, w, labels, planes, mask, cam0, tPrime);
+}
+
 void Backend::roundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                         const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
   const BackendContract c(*this, "roundTrip");

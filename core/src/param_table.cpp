@@ -192,9 +192,16 @@ std::vector<ParamInfo> buildTable() {
       "solve the other direction too; pixels whose round trip fails become invalid (run prints the share that passes)",
       Shown::Always);
   lrCheck.boolField = &Params::lrCheck;
+  ParamInfo plainFill =
+      base("plain_fill", Type::Bool, {}, "fill each large plain region with the plane its textured border agrees on",
+           Shown::Always);
+  plainFill.boolField = &Params::plainFill;
   std::vector<ParamInfo> trust = grouped(
       "confidence and validity (every preset)",
       {
+          plainFill,
+          intParam("plain_fill_level", &Params::plainFillLevel, closed(0, 12),
+                   "pyramid level whose estimate plain_fill corrects (clamped to the coarsest)", Shown::Never),
           lrCheck,
           floatParam("lr_check_px", &Params::lrCheckPx, above(0),
                      "lr_check: a round trip beyond this (px) leaves the pixel invalid", Shown::Always),

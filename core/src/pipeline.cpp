@@ -62,10 +62,14 @@ static Params reverseParams(Params p) {
 // confidence (1) at the sweep level and every finer one (and the coarser one with a band), and the volume and the costs
 // (planes each) and two sweep results (2 + 2) at the sweep level; with a band, those at the coarser level and, at the
 // sweep's, a volume and costs of band channels each, two results and `first` (1), and a warm frame's volume and
-// costs of warmBand channels where narrower. A sequence adds 6 more at level 0 (resetSequence: three states).
+// costs of warmBand channels where narrower. With plainFill, 7 at its level (support 6, labels 1) and the planes. A
+// sequence adds 6 more at level 0 (resetSequence: three states).
 static unsigned long long levelFloats(const std::vector<LevelSize>& plan, const Params& params) {
   auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
   unsigned long long floats = (params.lrCheck ? 11ull : 10ull) * pixels(plan[0]);
+  if (params.plainFill)
+    floats += (kPlainSupportChannels + 1ull) * pixels(plan[std::min(plan.size() - 1, size_t(params.plainFillLevel))]) +
+              3ull * kMaxPlainPlanes;
   const unsigned long long perPixel = params.dataTerm == Params::DataTerm::Normalised ? 39 : 34;
   for (const LevelSize& size : plan) floats += perPixel * pixels(size);
   return floats;
@@ -197,6 +201,12 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
   radial_ = backend_.create(w, h, 1);
   points_ = backend_.create(w, h, 3);
   confidence_ = backend_.create(w, h, 1);
+  if (params_.plainFill) {
+    const Level& P = levels_[plainLevel()];
+    plainSupport_ = backend_.create(P.size.width, P.size.height, kPlainSupportChannels);
+    plainLabels_ = backend_.create(P.size.width, P.size.height, 1);
+    plainPlanes_ = backend_.create(3 * kMaxPlainPlanes, 1, 1);
+  }
   finishes_ = finishes;
   if (finishes_) {
     valid_ = backend_.create(w, h, 1);
@@ -205,7 +215,7 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
   if (params_.lrCheck) {
     roundTripError_ = backend_.create(w, h, 1);
     reverse_ = std::make_unique<Pipeline>(backend_, reversedRig(rig), reverseParams(params_), ImageU8(), false);
-    reverse_->slotBase_ = kFrameSlots / 2;
+    reverse_->slotBase_ = kFrameSlots / 2;  // Pipeline::recordOrReplay's layout
   }
 }
 
@@ -629,7 +639,7 @@ void Pipeline::finishOutputs() {
   backend_.finishResult(valid_, z_, radial_, points_, L0.pd.u, L0.w, confidence_);
 }
 
-void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind kind) {
+void Pipeline::issueSolve(const std::function<void(double)>& progress, FrameKind kind) {
   // Progress in pixel-warps: a warp costs about the same per pixel at every level, and the
   // plane sweep about kSweepWarpsPerPlane warps per pixel and hypothesis (measured at full
   // resolution with 262 hypotheses: 2x the level's 30 warps on the CPU, 3x with CUDA).
@@ -661,6 +671,51 @@ void Pipeline::issueFrame(const std::function<void(double)>& progress, FrameKind
     if (initialising() && sweep_.banded && l == sweep_.level + 1) advance(coarseSweepWork);
     if (initialising() && l == sweep_.level) advance(sweepWork);
     solveLevel(levels_[l], warps[l], [&](int) { advance(pixels(levels_[l])); });
+  }
+  if (fillsPlains(kind)) findPlainSupport();
+}
+
+// Plain regions (Params::plainFill, docs/confidence.md "Plain surfaces"): the solve's own
+// confidence (without what rejects pixels) picks, under each pixel of the plain-fill level,
+// the full-resolution pixel whose warp the host's plane fits may trust.
+void Pipeline::findPlainSupport() {
+  Level& L0 = levels_[0];
+  triangulate();
+  stage("plain fill: support");
+  backend_.resultConfidence(confidence_, radial_, points_, L0.i0, L0.n0, L0.n1, L0.w, L0.trajectory,
+                            initialising() ? L0.confidence : Buffer{}, Buffer{}, L0.mask, confidenceTerms());
+  const Level& P = levels_[plainLevel()];
+  backend_.plainSupport(plainSupport_, confidence_, L0.w, L0.mask, P.i0, P.mask);
+}
+
+// The host's part: the plain regions of the level's image and the planes their borders
+// agree on, uploaded for fillPlanes (the frame waits for the solve here, once).
+void Pipeline::planPlainFill() {
+  stage("plain fill: planes");
+  const Level& P = levels_[plainLevel()];
+  const size_t n = size_t(P.size.width) * P.size.height;
+  support_.resize(kPlainSupportChannels * n);
+  backend_.download(plainSupport_, support_.data());
+  PlainFillParams p;
+  p.noise = float(params_.noiseLevel * P.size.scale);  // the level averages at least 1 / scale^2 pixels
+  p.qMax = sweepQMax(tPrime_, params_);
+  if (plainRays_.ray.empty()) plainRays_ = plainRays(levels_[0].cam0, P.size.width, P.size.height);
+  const PlainPlanes found =
+      findPlainPlanes(plainRays_, levels_[0].cam0, tPrime_, P.size.width, P.size.height, support_, p);
+  std::vector<float> planes(3 * kMaxPlainPlanes, 0.f);
+  for (size_t k = 0; k < found.planes.size(); ++k)
+    for (int c = 0; c < 3; ++c) planes[3 * k + size_t(c)] = found.planes[k][c];
+  backend_.upload(plainLabels_, found.labels.data());
+  backend_.upload(plainPlanes_, planes.data());
+  plainPixels_ = found.pixels;
+}
+
+void Pipeline::issueFinish(FrameKind kind) {
+  if (fillsPlains(kind)) {
+    stage("plain fill");
+    const Level& L0 = levels_[0];
+    const double tp[3] = {tPrime_.x(), tPrime_.y(), tPrime_.z()};
+    backend_.fillPlanes(L0.pd.u, L0.w, plainLabels_, plainPlanes_, L0.mask, toCameraParams(L0.cam0), tp);
   }
   triangulate();
   if (kind.filter) filterResult();
@@ -736,9 +791,12 @@ void Pipeline::download(DepthResult& out, bool countConsistent, bool countConfid
                                                               : std::numeric_limits<double>::quiet_NaN();
 }
 
-void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
-  if (kind.filter && state_.id < 0) throw Error("pipeline: a filtered frame before resetSequence()");
-  const int slot = slotBase_ + kind.slot();
+// Slots: slotBase_ + a kind's slot for the solve, and kKindSlots more for the finish after
+// the host's plain fill (without it, the whole frame is the first).
+constexpr int kKindSlots = 4;
+
+void Pipeline::recordOrReplay(int slot, const std::function<void(double)>& progress,
+                              const std::function<void()>& issue) {
   if (!profiling_ && backend_.canReplayFrame(slot)) {
     // A replayed frame issues nothing the warps could report: its start and, once its
     // results are here, its end.
@@ -746,9 +804,24 @@ void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameK
     backend_.replayFrame(slot);
   } else {
     backend_.beginFrame(slot);
-    issueFrame(progress, kind);
+    issue();
     backend_.endFrame();
   }
+}
+
+void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
+  if (kind.filter && state_.id < 0) throw Error("pipeline: a filtered frame before resetSequence()");
+  const int slot = slotBase_ + kind.slot();
+  if (!fillsPlains(kind)) {
+    recordOrReplay(slot, progress, [&] {
+      issueSolve(progress, kind);
+      issueFinish(kind);
+    });
+    return;
+  }
+  recordOrReplay(slot, progress, [&] { issueSolve(progress, kind); });
+  planPlainFill();
+  recordOrReplay(slot + kKindSlots, nullptr, [&] { issueFinish(kind); });
 }
 
 void Pipeline::resetSequence() {

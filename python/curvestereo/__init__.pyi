@@ -191,8 +191,11 @@ class Stereo:
         warm_fail_ratio: float = ...,
         temporal_strength: float = ...,
         temporal_gate: float = ...,
-        # Confidence and validity (docs/confidence.md): the other direction's round trip,
-        # points at infinity, pixels the image cannot fix, a confidence floor.
+        # Confidence and validity (docs/confidence.md): plain regions filled with the plane
+        # their border agrees on, the other direction's round trip, points at infinity, pixels
+        # the image cannot fix, a confidence floor.
+        plain_fill: bool = ...,
+        plain_fill_level: int = ...,
         lr_check: bool = ...,
         lr_check_px: float = ...,
         infinity_px: float = ...,

@@ -219,6 +219,15 @@ struct Params {
   float rejectBelow = 0.f;
   float maxDeviationPx = 0.f;
 
+  // Plain regions (docs/confidence.md "Plain surfaces"): after solving level
+  // plainFillLevel, each large connected region whose image varies no more than twice the
+  // noise (nothing to match on: painted walls, floors, ceilings) takes the plane that the
+  // inverse depths of its textured border agree on, if most of the border agrees and the
+  // border fixes the plane across the region to half a pixel; the finer levels then refine
+  // it. Without it the regulariser fills such a region from whatever it reaches.
+  bool plainFill = true;
+  int plainFillLevel = 2;
+
   // This data term with its default lambda.
   Params withDataTerm(DataTerm term) const;
 

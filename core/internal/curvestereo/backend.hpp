@@ -44,7 +44,9 @@ struct PrimalDualParams : PrimalDualWeights {
   std::vector<PrimalDualStep> schedule;  // one entry per iteration
 };
 
-constexpr int kFrameSlots = 8;  // recorded frames a backend keeps (beginFrame): 4 kinds x 2 directions (lrCheck)
+// Recorded frames a backend keeps (beginFrame): 4 kinds x 2 parts (the solve, and the finish
+// after the host's plain fill) x 2 directions (lrCheck).
+constexpr int kFrameSlots = 16;
 
 // The normalised Gaussian taps of standard deviation sigma > 0 over radius ceil(3 sigma)
 // (2 radius + 1 of them, the middle one at offset 0): the one definition behind the
@@ -281,6 +283,27 @@ class Backend {
   void temporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior, const Buffer& radial,
                       const Buffer& points, const Buffer& confidence, const Buffer& mask, const TemporalParams& p);
 
+  // --- plain regions (Params::plainFill: backend_cpu/plain_fill.cpp, shaders plain_support, fill_planes) ---
+  // A level pixel (x, y) of a coarse grid covers the full-resolution pixels (X, Y) with
+  // floor((2X + 1) W / (2 W0)) = x and floor((2Y + 1) H / (2 H0)) = y, W x H the coarse
+  // grid's size and W0 x H0 the full one's: integer arithmetic, the same pixels everywhere.
+  // support (6 ch, coarse): the most confident masked pixel of the block each level pixel
+  // covers (the first in row order among equals; NaN confidence is none): X, Y, w(X, Y) and
+  // its confidence; where the block has none, 0, 0, 0, 0, -1. Channel 5: the variance of
+  // levelImage over the level pixel's 5 x 5 window's pixels masked in levelMask (float, the
+  // mean first, rows then columns in order), or -1 where the pixel is not masked or fewer
+  // than 13 of the 25 are. confidence, mask 1 ch and w 2 ch on one grid; levelImage and
+  // levelMask 1 ch on support's.
+  void plainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
+                    const Buffer& levelImage, const Buffer& levelMask);
+  // At each masked full-resolution pixel x whose coarse pixel (as above) has a label l >= 0
+  // (labels 1 ch, coarse; planes 1 ch, at least 3 (l + 1) values): with a = planes[3l ..
+  // 3l + 2] and ray the unit ray of x, q = a . ray; where q >= 0 and ray + q t' projects,
+  // w(x) = pi(ray + q t') - x and u(x) = |w(x)| (the sweep's setWarp). Elsewhere u and w are
+  // unchanged. u, mask 1 ch and w 2 ch on cam0's grid.
+  void fillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes, const Buffer& mask,
+                  const CameraParams& cam0, const double tPrime[3]);
+
   // --- the result's confidence (one file / shader per kernel: result_confidence, round_trip) ---
   // error (1 ch): the left-right round trip of x through the other direction's solve. a = x
   // + w(x) (calibrated image 1), y = a + calibration(a) (image 1's pixel), b = y + reverseW(y)
@@ -413,6 +436,10 @@ class Backend {
                                  const Buffer& mask, const SweepParams& p) = 0;
   virtual void doFinishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
                               const Buffer& disparity, const Buffer& warp, const Buffer& confidence) = 0;
+  virtual void doPlainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
+                              const Buffer& levelImage, const Buffer& levelMask) = 0;
+  virtual void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
+                            const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) = 0;
   virtual void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                            const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) = 0;
   virtual void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
