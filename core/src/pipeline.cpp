@@ -244,6 +244,7 @@ void Pipeline::setPose(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
     backend_.fields(L.mask, l == 0 ? calibration_ : L.tangent, L.trajectory, fp);
   }
   sweepMaskPixels_ = maskPixels_ = summaryMaskPixels_ = -1;  // the mask changed: counted again when next needed
+  plainRays_ = PlainRays();                                  // t' changed: made again by the next frame
   if (reverse_) reverse_->setPose(R.transpose(), -(R.transpose() * t));
   backend_.synchronize();
 }
@@ -699,7 +700,7 @@ void Pipeline::planPlainFill() {
   PlainFillParams p;
   p.noise = float(params_.noiseLevel * P.size.scale);  // the level averages at least 1 / scale^2 pixels
   p.qMax = sweepQMax(tPrime_, params_);
-  if (plainRays_.ray.empty()) plainRays_ = plainRays(levels_[0].cam0, P.size.width, P.size.height);
+  if (plainRays_.ray.empty()) plainRays_ = plainRays(levels_[0].cam0, tPrime_, P.size.width, P.size.height);
   const PlainPlanes found =
       findPlainPlanes(plainRays_, levels_[0].cam0, tPrime_, P.size.width, P.size.height, support_, p);
   std::vector<float> planes(3 * kMaxPlainPlanes, 0.f);

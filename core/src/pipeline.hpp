@@ -225,7 +225,7 @@ class Pipeline {
   // host found (planPlainFill), their host copies, and the pixels it filled last frame.
   Buffer plainSupport_, plainLabels_, plainPlanes_;
   std::vector<float> support_;
-  PlainRays plainRays_;  // the rays of its level (the camera never changes)
+  PlainRays plainRays_;  // its level's rays (made by the first frame after setPose)
   long long plainPixels_ = 0;
   // A sequence's state at level 0 (Backend::carryEstimate): `state` is the committed
   // frame's, `next` this frame's filtered result, `prior` the state carried into this

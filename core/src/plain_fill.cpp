@@ -15,6 +15,7 @@ namespace cs {
 namespace {
 
 constexpr int kRansacTrials = 512;
+constexpr int kScored = 256;
 
 enum Texture : uint8_t { kUnknown, kPlain, kTextured };
 
@@ -32,33 +33,38 @@ std::vector<uint8_t> texturePixels(const std::vector<float>& support, float nois
   return texture;
 }
 
-// 4-connected regions of plain pixels: each pixel's region index (-1: none), regions listed.
-std::vector<std::vector<int>> plainRegions(int width, int height, const std::vector<uint8_t>& plain,
-                                           std::vector<int>& label) {
-  label.assign(plain.size(), -1);
-  std::vector<std::vector<int>> regions;
-  std::vector<int> stack;
-  for (int start = 0; start < int(plain.size()); ++start) {
-    if (plain[size_t(start)] != kPlain || label[size_t(start)] >= 0) continue;
-    const int id = int(regions.size());
-    regions.emplace_back();
-    std::vector<int>& region = regions.back();
-    label[size_t(start)] = id;
-    stack.push_back(start);
-    while (!stack.empty()) {
-      const int i = stack.back();
-      stack.pop_back();
-      region.push_back(i);
-      const int x = i % width, y = i / width;
-      const int next[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
-      for (const auto& p : next) {
-        if (p[0] < 0 || p[1] < 0 || p[0] >= width || p[1] >= height) continue;
-        const int j = p[1] * width + p[0];
-        if (plain[size_t(j)] != kPlain || label[size_t(j)] >= 0) continue;
-        label[size_t(j)] = id;
-        stack.push_back(j);
-      }
+// 4-connected regions of plain pixels, found breadth first: each pixel's region index (-1:
+// none) in `label`; region k is order[start[k] .. start[k + 1]).
+struct Regions {
+  std::vector<int> order;
+  std::vector<size_t> start{0};
+  size_t size(int k) const { return start[size_t(k) + 1] - start[size_t(k)]; }
+  std::vector<int> pixels(int k) const {
+    return {order.begin() + ptrdiff_t(start[size_t(k)]), order.begin() + ptrdiff_t(start[size_t(k) + 1])};
+  }
+};
+
+Regions plainRegions(int width, int height, const std::vector<uint8_t>& texture, std::vector<int>& label) {
+  label.assign(texture.size(), -1);
+  Regions regions;
+  regions.order.reserve(texture.size());
+  auto visit = [&](int j, int id) {
+    if (texture[size_t(j)] != kPlain || label[size_t(j)] >= 0) return;
+    label[size_t(j)] = id;
+    regions.order.push_back(j);
+  };
+  for (int first = 0; first < int(texture.size()); ++first) {
+    if (texture[size_t(first)] != kPlain || label[size_t(first)] >= 0) continue;
+    const int id = int(regions.start.size()) - 1;
+    visit(first, id);
+    for (size_t head = regions.start.back(); head < regions.order.size(); ++head) {
+      const int i = regions.order[head], x = i % width, y = i / width;
+      if (x > 0) visit(i - 1, id);
+      if (x + 1 < width) visit(i + 1, id);
+      if (y > 0) visit(i - width, id);
+      if (y + 1 < height) visit(i + width, id);
     }
+    regions.start.push_back(regions.order.size());
   }
   return regions;
 }
@@ -79,10 +85,10 @@ bool pxPerInverseDepth(const BuiltCamera& cam, const Eigen::Vector3d& tPrime, co
   return pxPerQ > 0;
 }
 
-// The non-plain masked pixels within `radius` of the region: its border, where the images
-// had texture to match.
+// The textured pixels within `radius` of the region: its border, where the images had
+// texture to match (each once, in index order).
 std::vector<int> borderOf(int width, int height, const std::vector<int>& region, int id, const std::vector<int>& label,
-                          const std::vector<uint8_t>& plain, int radius, std::vector<int>& stamp) {
+                          const std::vector<uint8_t>& texture, int radius) {
   std::vector<int> border;
   for (int i : region) {
     const int x = i % width, y = i / width;
@@ -92,13 +98,12 @@ std::vector<int> borderOf(int width, int height, const std::vector<int>& region,
     for (int dy = -radius; dy <= radius; ++dy)
       for (int dx = -radius; dx <= radius; ++dx) {
         const int nx = x + dx, ny = y + dy;
-        if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
-        const int j = ny * width + nx;
-        if (plain[size_t(j)] != kTextured || stamp[size_t(j)] == id) continue;
-        stamp[size_t(j)] = id;
-        border.push_back(j);
+        if (nx >= 0 && ny >= 0 && nx < width && ny < height && texture[size_t(ny) * width + nx] == kTextured)
+          border.push_back(ny * width + nx);
       }
   }
+  std::sort(border.begin(), border.end());
+  border.erase(std::unique(border.begin(), border.end()), border.end());
   return border;
 }
 
@@ -128,44 +133,66 @@ bool fitPlane(const std::vector<Sample>& samples, const std::vector<int>& which,
 }
 
 // The plane most of the border agrees with: RANSAC over triples (a fixed sequence of
-// draws, scored on the pool, the first best kept: every run fills alike), refined on its
-// inliers. MSAC scoring: each sample costs its squared residual, capped at the inlier bound,
-// so among planes with as many inliers the one they fit closer wins.
+// draws, scored on the pool in batches, the first best kept: every run fills alike), until
+// enough triples were drawn that one of them, at the best plane's inlier share w, was all
+// inliers with 99 % probability (log 0.01 / log(1 - w^3): 35 at w = 1/2), at most
+// kRansacTrials; refined on its inliers. MSAC scoring: each sample costs its squared
+// residual, capped at the inlier bound, so among planes with as many inliers the one they
+// fit closer wins.
 PlaneFit ransacPlane(const std::vector<Sample>& samples, double inlierPx, uint32_t seed) {
+  constexpr int kBatch = 32;
   PlaneFit best;
   const int n = int(samples.size());
   if (n < 3) return best;
+  // Triples are scored on at most kScored evenly spaced samples (the refit uses all).
+  const int stride = (n + kScored - 1) / kScored, scored = (n + stride - 1) / stride;
   uint32_t state = seed * 2654435761u + 1u;
   auto draw = [&] {
     state = state * 1664525u + 1013904223u;
     return int((uint64_t(state >> 8) * uint64_t(n)) >> 24);
   };
-  std::vector<std::array<int, 3>> triples(kRansacTrials);
-  for (auto& t : triples) t = {draw(), draw(), draw()};
-  std::vector<double> costs(kRansacTrials, INFINITY);
-  std::vector<Eigen::Vector3d> planes(kRansacTrials);
-  detail::parallelFor(
-      kRansacTrials,
-      [&](int trial) {
-        const auto [i, j, k] = triples[size_t(trial)];
-        if (i == j || j == k || i == k) return;
-        Eigen::Matrix3d M;
-        M.row(0) = samples[size_t(i)].ray.transpose();
-        M.row(1) = samples[size_t(j)].ray.transpose();
-        M.row(2) = samples[size_t(k)].ray.transpose();
-        Eigen::FullPivLU<Eigen::Matrix3d> lu(M);
-        if (!lu.isInvertible()) return;
-        const Eigen::Vector3d a =
-            lu.solve(Eigen::Vector3d(samples[size_t(i)].q, samples[size_t(j)].q, samples[size_t(k)].q));
-        double cost = 0;
-        for (const Sample& s : samples) cost += std::min(std::pow(residualPx(s, a), 2), inlierPx * inlierPx);
-        costs[size_t(trial)] = cost;
-        planes[size_t(trial)] = a;
-      },
-      8);
-  const size_t winner = size_t(std::min_element(costs.begin(), costs.end()) - costs.begin());
-  if (!std::isfinite(costs[winner])) return best;
-  best.a = planes[winner];
+  std::array<double, kBatch> costs;
+  std::array<int, kBatch> inliers;
+  std::array<Eigen::Vector3d, kBatch> planes;
+  std::array<std::array<int, 3>, kBatch> triples;
+  double bestCost = INFINITY;
+  int bestInliers = 0;
+  for (int drawn = 0; drawn < kRansacTrials;) {
+    for (auto& t : triples) t = {draw(), draw(), draw()};
+    detail::parallelFor(
+        kBatch,
+        [&](int b) {
+          costs[size_t(b)] = INFINITY;
+          const auto [i, j, k] = triples[size_t(b)];
+          if (i == j || j == k || i == k) return;
+          Eigen::Matrix3d M;
+          M.row(0) = samples[size_t(i)].ray.transpose();
+          M.row(1) = samples[size_t(j)].ray.transpose();
+          M.row(2) = samples[size_t(k)].ray.transpose();
+          Eigen::FullPivLU<Eigen::Matrix3d> lu(M);
+          if (!lu.isInvertible()) return;
+          const Eigen::Vector3d a =
+              lu.solve(Eigen::Vector3d(samples[size_t(i)].q, samples[size_t(j)].q, samples[size_t(k)].q));
+          double cost = 0;
+          int count = 0;
+          for (int m = 0; m < n; m += stride) {
+            const double r = residualPx(samples[size_t(m)], a);
+            cost += std::min(r * r, inlierPx * inlierPx);
+            count += r < inlierPx;
+          }
+          costs[size_t(b)] = cost, inliers[size_t(b)] = count, planes[size_t(b)] = a;
+        },
+        4);
+    for (int b = 0; b < kBatch; ++b)
+      if (costs[size_t(b)] < bestCost) {
+        bestCost = costs[size_t(b)], bestInliers = inliers[size_t(b)];
+        best.a = planes[size_t(b)];
+      }
+    drawn += kBatch;
+    const double share = double(bestInliers) / scored;
+    if (share > 0 && drawn >= std::log(0.01) / std::log1p(-std::min(share * share * share, 0.999999))) break;
+  }
+  if (!std::isfinite(bestCost)) return best;
   for (int m = 0; m < n; ++m)
     if (residualPx(samples[size_t(m)], best.a) < inlierPx) best.inliers.push_back(m);
   if (best.inliers.size() < 3 || !fitPlane(samples, best.inliers, best.a)) return PlaneFit{};
@@ -175,33 +202,40 @@ PlaneFit ransacPlane(const std::vector<Sample>& samples, double inlierPx, uint32
   return best;
 }
 
-// The region's border samples: each support pixel's full-resolution ray, the inverse depth
-// its warp triangulates to, and its pixels per unit of inverse depth.
+// The region's border samples: each voting support pixel's full-resolution ray, the inverse
+// depth its warp triangulates to, and its pixels per unit of inverse depth; in fixed pieces
+// on the pool, joined in order.
 std::vector<Sample> borderSamples(const BuiltCamera& cam, const Eigen::Vector3d& tPrime, const std::vector<int>& border,
                                   const std::vector<float>& support, double minConfidence) {
+  constexpr size_t kPiece = 64;
+  std::vector<std::vector<Sample>> pieces((border.size() + kPiece - 1) / kPiece);
+  detail::parallelPieces(border.size(), kPiece, [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) {
+      const float* b = &support[kPlainSupportChannels * size_t(border[k])];
+      if (!(b[4] >= minConfidence)) continue;
+      const Vec2<double> x(b[0], b[1]), w(b[2], b[3]);
+      const double radial = triangulateRadial(cam, tPrime, x, w);
+      Sample s;
+      Vec3<double> ray;
+      if (std::isnan(radial) || !cam.unproject(x, ray)) continue;
+      s.ray = ray;
+      s.q = std::isinf(radial) ? 0.0 : 1.0 / radial;
+      if (pxPerInverseDepth(cam, tPrime, s.ray, s.q, s.pxPerQ)) pieces[begin / kPiece].push_back(s);
+    }
+  });
   std::vector<Sample> samples;
-  for (int i : border) {
-    const float* b = &support[kPlainSupportChannels * size_t(i)];
-    if (!(b[4] >= minConfidence)) continue;
-    const Vec2<double> x(b[0], b[1]), w(b[2], b[3]);
-    const double radial = triangulateRadial(cam, tPrime, x, w);
-    Sample s;
-    Vec3<double> ray;
-    if (std::isnan(radial) || !cam.unproject(x, ray)) continue;
-    s.ray = ray;
-    s.q = std::isinf(radial) ? 0.0 : 1.0 / radial;
-    if (pxPerInverseDepth(cam, tPrime, s.ray, s.q, s.pxPerQ)) samples.push_back(s);
-  }
+  for (const auto& p : pieces) samples.insert(samples.end(), p.begin(), p.end());
   return samples;
 }
 
 // The pixels of the region the plane fills: none when it lies behind a ray of the region or
 // nearer than the nearest sphere (it is not the region's surface); else those where the
 // border fixes it to maxDeviationPx (the rest, far from any border that voted, keep the
-// solver's estimate). In fixed pieces on the pool, joined in order.
-std::vector<int> filledPixels(const BuiltCamera& cam, const Eigen::Vector3d& tPrime, const std::vector<int>& region,
-                              const PlainRays& rays, const Eigen::Vector3d& a, const Eigen::Matrix3d& covariance,
-                              const PlainFillParams& p) {
+// solver's estimate), in pixels of motion per unit of inverse depth at the ray (at infinity:
+// a few percent from that at the plane's depth). In fixed pieces on the pool, joined in
+// order.
+std::vector<int> filledPixels(const std::vector<int>& region, const PlainRays& rays, const Eigen::Vector3d& a,
+                              const Eigen::Matrix3d& covariance, const PlainFillParams& p) {
   constexpr size_t kPiece = 1024;
   const size_t pieces = (region.size() + kPiece - 1) / kPiece;
   std::vector<std::vector<int>> known(pieces);
@@ -213,12 +247,11 @@ std::vector<int> filledPixels(const BuiltCamera& cam, const Eigen::Vector3d& tPr
       if (!rays.valid[size_t(i)]) continue;
       const Eigen::Vector3d ray = rays.ray[size_t(i)].cast<double>();
       const double q = a.dot(ray);
-      double pxPerQ;
-      if (!(q >= 0.0) || q > p.qMax || !pxPerInverseDepth(cam, tPrime, ray, q, pxPerQ)) {
+      if (!(q >= 0.0) || q > p.qMax) {
         behind[piece] = 1;
         break;
       }
-      if (pxPerQ * std::sqrt(ray.dot(covariance * ray)) <= p.maxDeviationPx) known[piece].push_back(i);
+      if (rays.pxPerQ[size_t(i)] * std::sqrt(ray.dot(covariance * ray)) <= p.maxDeviationPx) known[piece].push_back(i);
     }
   });
   std::vector<int> all;
@@ -231,9 +264,10 @@ std::vector<int> filledPixels(const BuiltCamera& cam, const Eigen::Vector3d& tPr
 
 }  // namespace
 
-PlainRays plainRays(const Camera& camera0, int width, int height) {
+PlainRays plainRays(const Camera& camera0, const Eigen::Vector3d& tPrime, int width, int height) {
   PlainRays rays;
   rays.ray.resize(size_t(width) * height);
+  rays.pxPerQ.assign(rays.ray.size(), 0.f);
   rays.valid.assign(rays.ray.size(), 0);
   const BuiltCamera cam(camera0);
   const double sx = double(camera0.width) / width, sy = double(camera0.height) / height;
@@ -252,38 +286,64 @@ PlainRays plainRays(const Camera& camera0, int width, int height) {
   return rays;
 }
 
+namespace {
+
+// One region's plane and the pixels it fills (none: no plane).
+struct RegionFill {
+  Eigen::Vector3f a = Eigen::Vector3f::Zero();
+  std::vector<int> pixels;
+};
+
+RegionFill fillRegion(const BuiltCamera& cam, const Eigen::Vector3d& tPrime, const PlainRays& rays, int width,
+                      int height, const std::vector<int>& region, int id, const std::vector<int>& label,
+                      const std::vector<uint8_t>& texture, const std::vector<float>& support,
+                      const PlainFillParams& p) {
+  RegionFill out;
+  const std::vector<int> border = borderOf(width, height, region, id, label, texture, p.supportRadius);
+  const std::vector<Sample> samples = borderSamples(cam, tPrime, border, support, p.minSupportConfidence);
+  PlaneFit fit = ransacPlane(samples, p.inlierPx, uint32_t(id));
+  if (fit.inliers.size() < std::max<size_t>(8, size_t(p.minInliers * double(samples.size())))) return out;
+  // How well the border fixes the plane: its covariance from the inliers' scatter, taken as
+  // at least minScatter since neighbouring border pixels err alike.
+  Eigen::Matrix3d normal;
+  if (!fitPlane(samples, fit.inliers, fit.a, &normal)) return out;
+  double scatter = 0;
+  for (int k : fit.inliers) scatter += std::pow(residualPx(samples[size_t(k)], fit.a), 2);
+  scatter = std::max(scatter / double(fit.inliers.size()), p.minScatter);
+  out.pixels = filledPixels(region, rays, fit.a, scatter * normal.inverse(), p);
+  out.a = fit.a.cast<float>();
+  return out;
+}
+
+}  // namespace
+
+// The regions are fitted on the pool, one a worker (a region's own loops then run on it
+// alone: one dispatch a frame rather than several a region), and numbered in order.
 PlainPlanes findPlainPlanes(const PlainRays& rays, const Camera& camera0, const Eigen::Vector3d& tPrime, int width,
                             int height, const std::vector<float>& support, const PlainFillParams& p) {
   PlainPlanes out;
   const BuiltCamera cam(camera0);
   const std::vector<uint8_t> texture = texturePixels(support, p.noise);
   std::vector<int> label;
-  const std::vector<std::vector<int>> regions = plainRegions(width, height, texture, label);
+  const Regions regions = plainRegions(width, height, texture, label);
   out.labels.assign(label.size(), -1.f);
   const long long masked = std::count_if(texture.begin(), texture.end(), [](uint8_t t) { return t != kUnknown; });
   const size_t minPixels = size_t(std::max(16.0, p.minShare * double(masked)));
-  std::vector<int> stamp(texture.size(), -1);
-  for (int id = 0; id < int(regions.size()) && int(out.planes.size()) < kMaxPlainPlanes; ++id) {
-    const std::vector<int>& region = regions[size_t(id)];
-    if (region.size() < minPixels) continue;
-    ++out.regions;
-    const std::vector<int> border = borderOf(width, height, region, id, label, texture, p.supportRadius, stamp);
-    const std::vector<Sample> samples = borderSamples(cam, tPrime, border, support, p.minSupportConfidence);
-    PlaneFit fit = ransacPlane(samples, p.inlierPx, uint32_t(id));
-    if (fit.inliers.size() < std::max<size_t>(8, size_t(p.minInliers * double(samples.size())))) continue;
-    // How well the border fixes the plane: its covariance from the inliers' scatter, taken
-    // as at least minScatter since neighbouring border pixels err alike.
-    Eigen::Matrix3d normal;
-    if (!fitPlane(samples, fit.inliers, fit.a, &normal)) continue;
-    double scatter = 0;
-    for (int k : fit.inliers) scatter += std::pow(residualPx(samples[size_t(k)], fit.a), 2);
-    scatter = std::max(scatter / double(fit.inliers.size()), p.minScatter);
-    const std::vector<int> known = filledPixels(cam, tPrime, region, rays, fit.a, scatter * normal.inverse(), p);
-    if (known.empty()) continue;
+  std::vector<int> large;
+  for (int id = 0; id + 1 < int(regions.start.size()); ++id)
+    if (regions.size(id) >= minPixels) large.push_back(id);
+  out.regions = int(large.size());
+  std::vector<RegionFill> fills(large.size());
+  detail::parallelFor(int(large.size()), [&](int k) {
+    const int id = large[size_t(k)];
+    fills[size_t(k)] = fillRegion(cam, tPrime, rays, width, height, regions.pixels(id), id, label, texture, support, p);
+  });
+  for (const RegionFill& f : fills) {
+    if (f.pixels.empty() || int(out.planes.size()) == kMaxPlainPlanes) continue;
     const float index = float(out.planes.size());
-    out.planes.push_back(fit.a.cast<float>());
-    for (int i : known) out.labels[size_t(i)] = index;
-    out.pixels += (long long)known.size();
+    out.planes.push_back(f.a);
+    for (int i : f.pixels) out.labels[size_t(i)] = index;
+    out.pixels += (long long)f.pixels.size();
   }
   return out;
 }

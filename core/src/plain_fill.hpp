@@ -34,12 +34,14 @@ struct PlainPlanes {
 };
 
 // The unit ray (camera 0, full resolution) through the centre of each pixel of a width x
-// height level, and whether the camera model has one there: computed once per camera.
+// height level, the pixels its image moves per unit of inverse depth at infinity, and
+// whether the camera model has a ray there: computed once per pose.
 struct PlainRays {
   std::vector<Eigen::Vector3f> ray;
+  std::vector<float> pxPerQ;
   std::vector<uint8_t> valid;
 };
-PlainRays plainRays(const Camera& camera0, int width, int height);
+PlainRays plainRays(const Camera& camera0, const Eigen::Vector3d& tPrime, int width, int height);
 
 // At a width x height pyramid level (rays from plainRays): the large plain regions and the
 // planes through the inverse depths of their confident textured borders. support is
