@@ -122,8 +122,9 @@ class Pipeline {
 
   // For callers whose images are already on the backend's device (cs::cuda::DeviceStereo):
   // they fill `left` / `right` themselves, call runOnDevice(), which issues (or replays)
-  // the frame with no host transfer and no synchronisation, and read the results from
-  // the other buffers on the device.
+  // the frame with no host transfer of images and, but for plainFill's one wait for the
+  // host's plane fits, no synchronisation, and read the results from the other buffers on
+  // the device.
   detail::DeviceIO deviceIO() const;  // stereo_core.hpp
   void runOnDevice(FrameKind kind = {});
 
@@ -218,7 +219,7 @@ class Pipeline {
   int slotBase_ = 0;
   Buffer roundTripError_;
   bool profiling_ = false;
-  bool warmFrame_ = false;  // the frame being issued is warm (issueFrame)
+  bool warmFrame_ = false;  // the frame being issued is warm (issueSolve)
   bool checksWarmFrames_ = false;
   Selection selection_;
   // Params::plainFill: the support under each pixel of its level, the labels and planes the

@@ -58,7 +58,8 @@ class StereoCore {
   void setMask(const ImageU8& mask);
 
   // DeviceStereo: fill io.left / io.right on the device, then runOnDevice() issues (or
-  // replays) the frame with no host transfer and no synchronisation.
+  // replays) the frame with no host transfer and no synchronisation but, with plainFill,
+  // the one wait for the host's plane fits.
   DeviceIO deviceIO() const;
   void runOnDevice();
 

@@ -1,7 +1,9 @@
 // CUDA entry point for callers whose images already live on the GPU: inputs are device
 // pointers, outputs stay on the device, and all work is enqueued on the caller's
-// cudaStream_t without host synchronisation. The same pipeline as cs::Stereo on the
-// CUDA backend (recorded once as a CUDA graph, then replayed).
+// cudaStream_t. The same pipeline as cs::Stereo on the CUDA backend (recorded once as CUDA
+// graphs, then replayed). With plain_fill (on in every preset) a frame waits once on the
+// host, between its solve and its finish, for the plane fits (docs/confidence.md); with
+// plain_fill=false it never does.
 //
 //   cs::cuda::DeviceStereo stereo(rig, cs::preset("realtime"), stream);
 //   cs::cuda::DeviceDepth d = stereo.compute(dLeft, dRight);  // enqueued on `stream`
