@@ -104,9 +104,10 @@ void CpuBackend::doPlainSupport(const Buffer& support, const Buffer& confidence,
   cpu::plainSupport(view(support), view(confidence), view(w), view(mask), view(levelImage), view(levelMask));
 }
 
-void CpuBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
-                              const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) {
-  cpu::fillPlanes(view(u), view(w), view(labels), view(planes), view(mask), cam0, tPrime);
+void CpuBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
+                              const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
+                              const double tPrime[3]) {
+  cpu::fillPlanes(view(u), view(w), view(planeConfidence), view(labels), view(planes), view(mask), cam0, tPrime);
 }
 
 void CpuBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
@@ -118,12 +119,15 @@ void CpuBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer&
 void CpuBackend::doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
                                     const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
                                     const Buffer& trajectory, const Buffer& sweepConfidence,
-                                    const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
+                                    const Buffer& roundTripError, const Buffer& planeConfidence, const Buffer& mask,
+                                    const ConfidenceParams& p) {
   const View sweepView = sweepConfidence.id >= 0 ? view(sweepConfidence) : View{};
   const View tripView = roundTripError.id >= 0 ? view(roundTripError) : View{};
+  const View planeView = planeConfidence.id >= 0 ? view(planeConfidence) : View{};
   cpu::resultConfidence(view(confidence), view(radial), view(points), view(image), view(n0), view(n1), view(w),
                         view(trajectory), sweepConfidence.id >= 0 ? &sweepView : nullptr,
-                        roundTripError.id >= 0 ? &tripView : nullptr, view(mask), p);
+                        roundTripError.id >= 0 ? &tripView : nullptr, planeConfidence.id >= 0 ? &planeView : nullptr,
+                        view(mask), p);
 }
 
 void CpuBackend::doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) {

@@ -51,15 +51,16 @@ void temporalFilter(const View& state, const View& u, const View& w, const View&
                     const View& points, const View* confidence, const View& mask, const TemporalParams& p);
 void finishResult(const View& valid, const View& z, const View& radial, const View& points, const View& disparity,
                   const View& warp, const View& confidence);
-void plainSupport(const View& support, const View& confidence, const View& w, const View& mask,
-                  const View& levelImage, const View& levelMask);
-void fillPlanes(const View& u, const View& w, const View& labels, const View& planes, const View& mask,
-                const CameraParams& cam0, const double tPrime[3]);
+void plainSupport(const View& support, const View& confidence, const View& w, const View& mask, const View& levelImage,
+                  const View& levelMask);
+void fillPlanes(const View& u, const View& w, const View& planeConfidence, const View& labels, const View& planes,
+                const View& mask, const CameraParams& cam0, const double tPrime[3]);
 void roundTrip(const View& error, const View& w, const View& calibration, const View& reverseW,
                const View& reverseCalibration, const View& reverseMask, const View& mask);
 void resultConfidence(const View& confidence, const View& radial, const View& points, const View& image, const View& n0,
                       const View& n1, const View& w, const View& trajectory, const View* sweepConfidence,
-                      const View* roundTripError, const View& mask, const ConfidenceParams& p);
+                      const View* roundTripError, const View* planeConfidence, const View& mask,
+                      const ConfidenceParams& p);
 
 // Physical memory, or the container's memory limit when lower (0 if unknown): create()
 // refuses buffers beyond it with a cs::Error naming the size instead of being OOM-killed.
@@ -128,14 +129,15 @@ class CpuBackend final : public Backend {
                       const Buffer& disparity, const Buffer& warp, const Buffer& confidence) override;
   void doPlainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
                       const Buffer& levelImage, const Buffer& levelMask) override;
-  void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes, const Buffer& mask,
-                    const CameraParams& cam0, const double tPrime[3]) override;
+  void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
+                    const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
+                    const double tPrime[3]) override;
   void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                    const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) override;
   void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,
                           const Buffer& n0, const Buffer& n1, const Buffer& w, const Buffer& trajectory,
-                          const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& mask,
-                          const ConfidenceParams& p) override;
+                          const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& planeConfidence,
+                          const Buffer& mask, const ConfidenceParams& p) override;
 
  private:
   // The view of a buffer (Backend has checked it: created here, used no larger).

@@ -64,15 +64,17 @@ void plainSupport(const View& support, const View& confidence, const View& w, co
   });
 }
 
-void fillPlanes(const View& u, const View& w, const View& labels, const View& planes, const View& mask,
-                const CameraParams& cam0p, const double tPrime[3]) {
+void fillPlanes(const View& u, const View& w, const View& planeConfidence, const View& labels, const View& planes,
+                const View& mask, const CameraParams& cam0p, const double tPrime[3]) {
   const BuiltCamera cam(toCamera(cam0p));
   const long long planeCount = (long long)planes.width * planes.height / 3;
   parallelRows(u.height, [&](int y) {
     const int ly = coarseOf(y, labels.height, u.height);
     for (int x = 0; x < u.width; ++x) {
+      planeConfidence.at(x, y) = 0.f;
       if (!masked(mask, x, y)) continue;
-      const float label = labels.at(coarseOf(x, labels.width, u.width), ly);
+      const int lx = coarseOf(x, labels.width, u.width);
+      const float label = labels.at(lx, ly, 0);
       if (!(label >= 0.f) || (long long)label >= planeCount) continue;
       const int i = 3 * int(label);
       Vec3<double> ray;
@@ -87,6 +89,7 @@ void fillPlanes(const View& u, const View& w, const View& labels, const View& pl
       w.at(x, y, 0) = float(wx);
       w.at(x, y, 1) = float(wy);
       u.at(x, y) = float(std::sqrt(wx * wx + wy * wy));
+      planeConfidence.at(x, y) = labels.at(lx, ly, 1);
     }
   });
 }

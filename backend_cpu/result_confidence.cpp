@@ -2,6 +2,7 @@
 // for a pixel's estimate, as a product of independent terms, each 1 where nothing speaks
 // against it. Also where the evidence is too weak for a depth at all, and where the
 // disparity is too small to be told from infinity.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -55,15 +56,21 @@ float photometricTerm(int x, int y, const View& n0, const View& n1, const View& 
 
 void resultConfidence(const View& confidence, const View& radial, const View& points, const View& image, const View& n0,
                       const View& n1, const View& w, const View& trajectory, const View* sweepConfidence,
-                      const View* roundTripError, const View& mask, const ConfidenceParams& p) {
+                      const View* roundTripError, const View* planeConfidence, const View& mask,
+                      const ConfidenceParams& p) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   parallelRows(confidence.height, [&](int y) {
     for (int x = 0; x < confidence.width; ++x) {
       confidence.at(x, y) = 0.f;
       if (!masked(mask, x, y) || std::isnan(radial.at(x, y))) continue;
-      const float structure = structureTerm(x, y, image, trajectory, mask, p);
+      float structure = structureTerm(x, y, image, trajectory, mask, p);
+      if (planeConfidence) structure = std::max(structure, planeConfidence->at(x, y));
       float c = structure * photometricTerm(x, y, n0, n1, w, mask, p);
-      if (sweepConfidence) c *= std::min(1.f, std::max(0.f, sweepConfidence->at(x, y)));
+      if (sweepConfidence) {
+        float sw = std::min(1.f, std::max(0.f, sweepConfidence->at(x, y)));
+        if (planeConfidence) sw = std::max(sw, planeConfidence->at(x, y));
+        c *= sw;
+      }
       bool invalid = false;
       if (roundTripError) {
         const float e = roundTripError->at(x, y);

@@ -407,11 +407,14 @@ void CudaBackend::doPlainSupport(const Buffer& support, const Buffer& confidence
         "plainSupport");
 }
 
-void CudaBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
-                               const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) {
+void CudaBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
+                               const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
+                               const double tPrime[3]) {
   flush();
   auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
-  check(cudak::launchFillPlanes(stream_, on(u), on(w), on(labels), on(planes), on(mask), cam0, tPrime), "fillPlanes");
+  check(cudak::launchFillPlanes(stream_, on(u), on(w), on(planeConfidence), on(labels), on(planes), on(mask), cam0,
+                                tPrime),
+        "fillPlanes");
 }
 
 void CudaBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
@@ -431,14 +434,15 @@ constexpr int kConfidenceTermsKey = 4;
 void CudaBackend::doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
                                      const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
                                      const Buffer& trajectory, const Buffer& sweepConfidence,
-                                     const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
+                                     const Buffer& roundTripError, const Buffer& planeConfidence, const Buffer& mask,
+                                     const ConfidenceParams& p) {
   flush();
   auto optional = [&](const Buffer& b) { return b.id >= 0 ? img(slot(b).dev, b) : cudak::Img{nullptr, 0, 0, 0}; };
   check(cudak::launchResultConfidence(stream_, img(slot(confidence).dev, confidence), img(slot(radial).dev, radial),
                                       img(slot(points).dev, points), img(slot(image).dev, image), img(slot(n0).dev, n0),
                                       img(slot(n1).dev, n1), img(slot(w).dev, w), img(slot(trajectory).dev, trajectory),
-                                      optional(sweepConfidence), optional(roundTripError), img(slot(mask).dev, mask), p,
-                                      scratch(4 * mask.count(), kConfidenceTermsKey)),
+                                      optional(sweepConfidence), optional(roundTripError), optional(planeConfidence),
+                                      img(slot(mask).dev, mask), p, scratch(4 * mask.count(), kConfidenceTermsKey)),
         "resultConfidence");
 }
 

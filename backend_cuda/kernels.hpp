@@ -5,8 +5,8 @@
 // return cudaGetLastError(). Included by host C++ (cuda_backend.cpp) and by the .cu files;
 // no Eigen.
 #pragma once
-#include <cstdint>
 #include <cuda_runtime_api.h>
+#include <cstdint>
 
 #include "curvestereo/kernel_params.hpp"
 
@@ -104,17 +104,17 @@ cudaError_t launchTemporalFilter(cudaStream_t s, Img state, Img u, Img w, Img pr
 // Plain regions (plain_fill.cu; backend.hpp plainSupport, fillPlanes).
 cudaError_t launchPlainSupport(cudaStream_t s, Img support, Img confidence, Img w, Img mask, Img levelImage,
                                Img levelMask);
-cudaError_t launchFillPlanes(cudaStream_t s, Img u, Img w, Img labels, Img planes, Img mask, const CameraParams& cam0,
-                             const double tPrime[3]);
+cudaError_t launchFillPlanes(cudaStream_t s, Img u, Img w, Img planeConfidence, Img labels, Img planes, Img mask,
+                             const CameraParams& cam0, const double tPrime[3]);
 // The result's confidence (round_trip.cu, result_confidence.cu; backend.hpp roundTrip,
 // resultConfidence).
 cudaError_t launchRoundTrip(cudaStream_t s, Img error, Img w, Img calibration, Img reverseW, Img reverseCalibration,
                             Img reverseMask, Img mask);
-// sweepConfidence.data, roundTripError.data null: absent. scratch: 4 floats a pixel
-// (16-byte aligned).
+// sweepConfidence.data, roundTripError.data, planeConfidence.data null: absent. scratch: 4
+// floats a pixel (16-byte aligned).
 cudaError_t launchResultConfidence(cudaStream_t s, Img confidence, Img radial, Img points, Img image, Img n0, Img n1,
-                                   Img w, Img trajectory, Img sweepConfidence, Img roundTripError, Img mask,
-                                   const ConfidenceParams& p, float* scratch);
+                                   Img w, Img trajectory, Img sweepConfidence, Img roundTripError, Img planeConfidence,
+                                   Img mask, const ConfidenceParams& p, float* scratch);
 // The result as the user sees it (finish_result.cu; backend.hpp finishResult).
 cudaError_t launchFinishResult(cudaStream_t s, Img valid, Img z, Img radial, Img points, Img disparity, Img warp,
                                Img confidence);

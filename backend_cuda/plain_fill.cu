@@ -58,11 +58,15 @@ __global__ void plainSupportKernel(Img support, Img confidence, Img w, Img mask,
   at(support, x, y, 5) = windowVariance(levelImage, levelMask, x, y);
 }
 
-__global__ void fillPlanesKernel(Img u, Img w, Img labels, Img planes, Img mask, CameraParams cam, T3 t) {
+__global__ void fillPlanesKernel(Img u, Img w, Img planeConfidence, Img labels, Img planes, Img mask, CameraParams cam,
+                                 T3 t) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (x >= u.width || y >= u.height || !masked(mask, x, y)) return;
-  const float label = at(labels, coarseOf(x, labels.width, u.width), coarseOf(y, labels.height, u.height));
+  if (x >= u.width || y >= u.height) return;
+  at(planeConfidence, x, y) = 0.f;
+  if (!masked(mask, x, y)) return;
+  const int lx = coarseOf(x, labels.width, u.width), ly = coarseOf(y, labels.height, u.height);
+  const float label = at(labels, lx, ly, 0);
   const long long planeCount = (long long)planes.width * planes.height / 3;
   if (!(label >= 0.f) || (long long)label >= planeCount) return;
   const int i = 3 * int(label);
@@ -76,6 +80,7 @@ __global__ void fillPlanesKernel(Img u, Img w, Img labels, Img planes, Img mask,
   at(w, x, y, 0) = float(wx);
   at(w, x, y, 1) = float(wy);
   at(u, x, y) = float(sqrt(wx * wx + wy * wy));
+  at(planeConfidence, x, y) = at(labels, lx, ly, 1);
 }
 
 }  // namespace
@@ -88,11 +93,12 @@ cudaError_t launchPlainSupport(cudaStream_t s, Img support, Img confidence, Img 
   return cudaGetLastError();
 }
 
-cudaError_t launchFillPlanes(cudaStream_t s, Img u, Img w, Img labels, Img planes, Img mask, const CameraParams& cam0,
-                             const double tPrime[3]) {
+cudaError_t launchFillPlanes(cudaStream_t s, Img u, Img w, Img planeConfidence, Img labels, Img planes, Img mask,
+                             const CameraParams& cam0, const double tPrime[3]) {
   const dim3 block(16, 8);
   const T3 t{{tPrime[0], tPrime[1], tPrime[2]}};
-  CS_LAUNCH(fillPlanesKernel, grid2d(u.width, u.height, block), block, 0, s, u, w, labels, planes, mask, cam0, t);
+  CS_LAUNCH(fillPlanesKernel, grid2d(u.width, u.height, block), block, 0, s, u, w, planeConfidence, labels, planes,
+            mask, cam0, t);
   return cudaGetLastError();
 }
 

@@ -69,8 +69,8 @@ __device__ WindowTerms windowTerms(int x, int y, const float4* terms, const Img&
 }
 
 __global__ void resultConfidenceKernel(Img confidence, Img radial, Img points, const float4* terms, Img w,
-                                       Img trajectory, Img sweepConfidence, Img roundTripError, Img mask,
-                                       ConfidenceParams p) {
+                                       Img trajectory, Img sweepConfidence, Img roundTripError, Img planeConfidence,
+                                       Img mask, ConfidenceParams p) {
   beginKernel();
   const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
   if (x >= confidence.width || y >= confidence.height) return;
@@ -78,9 +78,13 @@ __global__ void resultConfidenceKernel(Img confidence, Img radial, Img points, c
   at(confidence, x, y) = 0.f;
   if (!masked(mask, x, y) || isnan(at(radial, x, y))) return;
   const WindowTerms terms2 = windowTerms(x, y, terms, trajectory, mask, p);
-  const float structure = terms2.structure;
+  const float structure = planeConfidence.data ? fmaxf(terms2.structure, at(planeConfidence, x, y)) : terms2.structure;
   float c = __fmul_rn(structure, terms2.photometric);
-  if (sweepConfidence.data) c = __fmul_rn(c, fminf(1.f, fmaxf(0.f, at(sweepConfidence, x, y))));
+  if (sweepConfidence.data) {
+    float sweep = fminf(1.f, fmaxf(0.f, at(sweepConfidence, x, y)));
+    if (planeConfidence.data) sweep = fmaxf(sweep, at(planeConfidence, x, y));
+    c = __fmul_rn(c, sweep);
+  }
   bool invalid = false;
   if (roundTripError.data) {
     const float e = at(roundTripError, x, y);
@@ -106,14 +110,14 @@ __global__ void resultConfidenceKernel(Img confidence, Img radial, Img points, c
 }  // namespace
 
 cudaError_t launchResultConfidence(cudaStream_t s, Img confidence, Img radial, Img points, Img image, Img n0, Img n1,
-                                   Img w, Img trajectory, Img sweepConfidence, Img roundTripError, Img mask,
-                                   const ConfidenceParams& p, float* scratch) {
+                                   Img w, Img trajectory, Img sweepConfidence, Img roundTripError, Img planeConfidence,
+                                   Img mask, const ConfidenceParams& p, float* scratch) {
   const dim3 block(32, 8);
   const dim3 grid = grid2d(confidence.width, confidence.height, block);
   float4* terms = reinterpret_cast<float4*>(scratch);
   CS_LAUNCH(confidenceTermsKernel, grid, block, 0, s, terms, image, n0, n1, w, mask);
   CS_LAUNCH(resultConfidenceKernel, grid, block, 0, s, confidence, radial, points, terms, w, trajectory,
-            sweepConfidence, roundTripError, mask, p);
+            sweepConfidence, roundTripError, planeConfidence, mask, p);
   return cudaGetLastError();
 }
 

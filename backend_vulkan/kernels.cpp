@@ -234,7 +234,7 @@ struct PcPlainSupport {
   int32_t width, height, fullWidth, fullHeight;
 };
 struct PcFillPlanes {
-  Addr u, w, labels, planes, mask, params;
+  Addr u, w, planeConfidence, labels, planes, mask, params;
   int32_t width, height, labelWidth, labelHeight, planeValues;
 };
 struct PcFinishResult {
@@ -246,8 +246,8 @@ struct PcConfidenceTerms {
   int32_t width, height;
 };
 struct PcResultConfidence {
-  Addr confidence, radial, points, terms, w, trajectory, sweepConfidence, roundTripError, mask, params;
-  int32_t width, height, hasSweep, hasRoundTrip;  // absent buffers: mask
+  Addr confidence, radial, points, terms, w, trajectory, sweepConfidence, roundTripError, planeConfidence, mask, params;
+  int32_t width, height, hasSweep, hasRoundTrip, hasPlane;  // absent buffers: mask
 };
 static_assert(sizeof(PcResultConfidence) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 static_assert(sizeof(PcTemporalFilter) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
@@ -779,8 +779,9 @@ void VulkanBackend::doPlainSupport(const Buffer& support, const Buffer& confiden
   dispatch(kPlainSupport, pc, support.width, support.height);
 }
 
-void VulkanBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
-                                 const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) {
+void VulkanBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
+                                 const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
+                                 const double tPrime[3]) {
   // In double where the device has it, as triangulate: the same camera equations.
   const bool inDouble = deviceFloat64_;
   Addr block;
@@ -795,8 +796,8 @@ void VulkanBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer&
     for (int i = 0; i < 3; ++i) prm.tPrime[i] = float(tPrime[i]);
     block = paramBlock(&prm, sizeof(prm));
   }
-  PcFillPlanes pc{addr(u),  addr(w),      addr(labels),  addr(planes),           addr(mask), block, u.width,
-                  u.height, labels.width, labels.height, int32_t(planes.count())};
+  PcFillPlanes pc{addr(u), addr(w),  addr(planeConfidence), addr(labels),  addr(planes),           addr(mask), block,
+                  u.width, u.height, labels.width,          labels.height, int32_t(planes.count())};
   dispatch(inDouble ? kFillPlanesF64 : kFillPlanesF32, pc, u.width, u.height);
 }
 
@@ -811,10 +812,11 @@ void VulkanBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buff
 void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
                                        const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
                                        const Buffer& trajectory, const Buffer& sweepConfidence,
-                                       const Buffer& roundTripError, const Buffer& mask, const ConfidenceParams& p) {
+                                       const Buffer& roundTripError, const Buffer& planeConfidence, const Buffer& mask,
+                                       const ConfidenceParams& p) {
   VkConfidenceParams prm{p.radius,         p.noise,      p.sigmaPx,      p.residualScale, p.roundTripPx,
                          p.roundTripMaxPx, p.infinityPx, p.invalidBelow, p.maxDeviationPx};
-  const bool hasSweep = sweepConfidence.id >= 0, hasTrip = roundTripError.id >= 0;
+  const bool hasSweep = sweepConfidence.id >= 0, hasTrip = roundTripError.id >= 0, hasPlane = planeConfidence.id >= 0;
   const int width = confidence.width, height = confidence.height;
   // Two passes, as on CUDA: each pixel's terms once, then the windows' sums of them.
   const Buffer terms = scratch(kConfidenceTermsScratch, width, height, 4);
@@ -829,12 +831,14 @@ void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& r
                         addr(trajectory),
                         addr(hasSweep ? sweepConfidence : mask),
                         addr(hasTrip ? roundTripError : mask),
+                        addr(hasPlane ? planeConfidence : mask),
                         addr(mask),
                         paramBlock(&prm, sizeof prm),
                         confidence.width,
                         confidence.height,
                         hasSweep ? 1 : 0,
-                        hasTrip ? 1 : 0};
+                        hasTrip ? 1 : 0,
+                        hasPlane ? 1 : 0};
   dispatch(kResultConfidence, pc, width, height);
 }
 

@@ -111,14 +111,15 @@ class VulkanBackend final : public Backend {
                       const Buffer& disparity, const Buffer& warp, const Buffer& confidence) override;
   void doPlainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
                       const Buffer& levelImage, const Buffer& levelMask) override;
-  void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes, const Buffer& mask,
-                    const CameraParams& cam0, const double tPrime[3]) override;
+  void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
+                    const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
+                    const double tPrime[3]) override;
   void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                    const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) override;
   void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,
                           const Buffer& n0, const Buffer& n1, const Buffer& w, const Buffer& trajectory,
-                          const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& mask,
-                          const ConfidenceParams& p) override;
+                          const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& planeConfidence,
+                          const Buffer& mask, const ConfidenceParams& p) override;
 
  private:
   struct Arena {

@@ -13,9 +13,9 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer ConfidencePa
 };
 
 layout(push_constant) uniform PC {
-  FBuf confidence, radial, points, terms, w, trajectory, sweepConfidence, roundTripError, mask;
+  FBuf confidence, radial, points, terms, w, trajectory, sweepConfidence, roundTripError, planeConfidence, mask;
   ConfidenceParamsRef prm;
-  int width, height, hasSweep, hasRoundTrip;
+  int width, height, hasSweep, hasRoundTrip, hasPlane;
 } pc;
 
 bool m(int x, int y) { return masked(pc.mask, pc.width, pc.height, x, y); }
@@ -57,9 +57,13 @@ void main() {
   if (!m(x, y) || isnan(pc.radial.v[i])) return;
   const int r = pc.prm.radius;
   const vec2 terms = windowTerms(x, y, r);
-  const float structure = terms.x;
+  const float structure = pc.hasPlane != 0 ? max(terms.x, pc.planeConfidence.v[i]) : terms.x;
   float c = structure * terms.y;
-  if (pc.hasSweep != 0) c *= min(1.0, max(0.0, pc.sweepConfidence.v[i]));
+  if (pc.hasSweep != 0) {
+    float sweep = min(1.0, max(0.0, pc.sweepConfidence.v[i]));
+    if (pc.hasPlane != 0) sweep = max(sweep, pc.planeConfidence.v[i]);
+    c *= sweep;
+  }
   bool invalid = false;
   if (pc.hasRoundTrip != 0) {
     const float e = pc.roundTripError.v[i];

@@ -108,9 +108,9 @@ class ForwardingBackend : public Backend {
                       const Buffer& lm) override {
     b_.plainSupport(s, c, w, m, li, lm);
   }
-  void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& l, const Buffer& p, const Buffer& m,
-                    const CameraParams& cam, const double t[3]) override {
-    b_.fillPlanes(u, w, l, p, m, cam, t);
+  void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& pc, const Buffer& l, const Buffer& p,
+                    const Buffer& m, const CameraParams& cam, const double t[3]) override {
+    b_.fillPlanes(u, w, pc, l, p, m, cam, t);
   }
   void doRoundTrip(const Buffer& e, const Buffer& w, const Buffer& c, const Buffer& rw, const Buffer& rc,
                    const Buffer& rm, const Buffer& m) override {
@@ -118,8 +118,8 @@ class ForwardingBackend : public Backend {
   }
   void doResultConfidence(const Buffer& c, const Buffer& r, const Buffer& pt, const Buffer& i, const Buffer& n0,
                           const Buffer& n1, const Buffer& w, const Buffer& t, const Buffer& sc, const Buffer& e,
-                          const Buffer& m, const ConfidenceParams& p) override {
-    b_.resultConfidence(c, r, pt, i, n0, n1, w, t, sc, e, m, p);
+                          const Buffer& pc, const Buffer& m, const ConfidenceParams& p) override {
+    b_.resultConfidence(c, r, pt, i, n0, n1, w, t, sc, e, pc, m, p);
   }
 
  protected:

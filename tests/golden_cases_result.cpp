@@ -130,24 +130,30 @@ std::vector<Output> plainSupportCase(Backend& b) {
   return within({s.get("plain_support", quarter), s.get("plain_support_uneven", uneven)}, {1e-9, 1e-12});
 }
 
-// Three planes over a coarse grid of labels (-1 and NaN: none; 5: beyond the planes given):
-// a floor, a wall, and a plane behind some rays (q < 0: those keep their values).
+// Three planes over a coarse grid of labels (-1 and NaN: none; 5: beyond the planes given),
+// each with a confidence: a floor, a wall, and a plane behind some rays (q < 0: those keep
+// their values).
 std::vector<Output> fillPlanesCase(Backend& b) {
   Session s{b};
   const int lw = (kW + 3) / 4, lh = (kH + 3) / 4;
-  Host u = noise(kW, kH, 1, 93, 2.f), w = noise(kW, kH, 2, 94, 2.f), mask = discMask(kW, kH), labels(lw, lh, 1);
+  Host u = noise(kW, kH, 1, 93, 2.f), w = noise(kW, kH, 2, 94, 2.f), mask = discMask(kW, kH), labels(lw, lh, 2);
   for (int y = 0; y < lh; ++y)
-    for (int x = 0; x < lw; ++x) labels.at(x, y) = float((x + 2 * y) % 5) - 1.f;  // -1, 0, 1, 2, 3
+    for (int x = 0; x < lw; ++x) {
+      labels.at(x, y, 0) = float((x + 2 * y) % 5) - 1.f;  // -1, 0, 1, 2, 3
+      labels.at(x, y, 1) = 0.3f + 0.05f * float(x);
+    }
   labels.at(1, 1) = 5.f;
   labels.at(2, 1) = std::numeric_limits<float>::quiet_NaN();
   Host planes(9, 1, 1);
   const float a[9] = {0.f, 0.6f, 0.05f, 0.02f, -0.01f, 0.4f, -0.9f, 0.1f, 0.2f};
   std::copy(a, a + 9, planes.v.begin());
-  Buffer ub = s.put(u), wb = s.put(w);
+  Buffer ub = s.put(u), wb = s.put(w), cb = s.make(kW, kH, 1);
+  b.fill(cb, 7.f);  // every pixel written
   const FieldsParams f = fieldsParams();
-  b.fillPlanes(ub, wb, s.put(labels), s.put(planes), s.put(mask), f.cam0, f.t);
+  b.fillPlanes(ub, wb, cb, s.put(labels), s.put(planes), s.put(mask), f.cam0, f.t);
   // Double geometry on every backend, rounded to float once (as carryEstimate).
-  return within({s.get("fill_planes_u", ub), s.get("fill_planes_w", wb)}, {1e-5, 1e-12});
+  return within({s.get("fill_planes_u", ub), s.get("fill_planes_w", wb), s.get("fill_planes_confidence", cb)},
+                {1e-5, 1e-12});
 }
 
 // --- the result's confidence ---
@@ -184,7 +190,7 @@ ConfidenceParams confidenceCaseParams() { return {3, 0.01f, 0.5f, 0.6f, 1.f, 1.5
 std::vector<Output> resultConfidenceRun(Backend& b, bool optional, const ConfidenceParams& p, const std::string& tag) {
   Session s{b};
   Host image = texture(kW, kH, 91, 1), n1(kW, kH, 1), w = noise(kW, kH, 2, 92, 0.4f), mask = discMask(kW, kH);
-  Host radial(kW, kH, 1), sweep(kW, kH, 1), trip(kW, kH, 1), trajectory = tangentField(kW, kH);
+  Host radial(kW, kH, 1), sweep(kW, kH, 1), trip(kW, kH, 1), plane(kW, kH, 1), trajectory = tangentField(kW, kH);
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
       if (x > kW / 2) image.at(x, y) = 0.5f + 0.001f * float(x);
@@ -192,6 +198,7 @@ std::vector<Output> resultConfidenceRun(Backend& b, bool optional, const Confide
       sweep.at(x, y) = 1.2f - float(y) / float(kH - 1);
       trip.at(x, y) = (x * 7 + y * 3) % 11 == 0 ? std::numeric_limits<float>::quiet_NaN() : 0.25f * float(x % 9);
       if (x < 8 && y < 8) w.at(x, y, 0) = w.at(x, y, 1) = 0.05f;
+      plane.at(x, y) = x > kW / 2 && y % 3 != 0 ? 0.2f + 0.6f * float(y) / float(kH) : 0.f;  // the plain half, filled
     }
   Host n0 = image;
   for (int y = 0; y < kH; ++y)
@@ -199,7 +206,8 @@ std::vector<Output> resultConfidenceRun(Backend& b, bool optional, const Confide
   Buffer confidence = s.make(kW, kH, 1), rb = s.put(radial), points = s.make(kW, kH, 3);
   b.fill(points, 1.f);
   b.resultConfidence(confidence, rb, points, s.put(image), s.put(n0), s.put(n1), s.put(w), s.put(trajectory),
-                     optional ? s.put(sweep) : Buffer{}, optional ? s.put(trip) : Buffer{}, s.put(mask), p);
+                     optional ? s.put(sweep) : Buffer{}, optional ? s.put(trip) : Buffer{},
+                     optional ? s.put(plane) : Buffer{}, s.put(mask), p);
   // Window sums in the oracle's order and the device's exp: a few ulps of values <= 1.
   return within({s.get("confidence_" + tag, confidence), s.get("confidence_radial_" + tag, rb),
                  s.get("confidence_points_" + tag, points)},

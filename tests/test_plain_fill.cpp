@@ -1,5 +1,6 @@
 // Plain regions (core/src/plain_fill.cpp, Params::plainFill): the host's plane fit from a
 // plain region's confident border, on supports made from a known floor.
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -60,13 +61,22 @@ TEST_CASE("the plane most of a plain floor's border agrees on fills it, a near o
   CHECK((found.planes[0].cast<double>() - kFloor).cwiseAbs().maxCoeff() < 1e-3);
   long long plain = 0, filled = 0;
   const std::vector<float> s = supports([](const Vec3<double>& ray, int, int) { return kFloor.dot(ray); }, 0.9f);
-  for (size_t i = 0; i < found.labels.size(); ++i) {
+  std::vector<float> confidences;
+  for (size_t i = 0; i < found.labels.size() / 2; ++i) {
     plain += s[kPlainSupportChannels * i + 5] == 1e-6f;
-    filled += found.labels[i] == 0.f;
+    filled += found.labels[2 * i] == 0.f;
+    if (found.labels[2 * i] == 0.f) confidences.push_back(found.labels[2 * i + 1]);
   }
+  // Filled where the plane's deviation is at most 1 px: confidence 1 / (1 + (1 / 0.5)^2) or more.
+  REQUIRE(!confidences.empty());
+  std::sort(confidences.begin(), confidences.end());
+  CHECK(confidences.front() >= 0.2f);
+  CHECK(confidences[confidences.size() / 2] > 0.5f);
   MESSAGE("plain " << plain << ", filled " << filled);
   CHECK(plain > 100);
-  CHECK(filled >= 0.9 * double(plain));
+  // The border is above the floor only (below it is the rim): the plane is extrapolated
+  // towards the rim, where its deviation passes 1 px and a few rows stay unfilled.
+  CHECK(filled >= 0.75 * double(plain));
   CHECK(found.pixels == filled);
 }
 
@@ -79,5 +89,5 @@ TEST_CASE("no plane where the border disagrees with itself or is not confident")
   // The floor's border, but no pixel confident enough to vote.
   const PlainPlanes unsure = find(supports([](const Vec3<double>& ray, int, int) { return kFloor.dot(ray); }, 0.3f));
   CHECK(unsure.planes.empty());
-  for (float label : unsure.labels) CHECK(label == -1.f);
+  for (size_t i = 0; i < unsure.labels.size(); i += 2) CHECK(unsure.labels[i] == -1.f);
 }

@@ -454,15 +454,16 @@ void Backend::plainSupport(const Buffer& support, const Buffer& confidence, cons
   doPlainSupport(support, confidence, w, mask, levelImage, levelMask);
 }
 
-void Backend::fillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
-                         const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) {
+void Backend::fillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
+                         const Buffer& planes, const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) {
   const BackendContract c(*this, "fillPlanes");
   c.buffer(mask, "mask", 1).sameGrid(u, "u", 1, mask, "mask").sameGrid(w, "w", 2, mask, "mask");
-  c.buffer(labels, "labels", 1).buffer(planes, "planes", 1).camera(cam0, "cam0", &mask, "mask");
+  c.sameGrid(planeConfidence, "planeConfidence", 1, mask, "mask");
+  c.buffer(labels, "labels", 2).buffer(planes, "planes", 1).camera(cam0, "cam0", &mask, "mask");
   c.require(labels.width <= mask.width && labels.height <= mask.height, "labels is larger than the mask's grid");
   c.require(planes.count() >= 3, "planes holds no plane");
   c.require(std::isfinite(tPrime[0]) && std::isfinite(tPrime[1]) && std::isfinite(tPrime[2]), "tPrime is not finite");
-  doFillPlanes(u, w, labels, planes, mask, cam0, tPrime);
+  doFillPlanes(u, w, planeConfidence, labels, planes, mask, cam0, tPrime);
 }
 
 void Backend::roundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
@@ -478,7 +479,7 @@ void Backend::roundTrip(const Buffer& error, const Buffer& w, const Buffer& cali
 void Backend::resultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
                                const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
                                const Buffer& trajectory, const Buffer& sweepConfidence, const Buffer& roundTripError,
-                               const Buffer& mask, const ConfidenceParams& p) {
+                               const Buffer& planeConfidence, const Buffer& mask, const ConfidenceParams& p) {
   const BackendContract c(*this, "resultConfidence");
   c.buffer(mask, "mask", 1).sameGrid(confidence, "confidence", 1, mask, "mask");
   c.sameGrid(radial, "radial", 1, mask, "mask").sameGrid(points, "points", 3, mask, "mask");
@@ -486,6 +487,7 @@ void Backend::resultConfidence(const Buffer& confidence, const Buffer& radial, c
   c.sameGrid(w, "w", 2, mask, "mask").sameGrid(trajectory, "trajectory", 2, mask, "mask");
   if (sweepConfidence.id >= 0) c.sameGrid(sweepConfidence, "sweepConfidence", 1, mask, "mask");
   if (roundTripError.id >= 0) c.sameGrid(roundTripError, "roundTripError", 1, mask, "mask");
+  if (planeConfidence.id >= 0) c.sameGrid(planeConfidence, "planeConfidence", 1, mask, "mask");
   c.require(confidence.id != radial.id, "confidence and radial are the same buffer");
   c.require(p.radius >= 0 && p.radius <= kMaxConfidenceRadius,
             "radius must be in [0, " + std::to_string(kMaxConfidenceRadius) + "], got " + std::to_string(p.radius));
@@ -494,8 +496,8 @@ void Backend::resultConfidence(const Buffer& confidence, const Buffer& radial, c
   c.require(p.infinityPx >= 0.f && p.maxDeviationPx >= 0.f, "infinityPx and maxDeviationPx must be >= 0");
   c.require(p.invalidBelow >= 0.f && p.invalidBelow <= 1.f,
             "invalidBelow must be in [0, 1], got " + std::to_string(p.invalidBelow));
-  doResultConfidence(confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError, mask,
-                     p);
+  doResultConfidence(confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError,
+                     planeConfidence, mask, p);
 }
 
 void Backend::finishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,

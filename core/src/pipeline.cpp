@@ -62,14 +62,14 @@ static Params reverseParams(Params p) {
 // confidence (1) at the sweep level and every finer one (and the coarser one with a band), and the volume and the costs
 // (planes each) and two sweep results (2 + 2) at the sweep level; with a band, those at the coarser level and, at the
 // sweep's, a volume and costs of band channels each, two results and `first` (1), and a warm frame's volume and
-// costs of warmBand channels where narrower. With plainFill, 7 at its level (support 6, labels 1) and the planes. A
-// sequence adds 6 more at level 0 (resetSequence: three states).
+// costs of warmBand channels where narrower. With plainFill, 8 at its level (support 6, labels 2), the planes and 1
+// at level 0 (the planes' confidence). A sequence adds 6 more at level 0 (resetSequence: three states).
 static unsigned long long levelFloats(const std::vector<LevelSize>& plan, const Params& params) {
   auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
   unsigned long long floats = (params.lrCheck ? 11ull : 10ull) * pixels(plan[0]);
   if (params.plainFill)
-    floats += (kPlainSupportChannels + 1ull) * pixels(plan[std::min(plan.size() - 1, size_t(params.plainFillLevel))]) +
-              3ull * kMaxPlainPlanes;
+    floats += (kPlainSupportChannels + 2ull) * pixels(plan[std::min(plan.size() - 1, size_t(params.plainFillLevel))]) +
+              3ull * kMaxPlainPlanes + pixels(plan[0]);
   const unsigned long long perPixel = params.dataTerm == Params::DataTerm::Normalised ? 39 : 34;
   for (const LevelSize& size : plan) floats += perPixel * pixels(size);
   return floats;
@@ -204,8 +204,9 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
   if (params_.plainFill) {
     const Level& P = levels_[plainLevel()];
     plainSupport_ = backend_.create(P.size.width, P.size.height, kPlainSupportChannels);
-    plainLabels_ = backend_.create(P.size.width, P.size.height, 1);
+    plainLabels_ = backend_.create(P.size.width, P.size.height, 2);
     plainPlanes_ = backend_.create(3 * kMaxPlainPlanes, 1, 1);
+    planeConfidence_ = backend_.create(rig.cam0.width, rig.cam0.height, 1);
   }
   finishes_ = finishes;
   if (finishes_) {
@@ -587,7 +588,8 @@ void Pipeline::filterResult() {
   Level& L0 = levels_[0];
   stage("temporal filter");
   backend_.resultConfidence(confidence_, radial_, points_, L0.i0, L0.n0, L0.n1, L0.w, L0.trajectory,
-                            initialising() ? L0.confidence : Buffer{}, Buffer{}, L0.mask, confidenceTerms());
+                            initialising() ? L0.confidence : Buffer{}, Buffer{}, planeConfidence_, L0.mask,
+                            confidenceTerms());
   const CameraParams cam = toCameraParams(L0.cam0);
   backend_.carryEstimate(prior_, state_, radial_, motion_, L0.mask, {cam, cam, {0, 0, 0}, 1});
   TemporalParams tp{cam,
@@ -614,8 +616,8 @@ void Pipeline::finishResult() {
   p.invalidBelow = params_.rejectBelow;
   p.maxDeviationPx = params_.maxDeviationPx;
   backend_.resultConfidence(confidence_, radial_, points_, L0.i0, L0.n0, L0.n1, L0.w, L0.trajectory,
-                            initialising() ? L0.confidence : Buffer{}, reverse_ ? roundTripError_ : Buffer{}, L0.mask,
-                            p);
+                            initialising() ? L0.confidence : Buffer{}, reverse_ ? roundTripError_ : Buffer{},
+                            planeConfidence_, L0.mask, p);
 }
 
 // The level whose size the confidence is summarised at: a sixteenth of the pixels with the
@@ -684,7 +686,7 @@ void Pipeline::findPlainSupport() {
   triangulate();
   stage("plain fill: support");
   backend_.resultConfidence(confidence_, radial_, points_, L0.i0, L0.n0, L0.n1, L0.w, L0.trajectory,
-                            initialising() ? L0.confidence : Buffer{}, Buffer{}, L0.mask, confidenceTerms());
+                            initialising() ? L0.confidence : Buffer{}, Buffer{}, Buffer{}, L0.mask, confidenceTerms());
   const Level& P = levels_[plainLevel()];
   backend_.plainSupport(plainSupport_, confidence_, L0.w, L0.mask, P.i0, P.mask);
 }
@@ -700,6 +702,7 @@ void Pipeline::planPlainFill() {
   PlainFillParams p;
   p.noise = float(params_.noiseLevel * P.size.scale);  // the level averages at least 1 / scale^2 pixels
   p.qMax = sweepQMax(tPrime_, params_);
+  p.confidenceSigmaPx = kConfidenceSigmaPx;
   if (plainRays_.ray.empty()) plainRays_ = plainRays(levels_[0].cam0, tPrime_, P.size.width, P.size.height);
   const PlainPlanes found =
       findPlainPlanes(plainRays_, levels_[0].cam0, tPrime_, P.size.width, P.size.height, support_, p);
@@ -716,7 +719,8 @@ void Pipeline::issueFinish(FrameKind kind) {
     stage("plain fill");
     const Level& L0 = levels_[0];
     const double tp[3] = {tPrime_.x(), tPrime_.y(), tPrime_.z()};
-    backend_.fillPlanes(L0.pd.u, L0.w, plainLabels_, plainPlanes_, L0.mask, toCameraParams(L0.cam0), tp);
+    backend_.fillPlanes(L0.pd.u, L0.w, planeConfidence_, plainLabels_, plainPlanes_, L0.mask, toCameraParams(L0.cam0),
+                        tp);
   }
   triangulate();
   if (kind.filter) filterResult();

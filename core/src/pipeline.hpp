@@ -225,6 +225,7 @@ class Pipeline {
   // Params::plainFill: the support under each pixel of its level, the labels and planes the
   // host found (planPlainFill), their host copies, and the pixels it filled last frame.
   Buffer plainSupport_, plainLabels_, plainPlanes_;
+  Buffer planeConfidence_;  // level 0: fillPlanes' confidence of the filled pixels (id -1 without plainFill)
   std::vector<float> support_;
   PlainRays plainRays_;  // its level's rays (made by the first frame after setPose)
   long long plainPixels_ = 0;

@@ -228,17 +228,19 @@ std::vector<Sample> borderSamples(const BuiltCamera& cam, const Eigen::Vector3d&
   return samples;
 }
 
-// The pixels of the region the plane fills: none when it lies behind a ray of the region or
-// nearer than the nearest sphere (it is not the region's surface); else those where the
-// border fixes it to maxDeviationPx (the rest, far from any border that voted, keep the
-// solver's estimate), in pixels of motion per unit of inverse depth at the ray (at infinity:
-// a few percent from that at the plane's depth). In fixed pieces on the pool, joined in
-// order.
-std::vector<int> filledPixels(const std::vector<int>& region, const PlainRays& rays, const Eigen::Vector3d& a,
-                              const Eigen::Matrix3d& covariance, const PlainFillParams& p) {
+// The pixels of the region the plane fills, with the plane's confidence there: none when it
+// lies behind a ray of the region or nearer than the nearest sphere (it is not the region's
+// surface); else those where the border fixes it to maxDeviationPx (the rest, far from any
+// border that voted, keep the solver's estimate). The deviation is in pixels of motion per
+// unit of inverse depth at the ray (at infinity: a few percent from that at the plane's
+// depth); the confidence has the structure term's form, 1 / (1 + (deviation / sigmaPx)^2).
+// In fixed pieces on the pool, joined in order.
+std::vector<std::pair<int, float>> filledPixels(const std::vector<int>& region, const PlainRays& rays,
+                                                const Eigen::Vector3d& a, const Eigen::Matrix3d& covariance,
+                                                const PlainFillParams& p) {
   constexpr size_t kPiece = 1024;
   const size_t pieces = (region.size() + kPiece - 1) / kPiece;
-  std::vector<std::vector<int>> known(pieces);
+  std::vector<std::vector<std::pair<int, float>>> known(pieces);
   std::vector<uint8_t> behind(pieces, 0);
   detail::parallelPieces(region.size(), kPiece, [&](size_t begin, size_t end) {
     const size_t piece = begin / kPiece;
@@ -251,10 +253,12 @@ std::vector<int> filledPixels(const std::vector<int>& region, const PlainRays& r
         behind[piece] = 1;
         break;
       }
-      if (rays.pxPerQ[size_t(i)] * std::sqrt(ray.dot(covariance * ray)) <= p.maxDeviationPx) known[piece].push_back(i);
+      const double deviation = rays.pxPerQ[size_t(i)] * std::sqrt(ray.dot(covariance * ray));
+      const double ratio = deviation / p.confidenceSigmaPx;
+      if (deviation <= p.maxDeviationPx) known[piece].push_back({i, float(1.0 / (1.0 + ratio * ratio))});
     }
   });
-  std::vector<int> all;
+  std::vector<std::pair<int, float>> all;
   for (size_t k = 0; k < pieces; ++k) {
     if (behind[k]) return {};
     all.insert(all.end(), known[k].begin(), known[k].end());
@@ -277,8 +281,12 @@ PlainRays plainRays(const Camera& camera0, const Eigen::Vector3d& tPrime, int wi
         for (int x = 0; x < width; ++x) {
           Vec3<double> ray;
           const size_t i = size_t(y) * width + x;
-          if (!cam.unproject(Vec2<double>((x + 0.5) * sx - 0.5, (y + 0.5) * sy - 0.5), ray)) continue;
+          double pxPerQ;
+          if (!cam.unproject(Vec2<double>((x + 0.5) * sx - 0.5, (y + 0.5) * sy - 0.5), ray) ||
+              !pxPerInverseDepth(cam, tPrime, ray, 0.0, pxPerQ))
+            continue;
           rays.ray[i] = ray.cast<float>();
+          rays.pxPerQ[i] = float(pxPerQ);
           rays.valid[i] = 1;
         }
       },
@@ -291,7 +299,7 @@ namespace {
 // One region's plane and the pixels it fills (none: no plane).
 struct RegionFill {
   Eigen::Vector3f a = Eigen::Vector3f::Zero();
-  std::vector<int> pixels;
+  std::vector<std::pair<int, float>> pixels;  // and the plane's confidence there
 };
 
 RegionFill fillRegion(const BuiltCamera& cam, const Eigen::Vector3d& tPrime, const PlainRays& rays, int width,
@@ -326,7 +334,8 @@ PlainPlanes findPlainPlanes(const PlainRays& rays, const Camera& camera0, const 
   const std::vector<uint8_t> texture = texturePixels(support, p.noise);
   std::vector<int> label;
   const Regions regions = plainRegions(width, height, texture, label);
-  out.labels.assign(label.size(), -1.f);
+  out.labels.assign(2 * label.size(), 0.f);
+  for (size_t i = 0; i < label.size(); ++i) out.labels[2 * i] = -1.f;
   const long long masked = std::count_if(texture.begin(), texture.end(), [](uint8_t t) { return t != kUnknown; });
   const size_t minPixels = size_t(std::max(16.0, p.minShare * double(masked)));
   std::vector<int> large;
@@ -342,7 +351,10 @@ PlainPlanes findPlainPlanes(const PlainRays& rays, const Camera& camera0, const 
     if (f.pixels.empty() || int(out.planes.size()) == kMaxPlainPlanes) continue;
     const float index = float(out.planes.size());
     out.planes.push_back(f.a);
-    for (int i : f.pixels) out.labels[size_t(i)] = index;
+    for (const auto& [i, confidence] : f.pixels) {
+      out.labels[2 * size_t(i)] = index;
+      out.labels[2 * size_t(i) + 1] = confidence;
+    }
     out.pixels += (long long)f.pixels.size();
   }
   return out;

@@ -22,10 +22,12 @@ struct PlainFillParams {
   double minScatter = 0.25;           // the border's residuals (px^2) taken as at least this
   double maxDeviationPx = 1.0;        // a pixel is filled where the plane's deviation is at most this (px)
   double qMax = 0.0;                  // nearest inverse depth accepted (the sweep's nearest sphere)
+  double confidenceSigmaPx = 0.5;     // the deviation at which a filled pixel's confidence is 1/2
 };
 
 // The planes found at the plain-fill level: each level pixel's plane index (-1: none) and
-// each plane as a, with inverse depth q = a . ray (ray of unit length in camera 0).
+// the plane's confidence there (2 channels, Backend::fillPlanes' labels), and each plane as
+// a, with inverse depth q = a . ray (ray of unit length in camera 0).
 struct PlainPlanes {
   std::vector<float> labels;
   std::vector<Eigen::Vector3f> planes;

@@ -297,12 +297,14 @@ class Backend {
   void plainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
                     const Buffer& levelImage, const Buffer& levelMask);
   // At each masked full-resolution pixel x whose coarse pixel (as above) has a label l >= 0
-  // (labels 1 ch, coarse; planes 1 ch, at least 3 (l + 1) values): with a = planes[3l ..
-  // 3l + 2] and ray the unit ray of x, q = a . ray; where q >= 0 and ray + q t' projects,
-  // w(x) = pi(ray + q t') - x and u(x) = |w(x)| (the sweep's setWarp). Elsewhere u and w are
-  // unchanged. u, mask 1 ch and w 2 ch on cam0's grid.
-  void fillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes, const Buffer& mask,
-                  const CameraParams& cam0, const double tPrime[3]);
+  // (labels 2 ch, coarse: l and the plane's confidence there; planes 1 ch, at least
+  // 3 (l + 1) values): with a = planes[3l .. 3l + 2] and ray the unit ray of x, q = a . ray;
+  // where q >= 0 and ray + q t' projects, w(x) = pi(ray + q t') - x, u(x) = |w(x)| (the
+  // sweep's setWarp) and planeConfidence(x) the label's confidence. Elsewhere u and w are
+  // unchanged and planeConfidence is 0. u, planeConfidence, mask 1 ch and w 2 ch on cam0's
+  // grid.
+  void fillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
+                  const Buffer& planes, const Buffer& mask, const CameraParams& cam0, const double tPrime[3]);
 
   // --- the result's confidence (one file / shader per kernel: result_confidence, round_trip) ---
   // error (1 ch): the left-right round trip of x through the other direction's solve. a = x
@@ -319,10 +321,12 @@ class Backend {
   // - structure: with g = trajectory(x) (unit) and S = sum over the window's pixels y that
   //   are masked with their four neighbours of (g . grad image(y))^2 (central differences),
   //   S sigmaPx^2 / (S sigmaPx^2 + 2 noise^2): 1/2 where the Cramer-Rao deviation of a shift
-  //   along the curve, noise sqrt(2 / S), is sigmaPx;
+  //   along the curve, noise sqrt(2 / S), is sigmaPx; or planeConfidence(x) where that is
+  //   larger (fillPlanes': the same form for the plane's deviation; id -1: none);
   // - photometric: exp(-(r / residualScale)^2), r the mean over the window's masked pixels y
   //   with a finite w(y) of |n1(y + w(y)) - n0(y)| (bilinear; 0 terms: r = +inf);
-  // - sweep: sweepConfidence(x) clamped to [0, 1] (id -1: 1);
+  // - sweep: sweepConfidence(x) clamped to [0, 1], or planeConfidence(x) where larger (the
+  //   sweep's check says as little about a plain region as its image does; id -1: 1);
   // - round trip: exp(-(e / roundTripPx)^2) for roundTrip's error e (id -1: 1).
   // Then, in order: a pixel whose e is NaN or above roundTripMaxPx (> 0), whose confidence is
   // below invalidBelow, or whose structure term is below 1 / (1 + (maxDeviationPx /
@@ -331,8 +335,8 @@ class Backend {
   // ch; points 3 ch; one grid.
   void resultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,
                         const Buffer& n0, const Buffer& n1, const Buffer& w, const Buffer& trajectory,
-                        const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& mask,
-                        const ConfidenceParams& p);
+                        const Buffer& sweepConfidence, const Buffer& roundTripError, const Buffer& planeConfidence,
+                        const Buffer& mask, const ConfidenceParams& p);
 
   // --- the result as the user sees it (finish_result) ---
   // A pixel is solved where radial is not NaN and disparity and warp are finite: a solver
@@ -438,14 +442,15 @@ class Backend {
                               const Buffer& disparity, const Buffer& warp, const Buffer& confidence) = 0;
   virtual void doPlainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
                               const Buffer& levelImage, const Buffer& levelMask) = 0;
-  virtual void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& labels, const Buffer& planes,
-                            const Buffer& mask, const CameraParams& cam0, const double tPrime[3]) = 0;
+  virtual void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
+                            const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
+                            const double tPrime[3]) = 0;
   virtual void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                            const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) = 0;
   virtual void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,
                                   const Buffer& image, const Buffer& n0, const Buffer& n1, const Buffer& w,
                                   const Buffer& trajectory, const Buffer& sweepConfidence, const Buffer& roundTripError,
-                                  const Buffer& mask, const ConfidenceParams& p) = 0;
+                                  const Buffer& planeConfidence, const Buffer& mask, const ConfidenceParams& p) = 0;
   virtual void doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                              const CameraParams& cam0, const double tPrime[3]) = 0;
   virtual void doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
