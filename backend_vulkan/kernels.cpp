@@ -293,6 +293,21 @@ void VulkanBackend::doFields(const Buffer& mask, const Buffer& calibration, cons
   dispatch(float64_ ? kFieldsF64 : kFieldsF32, pc, mask.width, mask.height);
 }
 
+// A camera and t' as VkTriangulateParams in the shader's precision (triangulate.comp and
+// fill_planes.comp read the same block).
+Addr VulkanBackend::cameraBlock(const CameraParams& cam0, const double tPrime[3], bool inDouble) {
+  if (inDouble) {
+    VkTriangulateParams<double> prm{};
+    prm.cam0 = toVkCam<double>(cam0);
+    for (int i = 0; i < 3; ++i) prm.tPrime[i] = tPrime[i];
+    return paramBlock(&prm, sizeof(prm));
+  }
+  VkTriangulateParams<float> prm{};
+  prm.cam0 = toVkCam<float>(cam0);
+  for (int i = 0; i < 3; ++i) prm.tPrime[i] = float(tPrime[i]);
+  return paramBlock(&prm, sizeof(prm));
+}
+
 void VulkanBackend::doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                                   const CameraParams& cam0, const double tPrime[3]) {
   // In double wherever the device has it, whatever the other models use: the least-squares
@@ -300,19 +315,8 @@ void VulkanBackend::doTriangulate(const Buffer& radial, const Buffer& points, co
   // difference far below float's rounding, so float decided "in front" (finite) or not
   // (+inf) unlike the oracle (NVIDIA, 36 of the golden case's pixels). 0.14 ms a frame.
   const bool inDouble = deviceFloat64_;
-  Addr block;
-  if (inDouble) {
-    VkTriangulateParams<double> prm{};
-    prm.cam0 = toVkCam<double>(cam0);
-    for (int i = 0; i < 3; ++i) prm.tPrime[i] = tPrime[i];
-    block = paramBlock(&prm, sizeof(prm));
-  } else {
-    VkTriangulateParams<float> prm{};
-    prm.cam0 = toVkCam<float>(cam0);
-    for (int i = 0; i < 3; ++i) prm.tPrime[i] = float(tPrime[i]);
-    block = paramBlock(&prm, sizeof(prm));
-  }
-  PcTriangulate pc{addr(radial), addr(points), addr(w), addr(mask), block, radial.width, radial.height};
+  PcTriangulate pc{addr(radial), addr(points), addr(w), addr(mask), cameraBlock(cam0, tPrime, inDouble),
+                   radial.width, radial.height};
   dispatch(inDouble ? kTriangulateF64 : kTriangulateF32, pc, radial.width, radial.height);
 }
 
@@ -784,18 +788,7 @@ void VulkanBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer&
                                  const double tPrime[3]) {
   // In double where the device has it, as triangulate: the same camera equations.
   const bool inDouble = deviceFloat64_;
-  Addr block;
-  if (inDouble) {
-    VkTriangulateParams<double> prm{};
-    prm.cam0 = toVkCam<double>(cam0);
-    for (int i = 0; i < 3; ++i) prm.tPrime[i] = tPrime[i];
-    block = paramBlock(&prm, sizeof(prm));
-  } else {
-    VkTriangulateParams<float> prm{};
-    prm.cam0 = toVkCam<float>(cam0);
-    for (int i = 0; i < 3; ++i) prm.tPrime[i] = float(tPrime[i]);
-    block = paramBlock(&prm, sizeof(prm));
-  }
+  const Addr block = cameraBlock(cam0, tPrime, inDouble);
   PcFillPlanes pc{addr(u), addr(w),  addr(planeConfidence), addr(labels),  addr(planes),           addr(mask), block,
                   u.width, u.height, labels.width,          labels.height, int32_t(planes.count())};
   dispatch(inDouble ? kFillPlanesF64 : kFillPlanesF32, pc, u.width, u.height);

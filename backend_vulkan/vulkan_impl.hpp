@@ -147,6 +147,7 @@ class VulkanBackend final : public Backend {
   const Alloc& alloc(const Buffer& b) const;
   Addr addr(const Buffer& b) const;
   Addr paramBlock(const void* data, size_t bytes);
+  Addr cameraBlock(const CameraParams& cam0, const double tPrime[3], bool inDouble);
   VkDeviceSize claimStaging(VkDeviceSize bytes);
   void fillByteTable();
   template <class Fill>
