@@ -17,7 +17,7 @@ struct PlainFillParams {
   double minShare = 0.005;            // smallest region filled, share of the level's masked pixels
   int supportRadius = 2;              // textured pixels this close (level px) to a region are its border
   double minSupportConfidence = 0.5;  // border pixels less confident than this do not vote
-  double inlierPx = 0.5;              // a border pixel agrees with a plane within this (full-resolution px)
+  double inlierPx = 1.0;              // a border pixel agrees with a plane within this (full-resolution px)
   double minInliers = 0.4;            // share of the voting border that must agree
   double minScatter = 0.25;           // the border's residuals (px^2) taken as at least this
   double maxDeviationPx = 1.0;        // a pixel is filled where the plane's deviation is at most this (px)
