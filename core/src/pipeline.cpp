@@ -675,7 +675,7 @@ void Pipeline::issueSolve(const std::function<void(double)>& progress, FrameKind
     if (initialising() && l == sweep_.level) advance(sweepWork);
     solveLevel(levels_[l], warps[l], [&](int) { advance(pixels(levels_[l])); });
   }
-  if (fillsPlains(kind)) findPlainSupport();
+  if (fillsPlains()) findPlainSupport();
 }
 
 // Plain regions (Params::plainFill, docs/confidence.md "Plain surfaces"): the solve's own
@@ -711,11 +711,10 @@ void Pipeline::planPlainFill() {
     for (int c = 0; c < 3; ++c) planes[3 * k + size_t(c)] = found.planes[k][c];
   backend_.upload(plainLabels_, found.labels.data());
   backend_.upload(plainPlanes_, planes.data());
-  plainPixels_ = found.pixels;
 }
 
 void Pipeline::issueFinish(FrameKind kind) {
-  if (fillsPlains(kind)) {
+  if (fillsPlains()) {
     stage("plain fill");
     const Level& L0 = levels_[0];
     const double tp[3] = {tPrime_.x(), tPrime_.y(), tPrime_.z()};
@@ -817,7 +816,7 @@ void Pipeline::recordOrReplay(int slot, const std::function<void(double)>& progr
 void Pipeline::issueOrReplay(const std::function<void(double)>& progress, FrameKind kind) {
   if (kind.filter && state_.id < 0) throw Error("pipeline: a filtered frame before resetSequence()");
   const int slot = slotBase_ + kind.slot();
-  if (!fillsPlains(kind)) {
+  if (!fillsPlains()) {
     recordOrReplay(slot, progress, [&] {
       issueSolve(progress, kind);
       issueFinish(kind);

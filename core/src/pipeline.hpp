@@ -183,7 +183,7 @@ class Pipeline {
   void recordOrReplay(int slot, const std::function<void(double)>& progress, const std::function<void()>& issue);
   // Every frame, warm ones too: a warm frame's brief solve does not keep the last frame's
   // planes (seqD1, CPU, 8 frames: warm tau>1 21.16 % without its own fill, 6.58 % cold).
-  bool fillsPlains(FrameKind) const { return params_.plainFill; }
+  bool fillsPlains() const { return params_.plainFill; }
   size_t plainLevel() const { return std::min(size_t(params_.plainFillLevel), levels_.size() - 1); }
   void buildPyramid(size_t levels);
   void carryIntoCoarseSweep();
@@ -223,12 +223,11 @@ class Pipeline {
   bool checksWarmFrames_ = false;
   Selection selection_;
   // Params::plainFill: the support under each pixel of its level, the labels and planes the
-  // host found (planPlainFill), their host copies, and the pixels it filled last frame.
+  // host found (planPlainFill), and the host's copy of the support.
   Buffer plainSupport_, plainLabels_, plainPlanes_;
   Buffer planeConfidence_;  // level 0: fillPlanes' confidence of the filled pixels (id -1 without plainFill)
   std::vector<float> support_;
   PlainRays plainRays_;  // its level's rays (made by the first frame after setPose)
-  long long plainPixels_ = 0;
   // A sequence's state at level 0 (Backend::carryEstimate): `state` is the committed
   // frame's, `next` this frame's filtered result, `prior` the state carried into this
   // frame's view; `motion` the kMotionFloats of camera 0's motion. Created by resetSequence.

@@ -7,7 +7,6 @@
 #include <cstdint>
 
 #include "curvestereo/parallel.hpp"
-
 #include "curvestereo/triangulate.hpp"
 
 namespace cs {
@@ -27,7 +26,7 @@ std::vector<uint8_t> texturePixels(const std::vector<float>& support, float nois
   const float limit = 4.f * noise * noise;
   std::vector<uint8_t> texture(support.size() / kPlainSupportChannels, kUnknown);
   for (size_t i = 0; i < texture.size(); ++i) {
-    const float variance = support[kPlainSupportChannels * i + 5];
+    const float variance = support[kPlainSupportChannels * i + kSupportVariance];
     if (variance >= 0.f) texture[i] = variance < limit ? kPlain : variance > 4.f * limit ? kTextured : kUnknown;
   }
   return texture;
@@ -69,8 +68,8 @@ Regions plainRegions(int width, int height, const std::vector<uint8_t>& texture,
   return regions;
 }
 
-// A pixel's ray, inverse depth and how far (level px) its image moves per unit of inverse
-// depth there: the scale that turns an inverse-depth residual into pixels.
+// A pixel's ray, inverse depth and how far (full-resolution px) its image moves per unit of
+// inverse depth there: the scale that turns an inverse-depth residual into pixels.
 struct Sample {
   Eigen::Vector3d ray;
   double q = 0, pxPerQ = 0;
@@ -113,6 +112,13 @@ struct PlaneFit {
 };
 
 double residualPx(const Sample& s, const Eigen::Vector3d& a) { return std::abs(a.dot(s.ray) - s.q) * s.pxPerQ; }
+
+std::vector<int> inliersOf(const std::vector<Sample>& samples, const Eigen::Vector3d& a, double inlierPx) {
+  std::vector<int> inliers;
+  for (int m = 0; m < int(samples.size()); ++m)
+    if (residualPx(samples[size_t(m)], a) < inlierPx) inliers.push_back(m);
+  return inliers;
+}
 
 // Least squares in pixels over the given samples: min sum (pxPerQ (a . ray - q))^2.
 bool fitPlane(const std::vector<Sample>& samples, const std::vector<int>& which, Eigen::Vector3d& a,
@@ -193,12 +199,9 @@ PlaneFit ransacPlane(const std::vector<Sample>& samples, double inlierPx, uint32
     if (share > 0 && drawn >= std::log(0.01) / std::log1p(-std::min(share * share * share, 0.999999))) break;
   }
   if (!std::isfinite(bestCost)) return best;
-  for (int m = 0; m < n; ++m)
-    if (residualPx(samples[size_t(m)], best.a) < inlierPx) best.inliers.push_back(m);
+  best.inliers = inliersOf(samples, best.a, inlierPx);
   if (best.inliers.size() < 3 || !fitPlane(samples, best.inliers, best.a)) return PlaneFit{};
-  best.inliers.clear();
-  for (int m = 0; m < n; ++m)
-    if (residualPx(samples[size_t(m)], best.a) < inlierPx) best.inliers.push_back(m);
+  best.inliers = inliersOf(samples, best.a, inlierPx);
   return best;
 }
 
@@ -212,7 +215,7 @@ std::vector<Sample> borderSamples(const BuiltCamera& cam, const Eigen::Vector3d&
   detail::parallelPieces(border.size(), kPiece, [&](size_t begin, size_t end) {
     for (size_t k = begin; k < end; ++k) {
       const float* b = &support[kPlainSupportChannels * size_t(border[k])];
-      if (!(b[4] >= minConfidence)) continue;
+      if (!(b[kSupportConfidence] >= minConfidence)) continue;
       const Vec2<double> x(b[0], b[1]), w(b[2], b[3]);
       const double radial = triangulateRadial(cam, tPrime, x, w);
       Sample s;

@@ -11,6 +11,7 @@ namespace cs {
 
 constexpr int kMaxPlainPlanes = 64;
 constexpr int kPlainSupportChannels = 6;  // Backend::plainSupport: X, Y, w (2), confidence, window variance
+constexpr int kSupportConfidence = 4, kSupportVariance = 5;  // their channels
 
 struct PlainFillParams {
   float noise = 0.01f;                // the level's image noise (grey levels of [0, 1])
