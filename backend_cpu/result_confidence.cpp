@@ -52,6 +52,16 @@ float photometricTerm(int x, int y, const View& n0, const View& n1, const View& 
   return std::exp(-r * r);
 }
 
+// Whether the image cannot tell |w| from 0 (|w| < 2 deviations) and bounds it below `bound`
+// (|w| + 2 deviations <= bound), the deviation from the structure term s being
+// sigmaPx sqrt(1/s - 1). Squared and multiplied by s (sqrt(a) + sqrt(b) <= R squared twice),
+// so that every backend decides it alike without a square root or a division.
+bool farBelowBound(float w2, float structure, float sigmaPx, float bound) {
+  const float b = 4.f * sigmaPx * sigmaPx * (1.f - structure);  // (2 deviations)^2 s
+  const float rest = bound * bound * structure - w2 * structure - b;
+  return w2 * structure < b && rest >= 0.f && 4.f * w2 * b * structure <= rest * rest;
+}
+
 }  // namespace
 
 void resultConfidence(const View& confidence, const View& radial, const View& points, const View& image, const View& n0,
@@ -87,7 +97,9 @@ void resultConfidence(const View& confidence, const View& radial, const View& po
       }
       confidence.at(x, y) = c;
       const float wx = w.at(x, y, 0), wy = w.at(x, y, 1);
-      if (wx * wx + wy * wy < p.infinityPx * p.infinityPx) {
+      const float w2 = wx * wx + wy * wy;
+      if (w2 < p.infinityPx * p.infinityPx ||
+          (p.infinityBoundPx > 0.f && farBelowBound(w2, structure, p.sigmaPx, p.infinityBoundPx))) {
         radial.at(x, y) = std::numeric_limits<float>::infinity();
         for (int k = 0; k < 3; ++k) points.at(x, y, k) = nan;
       }

@@ -68,6 +68,14 @@ __device__ WindowTerms windowTerms(int x, int y, const float4* terms, const Img&
   return out;
 }
 
+// backend_cpu/result_confidence.cpp farBelowBound: |w| < 2 deviations, |w| + 2 deviations <= bound.
+__device__ bool farBelowBound(float w2, float structure, float sigmaPx, float bound) {
+  const float b = __fmul_rn(__fmul_rn(__fmul_rn(4.f, sigmaPx), sigmaPx), __fsub_rn(1.f, structure));
+  const float rest = __fsub_rn(__fsub_rn(__fmul_rn(__fmul_rn(bound, bound), structure), __fmul_rn(w2, structure)), b);
+  return __fmul_rn(w2, structure) < b && rest >= 0.f &&
+         __fmul_rn(__fmul_rn(__fmul_rn(4.f, w2), b), structure) <= __fmul_rn(rest, rest);
+}
+
 __global__ void resultConfidenceKernel(Img confidence, Img radial, Img points, const float4* terms, Img w,
                                        Img trajectory, Img sweepConfidence, Img roundTripError, Img planeConfidence,
                                        Img mask, ConfidenceParams p) {
@@ -101,7 +109,9 @@ __global__ void resultConfidenceKernel(Img confidence, Img radial, Img points, c
   }
   at(confidence, x, y) = c;
   const float wx = at(w, x, y, 0), wy = at(w, x, y, 1);
-  if (__fadd_rn(__fmul_rn(wx, wx), __fmul_rn(wy, wy)) < __fmul_rn(p.infinityPx, p.infinityPx)) {
+  const float w2 = __fadd_rn(__fmul_rn(wx, wx), __fmul_rn(wy, wy));
+  if (w2 < __fmul_rn(p.infinityPx, p.infinityPx) ||
+      (p.infinityBoundPx > 0.f && farBelowBound(w2, structure, p.sigmaPx, p.infinityBoundPx))) {
     at(radial, x, y) = __int_as_float(0x7f800000);
     for (int k = 0; k < 3; ++k) at(points, x, y, k) = nan;
   }

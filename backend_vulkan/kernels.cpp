@@ -64,6 +64,7 @@ struct VkTemporalParams {
 struct VkConfidenceParams {
   int32_t radius;
   float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow, maxDeviationPx;
+  float infinityBoundPx;
 };
 
 template <class S>
@@ -807,8 +808,8 @@ void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& r
                                        const Buffer& trajectory, const Buffer& sweepConfidence,
                                        const Buffer& roundTripError, const Buffer& planeConfidence, const Buffer& mask,
                                        const ConfidenceParams& p) {
-  VkConfidenceParams prm{p.radius,         p.noise,      p.sigmaPx,      p.residualScale, p.roundTripPx,
-                         p.roundTripMaxPx, p.infinityPx, p.invalidBelow, p.maxDeviationPx};
+  VkConfidenceParams prm{p.radius,         p.noise,      p.sigmaPx,      p.residualScale,  p.roundTripPx,
+                         p.roundTripMaxPx, p.infinityPx, p.invalidBelow, p.maxDeviationPx, p.infinityBoundPx};
   const bool hasSweep = sweepConfidence.id >= 0, hasTrip = roundTripError.id >= 0, hasPlane = planeConfidence.id >= 0;
   const int width = confidence.width, height = confidence.height;
   // Two passes, as on CUDA: each pixel's terms once, then the windows' sums of them.

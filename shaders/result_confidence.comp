@@ -10,6 +10,7 @@
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer ConfidenceParamsRef {
   int radius;
   float noise, sigmaPx, residualScale, roundTripPx, roundTripMaxPx, infinityPx, invalidBelow, maxDeviationPx;
+  float infinityBoundPx;
 };
 
 layout(push_constant) uniform PC {
@@ -49,6 +50,16 @@ vec2 windowTerms(int x, int y, int r) {
   return vec2(structure, count == 0 ? 0.0 : exp(-q * q));
 }
 
+// backend_cpu/result_confidence.cpp farBelowBound: |w| < 2 deviations, |w| + 2 deviations <= bound.
+bool farBelowBound(float w2, float structure, float sigmaPx, float bound) {
+  precise float b = 4.0 * sigmaPx * sigmaPx * (1.0 - structure);
+  precise float rest = bound * bound * structure - w2 * structure - b;
+  precise float lhs = 4.0 * w2 * b * structure;
+  precise float rhs = rest * rest;
+  precise float signal = w2 * structure;
+  return signal < b && rest >= 0.0 && lhs <= rhs;
+}
+
 void main() {
   const int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
   if (x >= pc.width || y >= pc.height) return;
@@ -80,7 +91,9 @@ void main() {
   }
   pc.confidence.v[i] = c;
   const float wx = pc.w.v[2 * i], wy = pc.w.v[2 * i + 1];
-  if (wx * wx + wy * wy < pc.prm.infinityPx * pc.prm.infinityPx) {
+  precise float w2 = wx * wx + wy * wy;
+  if (w2 < pc.prm.infinityPx * pc.prm.infinityPx ||
+      (pc.prm.infinityBoundPx > 0.0 && farBelowBound(w2, structure, pc.prm.sigmaPx, pc.prm.infinityBoundPx))) {
     pc.radial.v[i] = posInf();
     for (int k = 0; k < 3; ++k) pc.points.v[3 * i + k] = quietNaN();
   }

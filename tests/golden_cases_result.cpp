@@ -185,7 +185,7 @@ std::vector<Output> roundTripCase(Backend& b) {
 // first where w says in the top half and not in the bottom (photometric), a falling sweep
 // confidence, round-trip errors across the threshold, disparities near zero in a corner and
 // depths NaN in places.
-ConfidenceParams confidenceCaseParams() { return {3, 0.01f, 0.5f, 0.6f, 1.f, 1.5f, 0.3f, 0.05f, 0.f}; }
+ConfidenceParams confidenceCaseParams() { return {3, 0.01f, 0.5f, 0.6f, 1.f, 1.5f, 0.3f, 0.05f, 0.f, 1.f}; }
 
 std::vector<Output> resultConfidenceRun(Backend& b, bool optional, const ConfidenceParams& p, const std::string& tag) {
   Session s{b};
@@ -224,6 +224,7 @@ std::vector<Output> resultConfidenceAloneCase(Backend& b) {
   p.infinityPx = 0.f;
   p.invalidBelow = 0.f;
   p.maxDeviationPx = 2.f;
+  p.infinityBoundPx = 0.f;
   return resultConfidenceRun(b, false, p, "alone");
 }
 

@@ -126,6 +126,33 @@ TEST_CASE("infinity: a disparity below infinity_px is +inf, a pixel the image ca
   CHECK(ms.density > m.density - 1.0);
 }
 
+TEST_CASE("infinity_bound_px: a disparity the image bounds below it is +inf; nothing else changes") {
+  const Solved& s = solved();
+  const DepthResult& on = s.plain;
+  const float bound = preset("realtime").infinityBoundPx;
+  REQUIRE(bound > 0.f);
+  Params p = preset("realtime");
+  p.infinityBoundPx = 0.f;
+  const DepthResult off = Stereo(s.pair.rig, p, "cpu").compute(s.pair.left, s.pair.right);
+  long long became = 0, beyond = 0, changed = 0;
+  for (size_t i = 0; i < on.valid.size(); ++i) {
+    const Vec2f w = on.warp.data[i];
+    changed += !(w.x == off.warp.data[i].x && w.y == off.warp.data[i].y) && std::isfinite(w.x);
+    const bool infOn = std::isinf(on.depth.radial.data[i]), infOff = std::isinf(off.depth.radial.data[i]);
+    if (infOn == infOff) continue;
+    ++became;
+    beyond += !infOn || w.x * w.x + w.y * w.y > bound * bound;
+  }
+  const Metrics mOn = evaluate(s.pair.rig, on.warp, on.depth.radial, s.pair.depthLeft, nullptr);
+  const Metrics mOff = evaluate(s.pair.rig, off.warp, off.depth.radial, s.pair.depthLeft, nullptr);
+  MESSAGE(became << " px more at +inf; sky " << mOff.sky << " -> " << mOn.sky << " %");
+  CHECK(changed == 0);
+  CHECK(became > 0);
+  CHECK(beyond == 0);  // only ever finite -> +inf, and only below the bound
+  CHECK(mOn.sky > mOff.sky);
+  CHECK(mOn.tau1 == mOff.tau1);
+}
+
 TEST_CASE("reject_below: pixels below the confidence are invalid") {
   const Solved& s = solved();
   Params p = preset("realtime");

@@ -493,7 +493,8 @@ void Backend::resultConfidence(const Buffer& confidence, const Buffer& radial, c
             "radius must be in [0, " + std::to_string(kMaxConfidenceRadius) + "], got " + std::to_string(p.radius));
   c.require(p.noise > 0.f && p.sigmaPx > 0.f && p.residualScale > 0.f && p.roundTripPx > 0.f,
             "noise, sigmaPx, residualScale and roundTripPx must be > 0");
-  c.require(p.infinityPx >= 0.f && p.maxDeviationPx >= 0.f, "infinityPx and maxDeviationPx must be >= 0");
+  c.require(p.infinityPx >= 0.f && p.maxDeviationPx >= 0.f && p.infinityBoundPx >= 0.f,
+            "infinityPx, maxDeviationPx and infinityBoundPx must be >= 0");
   c.require(p.invalidBelow >= 0.f && p.invalidBelow <= 1.f,
             "invalidBelow must be in [0, 1], got " + std::to_string(p.invalidBelow));
   doResultConfidence(confidence, radial, points, image, n0, n1, w, trajectory, sweepConfidence, roundTripError,

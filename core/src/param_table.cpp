@@ -207,6 +207,10 @@ std::vector<ParamInfo> buildTable() {
                      "lr_check: a round trip beyond this (px) leaves the pixel invalid", Shown::Always),
           floatParam("infinity_px", &Params::infinityPx, closed(0, 10),
                      "a disparity below this (px) is a point at infinity", Shown::Never),
+          floatParam(
+              "infinity_bound_px", &Params::infinityBoundPx, closed(0, 10),
+              "a disparity within two deviations of 0 and bounded by them below this (px) is at infinity (0: off)",
+              Shown::Never),
           floatParam("max_deviation_px", &Params::maxDeviationPx, closed(0, 1000),
                      "leave invalid the pixels whose image fixes the disparity no better than this (px; 0: keep)",
                      Shown::Always),

@@ -613,6 +613,7 @@ void Pipeline::finishResult() {
   ConfidenceParams p = confidenceTerms();
   p.roundTripMaxPx = params_.lrCheckPx;
   p.infinityPx = params_.infinityPx;
+  p.infinityBoundPx = params_.infinityBoundPx;
   p.invalidBelow = params_.rejectBelow;
   p.maxDeviationPx = params_.maxDeviationPx;
   backend_.resultConfidence(confidence_, radial_, points_, L0.i0, L0.n0, L0.n1, L0.w, L0.trajectory,

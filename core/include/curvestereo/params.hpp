@@ -206,7 +206,10 @@ struct Params {
   // leaves invalid (NaN in every output) the pixels whose round trip misses by more than
   // lrCheckPx. A pixel whose disparity is below infinityPx is at infinity (+inf depth): a
   // subpixel estimate resolves about a tenth of a pixel, so a smaller disparity does not
-  // tell a far point from one at infinity. A pixel whose confidence is below rejectBelow
+  // tell a far point from one at infinity. So is one whose disparity is within two
+  // deviations of the structure term (or of the plane that filled it) of zero and, those
+  // added, stays below infinityBoundPx: the image cannot tell it from infinity, and bounds
+  // it far (0: only infinityPx). A pixel whose confidence is below rejectBelow
   // is left invalid (0: every solved pixel is kept).
   // A pixel whose image cannot fix its disparity along the curve to within maxDeviationPx
   // (the Cramer-Rao deviation of the structure term) is left invalid rather than given the
@@ -216,6 +219,7 @@ struct Params {
   bool lrCheck = false;
   float lrCheckPx = 1.f;
   float infinityPx = 0.1f;
+  float infinityBoundPx = 1.f;
   float rejectBelow = 0.f;
   float maxDeviationPx = 0.f;
 

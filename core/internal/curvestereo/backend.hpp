@@ -331,7 +331,9 @@ class Backend {
   // Then, in order: a pixel whose e is NaN or above roundTripMaxPx (> 0), whose confidence is
   // below invalidBelow, or whose structure term is below 1 / (1 + (maxDeviationPx /
   // sigmaPx)^2) (maxDeviationPx > 0: the deviation beyond maxDeviationPx) is invalid: radial and points NaN, confidence
-  // 0; else where |w(x)| < infinityPx radial is +inf and points NaN. image, n0, n1, radial, mask 1 ch; w, trajectory 2
+  // 0; else where |w(x)| < infinityPx, or (infinityBoundPx > 0) |w(x)| < 2 d and |w(x)| + 2 d
+  // <= infinityBoundPx for d = sigmaPx sqrt(1/s - 1) of the structure term s above, radial is
+  // +inf and points NaN. image, n0, n1, radial, mask 1 ch; w, trajectory 2
   // ch; points 3 ch; one grid.
   void resultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,
                         const Buffer& n0, const Buffer& n1, const Buffer& w, const Buffer& trajectory,

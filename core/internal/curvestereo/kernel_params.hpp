@@ -148,15 +148,16 @@ struct TemporalParams {
 // give a depth at all.
 constexpr int kMaxConfidenceRadius = 4;
 struct ConfidenceParams {
-  int radius;            // window (2 radius + 1)^2 of the structure and the residual, 0..kMaxConfidenceRadius
-  float noise;           // the image's noise deviation (grey levels of [0, 1]; Params::noiseLevel)
-  float sigmaPx;         // disparity deviation (px) at which the structure term is 1/2, > 0
-  float residualScale;   // mean |n1(y + w) - n0(y)| at which the photometric term is 1/e, > 0
-  float roundTripPx;     // round-trip error (px) at which that term is 1/e, > 0
-  float roundTripMaxPx;  // a round trip beyond this (or none) leaves the pixel invalid; <= 0: never
-  float infinityPx;      // |w| below this: the point is at infinity (radial +inf, points NaN), >= 0
-  float invalidBelow;    // a confidence below this leaves the pixel invalid, [0, 1]
-  float maxDeviationPx;  // a structure deviation noise sqrt(2 / S) above this leaves it invalid; 0: never
+  int radius;             // window (2 radius + 1)^2 of the structure and the residual, 0..kMaxConfidenceRadius
+  float noise;            // the image's noise deviation (grey levels of [0, 1]; Params::noiseLevel)
+  float sigmaPx;          // disparity deviation (px) at which the structure term is 1/2, > 0
+  float residualScale;    // mean |n1(y + w) - n0(y)| at which the photometric term is 1/e, > 0
+  float roundTripPx;      // round-trip error (px) at which that term is 1/e, > 0
+  float roundTripMaxPx;   // a round trip beyond this (or none) leaves the pixel invalid; <= 0: never
+  float infinityPx;       // |w| below this: the point is at infinity (radial +inf, points NaN), >= 0
+  float invalidBelow;     // a confidence below this leaves the pixel invalid, [0, 1]
+  float maxDeviationPx;   // a structure deviation noise sqrt(2 / S) above this leaves it invalid; 0: never
+  float infinityBoundPx;  // |w| within 2 structure deviations of 0, and below this with them: at infinity; 0: never
 };
 
 }  // namespace cs
