@@ -199,6 +199,7 @@ class Stereo:
         lr_check: bool = ...,
         lr_check_px: float = ...,
         infinity_px: float = ...,
+        infinity_bound_px: float = ...,
         max_deviation_px: float = ...,
         reject_below: float = ...,
         **more: Any,
