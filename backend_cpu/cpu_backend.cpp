@@ -110,6 +110,22 @@ void CpuBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& pl
   cpu::fillPlanes(view(u), view(w), view(planeConfidence), view(labels), view(planes), view(mask), cam0, tPrime);
 }
 
+void CpuBackend::doPanoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays,
+                                 const PanoramaParams& p) {
+  cpu::panoramaPlace(view(place), view(radial), view(rays), p);
+}
+
+void CpuBackend::doPanoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence, const Buffer& grey,
+                                 const PanoramaParams& p) {
+  const View greyView = grey.id >= 0 ? view(grey) : View{};
+  cpu::panoramaSplat(view(accum), view(place), view(confidence), grey.id >= 0 ? &greyView : nullptr, p);
+}
+
+void CpuBackend::doPanoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence,
+                                   const Buffer& accum) {
+  cpu::panoramaResolve(view(range), view(grey), view(confidence), view(accum));
+}
+
 void CpuBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                              const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
   cpu::roundTrip(view(error), view(w), view(calibration), view(reverseW), view(reverseCalibration), view(reverseMask),

@@ -2,7 +2,7 @@
 // every other backend is tested against. One file per stage (fields.cpp, warp.cpp, resample.cpp,
 // upsample_estimate.cpp, normalise.cpp, structure_tensor.cpp, warp_derivatives.cpp, primal_dual.cpp, median.cpp,
 // accumulate.cpp, plane_sweep.cpp, triangulate.cpp, carry_estimate.cpp, temporal_filter.cpp,
-// round_trip.cpp, result_confidence.cpp, finish_result.cpp).
+// round_trip.cpp, result_confidence.cpp, finish_result.cpp, plain_fill.cpp, panorama.cpp).
 #pragma once
 #include <vector>
 
@@ -55,6 +55,10 @@ void plainSupport(const View& support, const View& confidence, const View& w, co
                   const View& levelMask);
 void fillPlanes(const View& u, const View& w, const View& planeConfidence, const View& labels, const View& planes,
                 const View& mask, const CameraParams& cam0, const double tPrime[3]);
+void panoramaPlace(const View& place, const View& radial, const View& rays, const PanoramaParams& p);
+void panoramaSplat(const View& accum, const View& place, const View& confidence, const View* grey,
+                   const PanoramaParams& p);
+void panoramaResolve(const View& range, const View& grey, const View& confidence, const View& accum);
 void roundTrip(const View& error, const View& w, const View& calibration, const View& reverseW,
                const View& reverseCalibration, const View& reverseMask, const View& mask);
 void resultConfidence(const View& confidence, const View& radial, const View& points, const View& image, const View& n0,
@@ -132,6 +136,11 @@ class CpuBackend final : public Backend {
   void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
                     const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
                     const double tPrime[3]) override;
+  void doPanoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays, const PanoramaParams& p) override;
+  void doPanoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence, const Buffer& grey,
+                       const PanoramaParams& p) override;
+  void doPanoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence,
+                         const Buffer& accum) override;
   void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                    const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) override;
   void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,

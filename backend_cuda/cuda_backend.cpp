@@ -417,6 +417,27 @@ void CudaBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& p
         "fillPlanes");
 }
 
+void CudaBackend::doPanoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays,
+                                  const PanoramaParams& p) {
+  flush();
+  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
+  check(cudak::launchPanoramaPlace(stream_, on(place), on(radial), on(rays), p), "panoramaPlace");
+}
+
+void CudaBackend::doPanoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence,
+                                  const Buffer& grey, const PanoramaParams& p) {
+  flush();
+  auto on = [&](const Buffer& b) { return b.id >= 0 ? img(slot(b).dev, b) : cudak::Img{nullptr, 0, 0, 0}; };
+  check(cudak::launchPanoramaSplat(stream_, on(accum), on(place), on(confidence), on(grey), p), "panoramaSplat");
+}
+
+void CudaBackend::doPanoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence,
+                                    const Buffer& accum) {
+  flush();
+  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
+  check(cudak::launchPanoramaResolve(stream_, on(range), on(grey), on(confidence), on(accum)), "panoramaResolve");
+}
+
 void CudaBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                               const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
   flush();

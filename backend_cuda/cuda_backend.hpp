@@ -140,6 +140,11 @@ class CudaBackend final : public Backend {
   void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
                     const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
                     const double tPrime[3]) override;
+  void doPanoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays, const PanoramaParams& p) override;
+  void doPanoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence, const Buffer& grey,
+                       const PanoramaParams& p) override;
+  void doPanoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence,
+                         const Buffer& accum) override;
   void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                    const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) override;
   void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points, const Buffer& image,

@@ -106,6 +106,12 @@ cudaError_t launchPlainSupport(cudaStream_t s, Img support, Img confidence, Img 
                                Img levelMask);
 cudaError_t launchFillPlanes(cudaStream_t s, Img u, Img w, Img planeConfidence, Img labels, Img planes, Img mask,
                              const CameraParams& cam0, const double tPrime[3]);
+// A rig's panorama (panorama.cu; backend.hpp panoramaPlace, panoramaSplat, panoramaResolve).
+// grey.data null: none.
+cudaError_t launchPanoramaPlace(cudaStream_t s, Img place, Img radial, Img rays, const PanoramaParams& p);
+cudaError_t launchPanoramaSplat(cudaStream_t s, Img accum, Img place, Img confidence, Img grey,
+                                const PanoramaParams& p);
+cudaError_t launchPanoramaResolve(cudaStream_t s, Img range, Img grey, Img confidence, Img accum);
 // The result's confidence (round_trip.cu, result_confidence.cu; backend.hpp roundTrip,
 // resultConfidence).
 cudaError_t launchRoundTrip(cudaStream_t s, Img error, Img w, Img calibration, Img reverseW, Img reverseCalibration,

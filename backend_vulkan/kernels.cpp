@@ -250,6 +250,20 @@ struct PcResultConfidence {
   Addr confidence, radial, points, terms, w, trajectory, sweepConfidence, roundTripError, planeConfidence, mask, params;
   int32_t width, height, hasSweep, hasRoundTrip, hasPlane;  // absent buffers: mask
 };
+struct PcPanoramaPlace {
+  Addr place, radial, rays;
+  int32_t width, height, panoWidth;
+  float cx, cy, cz, agreement, maxSplat;
+};
+struct PcPanoramaSplat {
+  Addr accum, place, confidence, grey;  // grey: place when absent
+  int32_t width, height, panoWidth, pass, hasGrey;
+  float minConfidence, agreement;
+};
+struct PcPanoramaResolve {
+  Addr range, grey, confidence, accum;
+  int32_t width, height;
+};
 static_assert(sizeof(PcResultConfidence) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 static_assert(sizeof(PcTemporalFilter) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
 static_assert(sizeof(PcPrimalDual) <= kPushBytes, "push constants exceed the guaranteed 128 bytes");
@@ -834,6 +848,30 @@ void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& r
                         hasTrip ? 1 : 0,
                         hasPlane ? 1 : 0};
   dispatch(kResultConfidence, pc, width, height);
+}
+
+// ---- a rig's panorama ----
+
+void VulkanBackend::doPanoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays,
+                                    const PanoramaParams& p) {
+  PcPanoramaPlace pc{addr(place), addr(radial), addr(rays),  radial.width,       radial.height,    p.width,
+                     p.centre[0], p.centre[1],  p.centre[2], kPanoramaAgreement, kPanoramaMaxSplat};
+  dispatch(kPanoramaPlace, pc, radial.width, radial.height);
+}
+
+void VulkanBackend::doPanoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence,
+                                    const Buffer& grey, const PanoramaParams& p) {
+  const bool hasGrey = grey.id >= 0;
+  PcPanoramaSplat pc{addr(accum),     addr(place),     addr(confidence),  addr(hasGrey ? grey : place),
+                     place.width,     place.height,    p.width,           p.pass,
+                     hasGrey ? 1 : 0, p.minConfidence, kPanoramaAgreement};
+  dispatch(kPanoramaSplat, pc, place.width, place.height);
+}
+
+void VulkanBackend::doPanoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence,
+                                      const Buffer& accum) {
+  PcPanoramaResolve pc{addr(range), addr(grey), addr(confidence), addr(accum), accum.width, accum.height};
+  dispatch(kPanoramaResolve, pc, accum.width, accum.height);
 }
 
 }  // namespace cs::vk

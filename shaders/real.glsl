@@ -45,58 +45,37 @@ void sincosr(real x, out real s, out real c) {
   else { s = -cr; c = sr; }
 }
 
-// atan2(y, x) for y >= 0 (every use here).
-#ifdef CS_DOUBLE
-// fdlibm's atan (s_atan.c) of |y / x|: the argument reduced by one of atan(1/2), atan(1),
-// atan(3/2), atan(inf) (the constants in two parts) to |t| < 7/16, then an odd polynomial
-// of degree 23; pi minus it for x < 0 (as fdlibm's e_atan2.c). Within a few ulp of double,
-// as the three Newton steps on a float estimate it replaces, at two divisions and a
-// dozen fused multiply-adds instead of three divisions and three sin/cos.
-real atan2r(real y, real x) {
-  if (y == 0.0LF) return x >= 0.0LF ? 0.0LF : PI_R;
-  double a = y / abs(x);  // +inf at x = 0: atan = pi/2 below
-  double hi = 0.0LF, lo = 0.0LF;
-  bool reduced = true;
-  if (a < 0.4375LF) {
-    reduced = false;
-  } else if (a < 0.6875LF) {
-    hi = 4.63647609000806093515e-01LF; lo = 2.26987774529616870924e-17LF;
-    a = (2.0LF * a - 1.0LF) / (2.0LF + a);
-  } else if (a < 1.1875LF) {
-    hi = 7.85398163397448278999e-01LF; lo = 3.06161699786838301793e-17LF;
-    a = (a - 1.0LF) / (a + 1.0LF);
-  } else if (a < 2.4375LF) {
-    hi = 9.82793723247329054082e-01LF; lo = 1.39033110312309984516e-17LF;
-    a = (a - 1.5LF) / (1.0LF + 1.5LF * a);
-  } else {
-    hi = 1.57079632679489655800e+00LF; lo = 6.12323399573676603587e-17LF;
-    a = -1.0LF / a;
+// atan(a) for 0 <= a <= 1. Above tan(pi/12), atan a = pi/6 + atan((sqrt3 a - 1) / (a + sqrt3))
+// brings the argument to |t| <= tan(pi/12); there the odd Taylor series of atan, t (1 - t^2/3 +
+// t^4/5 - ...), loses a factor t^2 <= 0.072 a term: 14 terms reach double's last bits, 6
+// float's (Vulkan's own float atan promises only 4096 ulp; GLSL has none in double).
+real atanUnit(real a) {
+  const real kTanPi12 = D(0.26794919243112270647LF, 0.26794919243112270647);
+  const real kSqrt3 = D(1.73205080756887729353LF, 1.73205080756887729353);
+  real shift = R(0.0);
+  if (a > kTanPi12) {
+    a = (kSqrt3 * a - R(1.0)) / (a + kSqrt3);
+    shift = PI_R / R(6.0);
   }
-  const double z = a * a, w = z * z;
-  const double s1 = z * (3.33333333333329318027e-01LF + w * (1.42857142725034663711e-01LF +
-                   w * (9.09088713343650656196e-02LF + w * (6.66107313738753120669e-02LF +
-                   w * (4.97687799461593236017e-02LF + w * 1.62858201153657823623e-02LF)))));
-  const double s2 = w * (-1.99999999998764832476e-01LF + w * (-1.11111104054623557880e-01LF +
-                   w * (-7.69187620504482999495e-02LF + w * (-5.83357013379057348645e-02LF +
-                   w * -3.65315727442169155270e-02LF))));
-  const double t = reduced ? hi - ((a * (s1 + s2) - lo) - a) : a - a * (s1 + s2);
-  // x < 0: pi - t, with pi's low part (e_atan2.c's pi - (z - pi_lo)).
-  return x >= 0.0LF ? t : 3.1415926535897931160E+00LF - (t - 1.2246467991473531772E-16LF);
-}
+  const real t2 = a * a;
+#ifdef CS_DOUBLE
+  const int kLast = 13;
 #else
-// A float estimate refined by Newton steps on x sin(t) - y cos(t) = 0 (quadratic
-// convergence from the 4096-ulp float atan that Vulkan allows).
+  const int kLast = 5;
+#endif
+  real sum = R(1.0) / real(2 * kLast + 1);
+  for (int n = kLast - 1; n >= 0; --n) sum = R(1.0) / real(2 * n + 1) - t2 * sum;
+  return shift + a * sum;
+}
+
+// atan2(y, x) for y >= 0 (the camera models' uses): the smaller of y / |x| and |x| / y
+// through atanUnit, then the quadrant.
 real atan2r(real y, real x) {
   if (y == R(0.0)) return x >= R(0.0) ? R(0.0) : PI_R;
-  real t = real(atan(float(y), float(x)));
-  for (int it = 0; it < 3; ++it) {
-    real s, c;
-    sincosr(t, s, c);
-    t -= (x * s - y * c) / (x * c + y * s);
-  }
-  return t;
+  const real ax = abs(x);
+  const real t = y <= ax ? atanUnit(y / ax) : PI_R / R(2.0) - atanUnit(ax / y);
+  return x >= R(0.0) ? t : PI_R - t;
 }
-#endif
 
 // acos(c) for c in [0, 1]; (1 - c)(1 + c) keeps the digits near c = 1.
 real acosr(real c) { return atan2r(sqrt((R(1.0) - c) * (R(1.0) + c)), c); }

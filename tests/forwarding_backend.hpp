@@ -112,6 +112,17 @@ class ForwardingBackend : public Backend {
                     const Buffer& m, const CameraParams& cam, const double t[3]) override {
     b_.fillPlanes(u, w, pc, l, p, m, cam, t);
   }
+  void doPanoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays,
+                       const PanoramaParams& p) override {
+    b_.panoramaPlace(place, radial, rays, p);
+  }
+  void doPanoramaSplat(const Buffer& a, const Buffer& place, const Buffer& c, const Buffer& g,
+                       const PanoramaParams& p) override {
+    b_.panoramaSplat(a, place, c, g, p);
+  }
+  void doPanoramaResolve(const Buffer& r, const Buffer& g, const Buffer& c, const Buffer& a) override {
+    b_.panoramaResolve(r, g, c, a);
+  }
   void doRoundTrip(const Buffer& e, const Buffer& w, const Buffer& c, const Buffer& rw, const Buffer& rc,
                    const Buffer& rm, const Buffer& m) override {
     b_.roundTrip(e, w, c, rw, rc, rm, m);

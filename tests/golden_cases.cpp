@@ -716,7 +716,9 @@ const std::vector<KernelCase>& kernelCases() {
       {"roundTrip", roundTripCase},
       {"resultConfidence", resultConfidenceCase},
       {"resultConfidence, no sweep or round trip, radius 1", resultConfidenceAloneCase},
-      {"finishResult", finishResultCase}};
+      {"finishResult", finishResultCase},
+      {"panoramaPlace", panoramaPlaceCase},
+      {"panoramaSplat and panoramaResolve", panoramaSplatCase}};
   return cases;
 }
 

@@ -123,4 +123,8 @@ std::vector<Output> resultConfidenceCase(Backend& b);
 std::vector<Output> resultConfidenceAloneCase(Backend& b);
 std::vector<Output> finishResultCase(Backend& b);
 
+// golden_cases_panorama.cpp: a rig's panorama.
+std::vector<Output> panoramaPlaceCase(Backend& b);
+std::vector<Output> panoramaSplatCase(Backend& b);
+
 }  // namespace cs::golden

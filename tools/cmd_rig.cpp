@@ -147,16 +147,17 @@ int runRig(const Args& args, const std::string& outDir) {
 
   const auto fuseStart = std::chrono::steady_clock::now();
   const PanoramaFrame frame = panoramaFrame(rig);
-  const Panorama panorama =
-      PanoramaFusion(rig, frame, width, stereo.rays()).fuse(r.cameras, images, panoramaConfidence);
+  const Panorama panorama = PanoramaFusion(rig, frame, width, stereo.rays(), stereo.backendName())
+                                .fuse(r.cameras, images, panoramaConfidence);
   const double panoramaMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fuseStart).count();
 
   writeRigFrame(outDir, rig, r, images, panorama, frame, minConfidence);
   for (int k = 0; k < rig.size(); ++k)
     std::printf("cam%d: %.1f %% of the image has a depth\n", k, 100.0 * validShare(r.cameras[size_t(k)]));
-  std::printf("total %.1f ms (pairs and per-camera fusion) + %.1f ms panorama %dx%d (host); outputs in %s\n", r.totalMs,
-              panoramaMs, width, width / 2, outDir.c_str());
+  std::printf(
+      "total %.1f ms (pairs and per-camera fusion) + %.1f ms panorama %dx%d (%s, with its setup); outputs in %s\n",
+      r.totalMs, panoramaMs, width, width / 2, stereo.backendName().c_str(), outDir.c_str());
   return 0;
 }
 
@@ -179,7 +180,7 @@ int runRigSequence(const Args& args, const std::string& outDir) {
   RigStereo stereo(rig, pairs, params, backendFromArgs(args));
   stereo.setCrossCheck(crossCheckFromArgs(args));
   const PanoramaFrame frame = panoramaFrame(rig);
-  PanoramaFusion fusion(rig, frame, panoramaWidth(args), stereo.rays());
+  PanoramaFusion fusion(rig, frame, panoramaWidth(args), stereo.rays(), stereo.backendName());
   const float panoramaConfidence = panoramaMinConfidence(args);
   std::printf("sequence: %s\n", sequence.summary().c_str());
   std::printf("backend: %s; settings: %s; %s\n", stereo.backendName().c_str(), describe(params).c_str(),
@@ -243,7 +244,7 @@ int benchRig(const Args& args) {
   const bool serial = args.has("serial");
   stereo.setConcurrentSolves(!serial);
   stereo.setFlowOutputs(false);  // a panorama needs neither disparity nor warp
-  PanoramaFusion fusion(rig, panoramaFrame(rig), panoramaWidth(args), stereo.rays());
+  PanoramaFusion fusion(rig, panoramaFrame(rig), panoramaWidth(args), stereo.rays(), stereo.backendName());
   const int runs = args.getInt("runs", stereo.backendName() == "cpu" ? 1 : 20);
   std::printf("backend:  %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
   std::printf("input:    %d cameras, %s\n", rig.size(), describePairs(pairs).c_str());
@@ -269,11 +270,12 @@ int benchRig(const Args& args) {
     progress(double(i) / runs);
   }
   progress.done();
-  std::printf("frame:    median %.2f ms (%.1f fps), images in memory to the panorama on the host\n",
+  std::printf("frame:    median %.2f ms (%.1f fps), images in memory to the panorama in memory\n",
               summarize(totals).median, 1000.0 / summarize(totals).median);
   std::printf("  solves and per-camera fusion: median %.2f ms (the slowest solve %.2f ms)\n", summarize(solves).median,
               summarize(slowest).median);
-  std::printf("  panorama %dx%d (host):        median %.2f ms\n", fusion.width(), fusion.width() / 2,
+  std::printf("  panorama %dx%d (%s):%*s median %.2f ms\n", fusion.width(), fusion.width() / 2,
+              fusion.backendName().c_str(), int(std::max<size_t>(1, 14 - fusion.backendName().size())), "",
               summarize(panoramas).median);
   return 0;
 }

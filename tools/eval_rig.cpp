@@ -184,8 +184,8 @@ int evalRig(const Args& args) {
   const RigResult r = stereo.compute(f.images);
   const auto start = std::chrono::steady_clock::now();
   const PanoramaFrame frame = panoramaFrame(f.rig);
-  const Panorama panorama =
-      PanoramaFusion(f.rig, frame, f.panoramaRange.width, stereo.rays()).fuse(r.cameras, f.images, panoramaConfidence);
+  const Panorama panorama = PanoramaFusion(f.rig, frame, f.panoramaRange.width, stereo.rays(), stereo.backendName())
+                                .fuse(r.cameras, f.images, panoramaConfidence);
   const double panoramaMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
   std::string csv = "camera,tau1,tau3,density,pixels\n";
@@ -209,8 +209,8 @@ int evalRig(const Args& args) {
       "panorama tau>1 %5.2f %%  tau>3 %5.2f %% (parallax over a %.3f m baseline, in panorama pixels; finite "
       "truth two cameras see)\n",
       p.tau1, p.tau3, baseline);
-  std::printf("time: %.1f ms pairs and per-camera fusion (%zu solves), %.1f ms panorama (host)\n", r.totalMs,
-              r.solves.size(), panoramaMs);
+  std::printf("time: %.1f ms pairs and per-camera fusion (%zu solves), %.1f ms panorama (%s, with its setup)\n",
+              r.totalMs, r.solves.size(), panoramaMs, stereo.backendName().c_str());
   if (args.has("csv")) {
     csv += "panorama_tau1," + std::to_string(p.tau1) + "\npanorama_tau3," + std::to_string(p.tau3) + "\n";
     csv += "panorama_absrel," + std::to_string(p.absRel) + "\npanorama_coverage," + std::to_string(p.coverage) +

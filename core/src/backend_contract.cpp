@@ -466,6 +466,36 @@ void Backend::fillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeCo
   doFillPlanes(u, w, planeConfidence, labels, planes, mask, cam0, tPrime);
 }
 
+void Backend::panoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays, const PanoramaParams& p) {
+  const BackendContract c(*this, "panoramaPlace");
+  c.buffer(radial, "radial", 1).sameGrid(place, "place", kPanoramaPlaceChannels, radial, "radial");
+  c.sameGrid(rays, "rays", 3, radial, "radial");
+  c.require(p.width >= 4 && p.width <= 32768 && p.width % 2 == 0, "the panorama width must be even, 4..32768");
+  c.require(std::isfinite(p.centre[0]) && std::isfinite(p.centre[1]) && std::isfinite(p.centre[2]),
+            "the camera's centre is not finite");
+  doPanoramaPlace(place, radial, rays, p);
+}
+
+void Backend::panoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence, const Buffer& grey,
+                            const PanoramaParams& p) {
+  const BackendContract c(*this, "panoramaSplat");
+  c.buffer(place, "place", kPanoramaPlaceChannels).sameGrid(confidence, "confidence", 1, place, "place");
+  if (grey.id >= 0) c.sameGrid(grey, "grey", 1, place, "place");
+  c.buffer(accum, "accum", kPanoramaChannels);
+  c.require(p.width >= 4 && p.width <= 32768 && p.width % 2 == 0, "the panorama width must be even, 4..32768");
+  c.require(accum.width == p.width && accum.height == p.width / 2, "accum is not the panorama's size");
+  c.require(p.pass >= kPanoramaBest && p.pass <= kPanoramaSums, "pass must be best, nearest or sums");
+  c.require(!std::isnan(p.minConfidence), "minConfidence is NaN");
+  doPanoramaSplat(accum, place, confidence, grey, p);
+}
+
+void Backend::panoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence, const Buffer& accum) {
+  const BackendContract c(*this, "panoramaResolve");
+  c.buffer(accum, "accum", kPanoramaChannels).sameGrid(range, "range", 1, accum, "accum");
+  c.sameGrid(grey, "grey", 1, accum, "accum").sameGrid(confidence, "confidence", 1, accum, "accum");
+  doPanoramaResolve(range, grey, confidence, accum);
+}
+
 void Backend::roundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                         const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
   const BackendContract c(*this, "roundTrip");

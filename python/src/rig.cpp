@@ -110,6 +110,7 @@ struct PyPanorama {
 // and centre: the cameras' rays and the working memory are most of a fusion's setup. Shared
 // by the results (a result may outlive its RigStereo); one fusion at a time.
 struct PanoramaCache {
+  std::string backend = "cpu";  // the RigStereo's, set when it is made
   std::mutex busy;
   std::unique_ptr<PanoramaFusion> fusion;
   Eigen::Vector3d centre = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -119,7 +120,7 @@ struct PanoramaCache {
     const std::lock_guard<std::mutex> lock(busy);
     if (!fusion || width != fusion->width() || frame.centre != centre) {
       fusion.reset();  // a width the fusion refuses leaves no stale one behind
-      fusion = std::make_unique<PanoramaFusion>(rig, frame, width);
+      fusion = std::make_unique<PanoramaFusion>(rig, frame, width, backend);
       centre = frame.centre;
     }
     return fusion->fuse(cameras, images, minConfidence);
@@ -199,6 +200,7 @@ class PyRigStereo {
     stereo_ = std::make_unique<RigStereo>(rig_, pairs_, params_, backendSpec);
     stereo_->setCrossCheck(crossCheck);
     crossCheck_ = crossCheck;
+    panoramas_->backend = stereo_->backendName();
   }
 
   PyRigResult compute(pb::handle imagesObj) {

@@ -3,6 +3,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "curvestereo/camera_rig.hpp"
@@ -70,21 +71,27 @@ struct Panorama {
 // averaged, weighted by confidence. Samples below minConfidence are left out altogether (a
 // panorama with fewer holes, or fewer errors: the choice is the caller's). width: even, 4 to
 // 32768. Throws cs::Error when a result lacks its valid mask, radial depth or confidence at its
-// camera's size, or an image (optional: none gives NaN grey) is not that size.
+// camera's size, or an image (optional: none gives NaN grey) is not that size. Runs on the
+// CPU backend; PanoramaFusion chooses.
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
                       const PanoramaFrame& frame, int width, float minConfidence = 0.f);
 
-// fusePanorama for a stream of frames: each camera's rays (as costly as a fusion) computed
-// once, at construction, and the working memory kept from frame to frame. fuse() is
-// fusePanorama with this rig, frame and width, spread over the machine's cores. One thread
-// at a time per object. Throws cs::Error for a width that is not even and 4 to 32768.
+// fusePanorama for a stream of frames, on a backend (the splats and their three passes are
+// kernels: backend.hpp panoramaPlace, panoramaSplat, panoramaResolve): each camera's rays
+// turned and uploaded once, at construction, and the backend's buffers kept from frame to
+// frame. fuse() is fusePanorama with this rig, frame and width; on a GPU backend the sums
+// are in the device's order, so the values agree with the CPU's to rounding. `backend` is a
+// name as Stereo takes it ("cpu", "cuda", "vulkan", "auto"). One thread at a time per
+// object. Throws cs::Error for a width that is not even and 4 to 32768, or a backend that
+// is not usable.
 class PanoramaFusion {
  public:
-  PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width);
+  PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::string& backend = "cpu");
   // The same from each camera's cameraRays() that the caller already has (RigStereo::rays()),
   // rather than computing them again. Throws cs::Error when they are not one per camera, each
   // its camera's size.
-  PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::vector<CameraRays>& rays);
+  PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::vector<CameraRays>& rays,
+                 const std::string& backend = "cpu");
   ~PanoramaFusion();
   PanoramaFusion(const PanoramaFusion&) = delete;
   PanoramaFusion& operator=(const PanoramaFusion&) = delete;
@@ -93,15 +100,13 @@ class PanoramaFusion {
   void fuse(const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images, Panorama& out,
             float minConfidence = 0.f);
   int width() const { return width_; }
+  std::string backendName() const;
 
  private:
-  struct CameraView;
-  struct Scratch;
-  void listSplats(const std::vector<DepthResult>& cameras, float minConfidence);
+  struct State;  // the backend and its buffers
   CameraRig rig_;
   int width_;
-  std::vector<CameraView> views_;
-  std::unique_ptr<Scratch> scratch_;
+  std::unique_ptr<State> state_;
 };
 
 // Every camera's points in the panorama frame, with their grey level, at least minConfidence.

@@ -361,6 +361,45 @@ class Backend {
   void triangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                    const CameraParams& cam0, const double tPrime[3]);
 
+  // --- a rig's panorama (one file / shader per kernel: panorama) ---
+  // All arithmetic in float. place (5 ch), radial (1 ch), rays (3 ch): one camera's grid.
+  // At pixel x with radial r (NaN: no estimate; +inf: at infinity) and ray d (the camera's
+  // unit ray turned into the panorama's frame; NaN in any component: none): where r is NaN
+  // or d is not finite, place = NaN x 5. Else the point P = r d + centre (d where r is +inf:
+  // a point at infinity is its direction), its column lon = atan2(P.x, P.z), row lat =
+  // atan2(-P.y, sqrt(P.x^2 + P.z^2)), place = ((lon + pi) / (2 pi) W - 0.5, (pi/2 - lat) / pi
+  // H - 0.5, hx, hy, range) with W = p.width, H = W / 2, range = |P| (+inf where r is +inf).
+  // The footprint: a = b = (0, 0); for the neighbours (x+1, y), (x, y+1), (x-1, y), (x, y-1)
+  // in that order, inside the grid, with a radial rn that is not NaN, a finite ray, and rn
+  // on x's surface (|1/rn - 1/r| <= kPanoramaAgreement max(1/rn, 1/r)): step = (column, row)
+  // of the neighbour minus x's (placed the same way); where |step.x| > W/2, step.x =
+  // remainder(step.x, W) (across the seam); a (row neighbours) or b (column neighbours) =
+  // max(itself, |step|) per axis. With s = a + b and latitude l = pi/2 - pi (row + 0.5) / H:
+  // hx = clamp(s.x / 2, 0.5, kPanoramaMaxSplat / max(cos l, 2 kPanoramaMaxSplat / W)) and
+  // hy = clamp(s.y / 2, 0.5, kPanoramaMaxSplat).
+  void panoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays, const PanoramaParams& p);
+  // One pass of one camera's pixels into accum (6 ch, W x W/2): best confidence, nearest
+  // inverse range, sum of w / range, sum of w, sum of w grey, sum of w where grey is finite.
+  // A pixel splats where its place's column is not NaN and (p.minConfidence <= 0 or its
+  // confidence >= p.minConfidence); c is its confidence (0 where not finite), w = max(c,
+  // 1e-6) (1e-6 where not finite), g its grey (NaN: none; grey id -1: none). It covers the
+  // panorama pixels of columns ceil(col - hx) .. floor(col + hx), wrapped modulo W, and rows
+  // max(0, ceil(row - hy)) .. min(H - 1, floor(row + hy)). At each, by p.pass:
+  // - kPanoramaBest: best = max(best, c);
+  // - kPanoramaNearest: where c >= 0.5 best, nearest = max(nearest, 1 / range);
+  // - kPanoramaSums: where c >= 0.5 best and |1/range - nearest| <= kPanoramaAgreement
+  //   max(1/range, nearest): the sums += w (1/range), w, and where g is finite w g, w.
+  // Every camera's best pass runs before any nearest pass, and those before the sums. The
+  // order of the sums is the backend's (GPUs: atomics), so they agree to rounding.
+  // confidence, grey 1 ch on place's grid.
+  void panoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence, const Buffer& grey,
+                     const PanoramaParams& p);
+  // range, grey, confidence (1 ch, accum's grid): where the sum of w is not > 0, NaN x 3;
+  // else range = sum w / sum (w / range) (+inf where that sum is 0), confidence = best, grey
+  // = sum w g / its sum of w (NaN where that is not > 0). accum is then all 0 again, the
+  // state panoramaSplat starts from (fill it with 0 once after create()).
+  void panoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence, const Buffer& accum);
+
   // Waits until all enqueued work is done.
   virtual void synchronize() {}
 
@@ -447,6 +486,12 @@ class Backend {
   virtual void doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& planeConfidence, const Buffer& labels,
                             const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
                             const double tPrime[3]) = 0;
+  virtual void doPanoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays,
+                               const PanoramaParams& p) = 0;
+  virtual void doPanoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence, const Buffer& grey,
+                               const PanoramaParams& p) = 0;
+  virtual void doPanoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence,
+                                 const Buffer& accum) = 0;
   virtual void doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                            const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) = 0;
   virtual void doResultConfidence(const Buffer& confidence, const Buffer& radial, const Buffer& points,

@@ -1,0 +1,174 @@
+// A rig's panorama (cpu/panorama.cpp, backend.hpp panoramaPlace, panoramaSplat,
+// panoramaResolve): each camera pixel placed as a footprint in the equirectangular
+// panorama, splatted in three passes with atomics, then resolved. The oracle's float
+// arithmetic in its order (no fused multiply-adds); atan2f and cosf are CUDA's, within a
+// few ulp of the host's, so the placement agrees to rounding.
+#include "common.cuh"
+
+namespace cs::cudak {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+
+// std::max and std::clamp as the oracle calls them (the first argument where the
+// comparison is false, NaN included), not fmaxf / fminf.
+__device__ __forceinline__ float stdMax(float a, float b) { return a < b ? b : a; }
+__device__ __forceinline__ float stdClamp(float v, float lo, float hi) { return v < lo ? lo : (hi < v ? hi : v); }
+
+// Two inverse ranges on one surface: +inf's 0 agrees only with nearly 0.
+__device__ __forceinline__ bool sameSurface(float inverseA, float inverseB) {
+  return fabsf(inverseA - inverseB) <= kPanoramaAgreement * stdMax(inverseA, inverseB);
+}
+
+struct Placed {
+  float column, row, range;
+};
+
+// Pixel (x, y)'s column and row in the panorama and its range from the centre; false where
+// it has no estimate or no ray. Every thread places its neighbours itself: recomputing four
+// placements is cheaper than a pass and a buffer to share them.
+__device__ bool placePixel(const Img& radial, const Img& rays, int x, int y, const PanoramaParams& p, Placed& out) {
+  const float r = at(radial, x, y);
+  const float dx = at(rays, x, y, 0), dy = at(rays, x, y, 1), dz = at(rays, x, y, 2);
+  if (isnan(r) || !isfinite(dx) || !isfinite(dy) || !isfinite(dz)) return false;
+  const bool finite = isfinite(r);  // a point at infinity is its direction
+  const float px = finite ? r * dx + p.centre[0] : dx, py = finite ? r * dy + p.centre[1] : dy,
+              pz = finite ? r * dz + p.centre[2] : dz;
+  const float lon = atan2f(px, pz), lat = atan2f(-py, sqrtf(px * px + pz * pz));
+  const float width = float(p.width), height = float(p.width / 2);
+  out.column = (lon + kPi) / (2.f * kPi) * width - 0.5f;
+  out.row = (kPi / 2.f - lat) / kPi * height - 0.5f;
+  out.range = finite ? sqrtf(px * px + py * py + pz * pz) : __int_as_float(0x7f800000);
+  return true;
+}
+
+// The footprint's half-sizes (cpu/panorama.cpp footprint): half the largest steps to the
+// neighbours on the same surface along the camera's rows (a) plus along its columns (b), at
+// least half a pixel, at most kPanoramaMaxSplat of arc (a column's arc shrinks with cos of
+// the latitude).
+__device__ void footprint(const Img& radial, const Img& rays, int x, int y, const Placed& own, const PanoramaParams& p,
+                          float& hx, float& hy) {
+  const float width = float(p.width), height = float(p.width / 2), inverse = 1.f / at(radial, x, y);
+  float a[2] = {0.f, 0.f}, b[2] = {0.f, 0.f};
+  const int nx[4] = {x + 1, x, x - 1, x}, ny[4] = {y, y + 1, y, y - 1};
+  for (int k = 0; k < 4; ++k) {
+    if (!inside(radial, nx[k], ny[k])) continue;
+    const float rn = at(radial, nx[k], ny[k]);
+    Placed n;
+    if (isnan(rn) || !sameSurface(1.f / rn, inverse) || !placePixel(radial, rays, nx[k], ny[k], p, n)) continue;
+    float step[2] = {n.column - own.column, n.row - own.row};
+    if (fabsf(step[0]) > 0.5f * width) step[0] = remainderf(step[0], width);  // across the seam
+    float* along = ny[k] == y ? a : b;
+    for (int i = 0; i < 2; ++i) along[i] = stdMax(along[i], fabsf(step[i]));
+  }
+  const float latitude = kPi / 2.f - kPi * (own.row + 0.5f) / height;
+  const float columns = kPanoramaMaxSplat / stdMax(cosf(latitude), 2.f * kPanoramaMaxSplat / width);
+  hx = stdClamp(0.5f * (a[0] + b[0]), 0.5f, stdMax(0.5f, columns));
+  hy = stdClamp(0.5f * (a[1] + b[1]), 0.5f, kPanoramaMaxSplat);
+}
+
+// One thread per camera pixel.
+__global__ void panoramaPlaceKernel(Img place, Img radial, Img rays, PanoramaParams p) {
+  beginKernel();
+  const int x = blockIdx.x * blockDim.x + threadIdx.x, y = blockIdx.y * blockDim.y + threadIdx.y;
+  if (x >= radial.width || y >= radial.height) return;
+  const float nan = __int_as_float(0x7fc00000);  // the oracle's quiet NaN, bit for bit
+  float values[kPanoramaPlaceChannels] = {nan, nan, nan, nan, nan};
+  Placed own;
+  if (placePixel(radial, rays, x, y, p, own)) {
+    float hx, hy;
+    footprint(radial, rays, x, y, own, p, hx, hy);
+    values[0] = own.column, values[1] = own.row, values[2] = hx, values[3] = hy, values[4] = own.range;
+  }
+  for (int c = 0; c < kPanoramaPlaceChannels; ++c) at(place, x, y, c) = values[c];
+}
+
+// *address = max(*address, value) for accumulators that start at 0 and only grow: the
+// order of non-negative floats is that of their bits as ints, and a negative value (bits
+// negative as an int) never wins over them. The plain load first skips the atomic where it
+// cannot win (most splats, since neighbouring footprints overlap); a stale load is never
+// above the stored value, so it only costs an atomic. A NaN value never wins, as in the
+// oracle's std::max(accumulator, value).
+__device__ __forceinline__ void growTo(float* address, float value) {
+  if (value > *address) atomicMax(reinterpret_cast<int*>(address), __float_as_int(value));
+}
+
+// One splat's contribution to the panorama pixel at acc (6 channels), by pass. best and
+// nearest are read plainly: the passes that write them finished before this launch.
+__device__ void splatInto(float* acc, int pass, float confidence, float weight, float inverse, float grey) {
+  if (pass == kPanoramaBest) {
+    growTo(acc, confidence);
+  } else if (pass == kPanoramaNearest) {
+    if (confidence >= 0.5f * acc[0]) growTo(acc + 1, inverse);
+  } else if (confidence >= 0.5f * acc[0] && sameSurface(inverse, acc[1])) {
+    atomicAdd(acc + 2, weight * inverse);
+    atomicAdd(acc + 3, weight);
+    if (isfinite(grey)) atomicAdd(acc + 4, weight * grey), atomicAdd(acc + 5, weight);
+  }
+}
+
+// One thread per camera pixel, over the panorama pixels its footprint covers: columns
+// ceil(column - hx) .. floor(column + hx), wrapped modulo the width (each column as often
+// as the oracle's loop takes it), and the rows of that span inside the panorama.
+__global__ void panoramaSplatKernel(Img accum, Img place, Img confidence, Img grey, PanoramaParams p) {
+  beginKernel();
+  const int cx = blockIdx.x * blockDim.x + threadIdx.x, cy = blockIdx.y * blockDim.y + threadIdx.y;
+  if (cx >= place.width || cy >= place.height) return;
+  const float column = at(place, cx, cy, 0), c0 = at(confidence, cx, cy);
+  if (isnan(column) || (p.minConfidence > 0.f && !(c0 >= p.minConfidence))) return;
+  const float c = isfinite(c0) ? c0 : 0.f, weight = isfinite(c0) ? stdMax(c0, 1e-6f) : 1e-6f;
+  const float row = at(place, cx, cy, 1), hx = at(place, cx, cy, 2), hy = at(place, cx, cy, 3);
+  const float inverse = 1.f / at(place, cx, cy, 4), g = grey.data ? at(grey, cx, cy) : __int_as_float(0x7fc00000);
+  const int width = p.width, height = p.width / 2;
+  const int x0 = int(ceilf(column - hx)), x1 = int(floorf(column + hx));
+  const int y0 = max(0, int(ceilf(row - hy))), y1 = min(height - 1, int(floorf(row + hy)));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0, wrapped = ((x0 % width) + width) % width; x <= x1;
+         ++x, wrapped = wrapped + 1 == width ? 0 : wrapped + 1)
+      splatInto(&at(accum, wrapped, y), p.pass, c, weight, inverse, g);
+}
+
+// One thread per panorama pixel: the mean over the nearest surface, then the pixel's
+// accumulator back to 0 for the next panorama.
+__global__ void panoramaResolveKernel(float* range, float* grey, float* confidence, float* accum, long long n) {
+  beginKernel();
+  const long long i = (long long)blockIdx.x * blockDim.x + threadIdx.x;
+  if (i >= n) return;
+  float* acc = accum + i * kPanoramaChannels;
+  const float nan = __int_as_float(0x7fc00000);
+  float r = nan, g = nan, c = nan;
+  if (acc[3] > 0.f) {
+    r = acc[3] / acc[2];  // +inf where every splat was at infinity
+    c = acc[0];
+    if (acc[5] > 0.f) g = acc[4] / acc[5];
+  }
+  range[i] = r, grey[i] = g, confidence[i] = c;
+  for (int k = 0; k < kPanoramaChannels; ++k) acc[k] = 0.f;
+}
+
+}  // namespace
+
+cudaError_t launchPanoramaPlace(cudaStream_t s, Img place, Img radial, Img rays, const PanoramaParams& p) {
+  const dim3 block(16, 8);
+  CS_LAUNCH(panoramaPlaceKernel, grid2d(radial.width, radial.height, block), block, 0, s, place, radial, rays, p);
+  return cudaGetLastError();
+}
+
+cudaError_t launchPanoramaSplat(cudaStream_t s, Img accum, Img place, Img confidence, Img grey,
+                                const PanoramaParams& p) {
+  const dim3 block(16, 8);
+  CS_LAUNCH(panoramaSplatKernel, grid2d(place.width, place.height, block), block, 0, s, accum, place, confidence, grey,
+            p);
+  return cudaGetLastError();
+}
+
+cudaError_t launchPanoramaResolve(cudaStream_t s, Img range, Img grey, Img confidence, Img accum) {
+  const long long n = (long long)accum.width * accum.height;
+  const int block = 256;
+  CS_LAUNCH(panoramaResolveKernel, unsigned((n + block - 1) / block), block, 0, s, range.data, grey.data,
+            confidence.data, accum.data, n);
+  return cudaGetLastError();
+}
+
+}  // namespace cs::cudak
