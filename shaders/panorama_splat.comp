@@ -4,7 +4,12 @@
 // (backend_cpu/panorama.cpp panoramaSplat, backend.hpp): each pixel's footprint box, by
 // pc.pass the best confidence, the nearest inverse range or the sums. Pixels overlap, so
 // the updates are core 32-bit atomics on the floats' bits: atomicMax where the values are
-// >= 0 (their order is their bits'), a compare-and-swap loop for the float sums.
+// >= 0 (their order is their bits'), a compare-and-swap loop for the float sums; or, with
+// CS_ATOMIC_FLOAT_ADD (where the device has shaderBufferFloat32AtomicAdd), a native float
+// atomicAdd for the sums, which spares the loop's retries under contention.
+#ifdef CS_ATOMIC_FLOAT_ADD
+#extension GL_EXT_shader_atomic_float : require
+#endif
 #include "common.glsl"
 
 // The accumulator's floats as their bits (the same address as an FBuf).
@@ -31,6 +36,9 @@ void maxInto(uint k, float value) {
   if (value > 0.0) atomicMax(pc.accum.v[k], floatBitsToUint(value));
 }
 
+#ifdef CS_ATOMIC_FLOAT_ADD
+void addInto(uint k, float value) { atomicAdd(FBuf(pc.accum).v[k], value); }
+#else
 void addInto(uint k, float value) {
   uint seen = pc.accum.v[k];
   for (;;) {
@@ -40,6 +48,7 @@ void addInto(uint k, float value) {
     seen = before;
   }
 }
+#endif
 
 void main() {
   const int x = int(gl_GlobalInvocationID.x), y = int(gl_GlobalInvocationID.y);
@@ -63,7 +72,8 @@ void main() {
   const int y0 = max(0, int(ceil(top))), y1 = min(H - 1, int(floor(bottom)));
   for (int py = y0; py <= y1; ++py)
     for (int px = x0; px <= x1; ++px) {
-      const uint k = 6u * uint(py * W + (px % W + W) % W);  // past 2^31 at the widest
+      // px >= -W (hx <= W / 2): px + W is not negative, where GLSL's % is undefined.
+      const uint k = 6u * (uint(py) * uint(W) + uint(px + W) % uint(W));  // past 2^31 at the widest
       if (pc.pass == kBest) {
         maxInto(k, c);
         continue;
