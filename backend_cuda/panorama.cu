@@ -108,25 +108,64 @@ __device__ void splatInto(float* acc, int pass, float confidence, float weight, 
   }
 }
 
-// One thread per camera pixel, over the panorama pixels its footprint covers: columns
-// ceil(column - hx) .. floor(column + hx), wrapped modulo the width (each column as often
-// as the oracle's loop takes it), and the rows of that span inside the panorama.
+// A footprint's box: columns x0 .. x0 + columns - 1 (wrapped modulo the width when
+// splatted: each column as often as the oracle's loop takes it) and rows y0 .. y0 + rows - 1
+// inside the panorama; and what it adds.
+struct Box {
+  int x0 = 0, y0 = 0, columns = 0, rows = 0;
+  float confidence = 0.f, weight = 0.f, inverse = 0.f, grey = 0.f;
+  __device__ int area() const { return columns * rows; }
+};
+
+__device__ Box boxOf(Img place, Img confidence, Img grey, int cx, int cy, const PanoramaParams& p) {
+  Box b;
+  if (cx >= place.width || cy >= place.height) return b;
+  const float column = at(place, cx, cy, 0), c0 = at(confidence, cx, cy);
+  if (isnan(column) || (p.minConfidence > 0.f && !(c0 >= p.minConfidence))) return b;
+  b.confidence = isfinite(c0) ? c0 : 0.f;
+  b.weight = isfinite(c0) ? stdMax(c0, 1e-6f) : 1e-6f;
+  const float row = at(place, cx, cy, 1), hx = at(place, cx, cy, 2), hy = at(place, cx, cy, 3);
+  b.inverse = 1.f / at(place, cx, cy, 4);
+  b.grey = grey.data ? at(grey, cx, cy) : __int_as_float(0x7fc00000);
+  b.x0 = int(ceilf(column - hx));
+  b.columns = int(floorf(column + hx)) - b.x0 + 1;
+  b.y0 = max(0, int(ceilf(row - hy)));
+  b.rows = max(0, min(p.width / 2 - 1, int(floorf(row + hy))) - b.y0 + 1);
+  return b;
+}
+
+// Pixel k (row-major) of box b.
+__device__ void splatPixel(Img accum, const Box& b, int k, const PanoramaParams& p) {
+  const int x = b.x0 + k % b.columns, y = b.y0 + k / b.columns;
+  splatInto(&at(accum, ((x % p.width) + p.width) % p.width, y), p.pass, b.confidence, b.weight, b.inverse, b.grey);
+}
+
+// Boxes of at most this many pixels are their own thread's work.
+constexpr int kOwnArea = 32;
+
+// One thread per camera pixel (blocks of whole warps, no thread leaving early: the warp
+// votes). A thread splats its own box when it is small; near the poles a footprint spans up
+// to half the panorama's columns, and such a box is shared out over its warp's lanes, so no
+// thread runs hundreds of times longer than the others beside it.
 __global__ void panoramaSplatKernel(Img accum, Img place, Img confidence, Img grey, PanoramaParams p) {
   beginKernel();
   const int cx = blockIdx.x * blockDim.x + threadIdx.x, cy = blockIdx.y * blockDim.y + threadIdx.y;
-  if (cx >= place.width || cy >= place.height) return;
-  const float column = at(place, cx, cy, 0), c0 = at(confidence, cx, cy);
-  if (isnan(column) || (p.minConfidence > 0.f && !(c0 >= p.minConfidence))) return;
-  const float c = isfinite(c0) ? c0 : 0.f, weight = isfinite(c0) ? stdMax(c0, 1e-6f) : 1e-6f;
-  const float row = at(place, cx, cy, 1), hx = at(place, cx, cy, 2), hy = at(place, cx, cy, 3);
-  const float inverse = 1.f / at(place, cx, cy, 4), g = grey.data ? at(grey, cx, cy) : __int_as_float(0x7fc00000);
-  const int width = p.width, height = p.width / 2;
-  const int x0 = int(ceilf(column - hx)), x1 = int(floorf(column + hx));
-  const int y0 = max(0, int(ceilf(row - hy))), y1 = min(height - 1, int(floorf(row + hy)));
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0, wrapped = ((x0 % width) + width) % width; x <= x1;
-         ++x, wrapped = wrapped + 1 == width ? 0 : wrapped + 1)
-      splatInto(&at(accum, wrapped, y), p.pass, c, weight, inverse, g);
+  const Box own = boxOf(place, confidence, grey, cx, cy, p);
+  const int area = own.area();
+  if (area <= kOwnArea)
+    for (int k = 0; k < area; ++k) splatPixel(accum, own, k, p);
+  const int lane = int(threadIdx.x + threadIdx.y * blockDim.x) % 32;
+  for (unsigned large = __ballot_sync(0xffffffffu, area > kOwnArea); large; large &= large - 1) {
+    const int source = __ffs(int(large)) - 1;
+    Box b;
+    b.x0 = __shfl_sync(0xffffffffu, own.x0, source), b.y0 = __shfl_sync(0xffffffffu, own.y0, source);
+    b.columns = __shfl_sync(0xffffffffu, own.columns, source), b.rows = __shfl_sync(0xffffffffu, own.rows, source);
+    b.confidence = __shfl_sync(0xffffffffu, own.confidence, source);
+    b.weight = __shfl_sync(0xffffffffu, own.weight, source);
+    b.inverse = __shfl_sync(0xffffffffu, own.inverse, source);
+    b.grey = __shfl_sync(0xffffffffu, own.grey, source);
+    for (int k = lane; k < b.area(); k += 32) splatPixel(accum, b, k, p);
+  }
 }
 
 // One thread per panorama pixel: the mean over the nearest surface, then the pixel's
@@ -157,7 +196,7 @@ cudaError_t launchPanoramaPlace(cudaStream_t s, Img place, Img radial, Img rays,
 
 cudaError_t launchPanoramaSplat(cudaStream_t s, Img accum, Img place, Img confidence, Img grey,
                                 const PanoramaParams& p) {
-  const dim3 block(16, 8);
+  const dim3 block(16, 8);  // whole warps: the kernel votes across each
   CS_LAUNCH(panoramaSplatKernel, grid2d(place.width, place.height, block), block, 0, s, accum, place, confidence, grey,
             p);
   return cudaGetLastError();

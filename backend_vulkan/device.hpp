@@ -28,6 +28,7 @@ namespace cs::vk {
   X(vkGetPhysicalDeviceProperties)            \
   X(vkGetPhysicalDeviceProperties2)           \
   X(vkGetPhysicalDeviceFeatures2)             \
+  X(vkEnumerateDeviceExtensionProperties)     \
   X(vkGetPhysicalDeviceQueueFamilyProperties) \
   X(vkGetPhysicalDeviceMemoryProperties)      \
   X(vkCreateDevice)                           \
@@ -149,7 +150,8 @@ struct Candidate {
   VkPhysicalDeviceProperties props{};
   uint32_t queueFamily = 0, queueCount = 0;  // the first family that computes, and its queues
   bool float64 = false, int64 = false;
-  std::string unusable;  // why this device cannot run the backend ("" if it can)
+  bool atomicFloatAdd = false;  // VK_EXT_shader_atomic_float's shaderBufferFloat32AtomicAdd
+  std::string unusable;         // why this device cannot run the backend ("" if it can)
 };
 
 std::vector<Candidate> candidates(const Instance& inst);
@@ -183,6 +185,7 @@ struct SharedDevice {
     std::mutex lock;
   };
   std::vector<std::unique_ptr<Queue>> queues;  // every queue of the candidate's family
+  bool atomicFloatAdd = false;                 // enabled at creation (Candidate::atomicFloatAdd)
   bool abandoned = false;                      // set by a backend that saw the device hang: never destroyed (leaked)
   unsigned queuesTaken = 0;
 

@@ -89,6 +89,7 @@ VulkanBackend::VulkanBackend(const std::string& spec) : instance_(sharedInstance
   SharedDevice::Queue* queue = nullptr;
   device_ = sharedDevice(instance_, *c, queue);
   dev_ = device_->device;
+  atomicFloatAdd_ = device_->atomicFloatAdd;  // what the device was made with, by whichever backend
   queue_ = queue->queue;
   queueLock_ = &queue->lock;
   queueFamily_ = c->queueFamily;

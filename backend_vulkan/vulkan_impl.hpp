@@ -207,6 +207,7 @@ class VulkanBackend final : public Backend {
   PdTile pdTile_ = PdTile::Narrow;        // the largest tile of primal_dual.comp the device holds
   bool subgroupArithmetic_ = false;       // subgroup arithmetic and shuffles in compute shaders
   uint32_t subgroupSize_ = 1;             // the device's subgroup size (VkPhysicalDeviceSubgroupProperties)
+  bool atomicFloatAdd_ = false;           // device_ has float atomic add (panorama_splat's variant)
   std::shared_ptr<SharedDevice> device_;  // shared with the other backends on this GPU
   VkDevice dev_ = VK_NULL_HANDLE;         // device_'s
   VkQueue queue_ = VK_NULL_HANDLE;        // one of device_'s queues, maybe shared
