@@ -4,6 +4,7 @@
 // fusePanorama does, on the CPU bit for bit and on the GPU backends to rounding.
 #include <cstring>
 #include <limits>
+#include <memory>
 
 #include "curvestereo/backends.hpp"
 #include "curvestereo/rig_fusion.hpp"
@@ -36,6 +37,22 @@ Params shortSolve(const CameraRig& rig) {
 bool sameResult(const DepthResult& a, const DepthResult& b) {
   return a.valid.data == b.valid.data && test::sameBits(a.depth.radial, b.depth.radial) &&
          test::sameBits(a.confidence, b.confidence) && test::sameBits(a.disparity, b.disparity);
+}
+
+// ring4 solved once on the CPU with every pair, for the panorama's tests.
+struct SolvedRing {
+  std::unique_ptr<RigStereo> stereo;
+  RigResult result;
+  PanoramaFrame frame;
+};
+const SolvedRing& solvedRing() {
+  static const SolvedRing solved = [] {
+    const CameraRig& rig = ring4().layout.rig;
+    SolvedRing s{std::make_unique<RigStereo>(rig, choosePairs(rig), shortSolve(rig), "cpu"), {}, panoramaFrame(rig)};
+    s.result = s.stereo->compute(ring4().images);
+    return s;
+  }();
+  return solved;
 }
 
 std::vector<std::string> backendsHere() {
@@ -77,10 +94,9 @@ TEST_CASE("a rig's directions solved concurrently equal one after the other, bit
 // (the resolve left the accumulator clean).
 TEST_CASE("the panorama on every backend here equals the CPU's to rounding, frame after frame") {
   const synth::SynthRig& synthetic = ring4();
+  const auto& [stereoPtr, r, frame] = solvedRing();
   const CameraRig& rig = synthetic.layout.rig;
-  RigStereo stereo(rig, choosePairs(rig), shortSolve(rig), "cpu");
-  const RigResult r = stereo.compute(synthetic.images);
-  const PanoramaFrame frame = panoramaFrame(rig);
+  const RigStereo& stereo = *stereoPtr;
   const Panorama cpu = fusePanorama(rig, r.cameras, synthetic.images, frame, 128);
   for (const std::string& backend : backendsHere()) {
     CAPTURE(backend);
@@ -128,10 +144,9 @@ TEST_CASE("a direction's error reaches the caller once every solve has ended, an
 
 TEST_CASE("PanoramaFusion reused over frames, or from RigStereo's rays, fuses as fusePanorama, bit for bit") {
   const synth::SynthRig& synthetic = ring4();
+  const auto& [stereoPtr, r, frame] = solvedRing();
   const CameraRig& rig = synthetic.layout.rig;
-  RigStereo stereo(rig, choosePairs(rig), shortSolve(rig), "cpu");
-  const RigResult r = stereo.compute(synthetic.images);
-  const PanoramaFrame frame = panoramaFrame(rig);
+  const RigStereo& stereo = *stereoPtr;
   PanoramaFusion fusion(rig, frame, 128), fromStereosRays(rig, frame, 128, stereo.rays());
   for (float minConfidence : {0.f, 0.3f}) {
     CAPTURE(minConfidence);
