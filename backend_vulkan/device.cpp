@@ -232,8 +232,11 @@ std::vector<Candidate> candidates(const Instance& inst) {
     std::vector<VkQueueFamilyProperties> qf(nq);
     inst.fn.vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, qf.data());
     bool compute = false;
-    for (uint32_t i = 0; i < nq && !compute; ++i)
-      if (qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT) compute = true, c.queueFamily = i, c.queueCount = qf[i].queueCount;
+    for (uint32_t i = 0; i < nq; ++i) {
+      if (!(qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT) || qf[i].queueCount == 0) continue;
+      if (!compute) compute = true, c.queueFamily = i, c.queueCount = qf[i].queueCount;
+      c.computeFamilies.emplace_back(i, qf[i].queueCount);
+    }
     if (c.props.apiVersion < VK_API_VERSION_1_2)
       c.unusable = "supports only Vulkan < 1.2";
     else if (!f12.bufferDeviceAddress)
@@ -360,11 +363,17 @@ std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& inst
   if (!d) {
     d = std::make_shared<SharedDevice>();
     d->instance = instance;
-    const std::vector<float> priorities(std::max(1u, c.queueCount), 1.f);
-    auto qci = vkStruct<VkDeviceQueueCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO);
-    qci.queueFamilyIndex = c.queueFamily;
-    qci.queueCount = uint32_t(priorities.size());
-    qci.pQueuePriorities = priorities.data();
+    uint32_t most = 1;
+    for (const auto& [family, count] : c.computeFamilies) most = std::max(most, count);
+    const std::vector<float> priorities(most, 1.f);
+    std::vector<VkDeviceQueueCreateInfo> qcis;
+    for (const auto& [family, count] : c.computeFamilies) {
+      auto qci = vkStruct<VkDeviceQueueCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO);
+      qci.queueFamilyIndex = family;
+      qci.queueCount = count;
+      qci.pQueuePriorities = priorities.data();
+      qcis.push_back(qci);
+    }
     auto f12 = vkStruct<VkPhysicalDeviceVulkan12Features>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES);
     f12.bufferDeviceAddress = VK_TRUE;
     auto f2 = vkStruct<VkPhysicalDeviceFeatures2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2);
@@ -384,8 +393,8 @@ std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& inst
     d->atomicFloatAdd = c.atomicFloatAdd;
     auto dci = vkStruct<VkDeviceCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO);
     dci.pNext = &f2;
-    dci.queueCreateInfoCount = 1;
-    dci.pQueueCreateInfos = &qci;
+    dci.queueCreateInfoCount = uint32_t(qcis.size());
+    dci.pQueueCreateInfos = qcis.data();
     dci.enabledExtensionCount = uint32_t(extensions.size());
     dci.ppEnabledExtensionNames = extensions.data();
     const VkResult r = instance->fn.vkCreateDevice(c.device, &dci, nullptr, &d->device);
@@ -393,11 +402,14 @@ std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& inst
       d->device = VK_NULL_HANDLE;
       throw Error("vulkan backend: vkCreateDevice failed: " + resultText(r));
     }
-    for (uint32_t i = 0; i < qci.queueCount; ++i) {
-      auto q = std::make_unique<SharedDevice::Queue>();
-      instance->fn.vkGetDeviceQueue(d->device, c.queueFamily, i, &q->queue);
-      d->queues.push_back(std::move(q));
-    }
+    for (uint32_t i = 0; i < most; ++i)
+      for (const auto& [family, count] : c.computeFamilies) {
+        if (i >= count) continue;
+        auto q = std::make_unique<SharedDevice::Queue>();
+        q->family = family;
+        instance->fn.vkGetDeviceQueue(d->device, family, i, &q->queue);
+        d->queues.push_back(std::move(q));
+      }
     liveDevices[c.device] = d;
   }
   queue = d->queues[d->queuesTaken++ % d->queues.size()].get();

@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cs::vk {
@@ -149,6 +150,10 @@ struct Candidate {
   VkPhysicalDevice device = VK_NULL_HANDLE;
   VkPhysicalDeviceProperties props{};
   uint32_t queueFamily = 0, queueCount = 0;  // the first family that computes, and its queues
+  // Every family that computes, with its queue count: a rig's backends are dealt queues from
+  // all of them, since a driver may run two families' work side by side where it runs one
+  // family's queues one after another.
+  std::vector<std::pair<uint32_t, uint32_t>> computeFamilies;
   bool float64 = false, int64 = false;
   bool atomicFloatAdd = false;  // VK_EXT_shader_atomic_float's shaderBufferFloat32AtomicAdd
   std::string unusable;         // why this device cannot run the backend ("" if it can)
@@ -182,11 +187,14 @@ struct SharedDevice {
   VkDevice device = VK_NULL_HANDLE;
   struct Queue {
     VkQueue queue = VK_NULL_HANDLE;
+    uint32_t family = 0;
     std::mutex lock;
   };
-  std::vector<std::unique_ptr<Queue>> queues;  // every queue of the candidate's family
-  bool atomicFloatAdd = false;                 // enabled at creation (Candidate::atomicFloatAdd)
-  bool abandoned = false;                      // set by a backend that saw the device hang: never destroyed (leaked)
+  // Every queue of every family that computes, the families taken in turn (the first queue
+  // of each, then the second of each, ...), so that consecutive backends use other families.
+  std::vector<std::unique_ptr<Queue>> queues;
+  bool atomicFloatAdd = false;  // enabled at creation (Candidate::atomicFloatAdd)
+  bool abandoned = false;       // set by a backend that saw the device hang: never destroyed (leaked)
   unsigned queuesTaken = 0;
 
   SharedDevice() = default;
@@ -195,7 +203,7 @@ struct SharedDevice {
   ~SharedDevice();
 };
 
-// The logical device of candidate c (made on first use, with every queue of its family and
+// The logical device of candidate c (made on first use, with every queue of its compute families and
 // the features the backend enables), and the queue this caller is to use.
 // Throws cs::Error.
 std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& instance, const Candidate& c,

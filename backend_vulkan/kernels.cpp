@@ -865,7 +865,9 @@ void VulkanBackend::doPanoramaSplat(const Buffer& accum, const Buffer& place, co
   PcPanoramaSplat pc{addr(accum),     addr(place),     addr(confidence),  addr(hasGrey ? grey : place),
                      place.width,     place.height,    p.width,           p.pass,
                      hasGrey ? 1 : 0, p.minConfidence, kPanoramaAgreement};
-  dispatch(atomicFloatAdd_ ? kPanoramaSplatAtomic : kPanoramaSplat, pc, place.width, place.height);
+  const Shader s = subgroupBallot_ ? (atomicFloatAdd_ ? kPanoramaSplatSubgroupAtomic : kPanoramaSplatSubgroup)
+                                   : (atomicFloatAdd_ ? kPanoramaSplatAtomic : kPanoramaSplat);
+  dispatch(s, pc, place.width, place.height);
 }
 
 void VulkanBackend::doPanoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence,

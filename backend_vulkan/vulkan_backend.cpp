@@ -79,6 +79,12 @@ VulkanBackend::VulkanBackend(const std::string& spec) : instance_(sharedInstance
                         (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
                         (subgroup.supportedOperations & needed) == needed && subgroup.subgroupSize >= 1 &&
                         !(useSubgroups && std::string(useSubgroups) == "0");
+  // Subgroup ballots (and their broadcasts) in compute shaders, for panorama_splat.comp's
+  // shared large footprints; off with the rest under CURVESTEREO_VULKAN_SUBGROUPS=0.
+  const VkSubgroupFeatureFlags ballots = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+  subgroupBallot_ =
+      props_.apiVersion >= VK_API_VERSION_1_1 && (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
+      (subgroup.supportedOperations & ballots) == ballots && !(useSubgroups && std::string(useSubgroups) == "0");
   subgroupSize_ = subgroup.subgroupSize;
   description_ = std::string(props_.deviceName) + " (" + typeName(props_.deviceType) + ", Vulkan " +
                  std::to_string(VK_API_VERSION_MAJOR(props_.apiVersion)) + "." +
@@ -92,7 +98,7 @@ VulkanBackend::VulkanBackend(const std::string& spec) : instance_(sharedInstance
   atomicFloatAdd_ = device_->atomicFloatAdd;  // what the device was made with, by whichever backend
   queue_ = queue->queue;
   queueLock_ = &queue->lock;
-  queueFamily_ = c->queueFamily;
+  queueFamily_ = queue->family;
 
   auto pci = vkStruct<VkCommandPoolCreateInfo>(VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO);
   pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;

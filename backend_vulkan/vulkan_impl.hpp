@@ -206,6 +206,7 @@ class VulkanBackend final : public Backend {
   bool deviceFloat64_ = false;            // the device has shaderFloat64 (triangulate always uses it)
   PdTile pdTile_ = PdTile::Narrow;        // the largest tile of primal_dual.comp the device holds
   bool subgroupArithmetic_ = false;       // subgroup arithmetic and shuffles in compute shaders
+  bool subgroupBallot_ = false;           // subgroup ballots and broadcasts in compute shaders
   uint32_t subgroupSize_ = 1;             // the device's subgroup size (VkPhysicalDeviceSubgroupProperties)
   bool atomicFloatAdd_ = false;           // device_ has float atomic add (panorama_splat's variant)
   std::shared_ptr<SharedDevice> device_;  // shared with the other backends on this GPU

@@ -56,7 +56,8 @@ std::vector<Output> panoramaPlaceCase(Backend& b) {
 }
 
 // Two cameras' footprints placed at random (seams, the top and bottom rows, overlaps at
-// several ranges, +inf, NaN confidences and greys, one camera gated by a confidence), each
+// several ranges, +inf, NaN confidences and greys, one camera gated by a confidence, and
+// some boxes near the top pole over 32 pixels wide and up to the whole width), each
 // pass over both before the next; the accumulator, what it resolves to, and the accumulator
 // left cleared for the next frame.
 std::vector<Output> panoramaSplatCase(Backend& b) {
@@ -74,6 +75,11 @@ std::vector<Output> panoramaSplatCase(Backend& b) {
                                                       0.5f + 2.5f * hash01(i + 2), 0.5f + 1.5f * hash01(i + 3),
                                                       (i % 11 == 0) ? inf : 1.f + 3.f * hash01(i + 4)};
         for (int k = 0; k < kPanoramaPlaceChannels; ++k) place.at(x, y, k) = values[k];
+        if ((x + 2 * y) % 23 == 0) {  // near a pole: tens of columns (GPUs share such a box out)
+          place.at(x, y, 1) = 0.5f + 2.f * hash01(i + 7);
+          place.at(x, y, 2) = 8.f + 16.f * hash01(i + 8);
+          place.at(x, y, 3) = 1.5f;
+        }
         if (i % 13 == 0) place.at(x, y, 0) = nan;
         confidence.at(x, y) = i % 17 == 0 ? nan : hash01(i + 5);
         grey.at(x, y) = i % 19 == 0 ? nan : hash01(i + 6);
