@@ -294,7 +294,8 @@ class RigResult:
     def panorama(
         self, width: int = 2048, centre: npt.ArrayLike | None = None, min_confidence: float = 0.0
     ) -> Panorama:
-        """The cameras' depths fused around the rig, as `curvestereo run --calib rig.yaml` does."""
+        """The cameras' depths fused around the rig, as `curvestereo run --calib rig.yaml` does,
+        on the RigStereo's backend."""
 
 class RigStereo:
     """The solver for a rig of N cameras: every pair both ways, fused per camera. Not for two

@@ -443,8 +443,9 @@ void bindRigs(pb::module_& m) {
 The same fusion as `curvestereo run --calib rig.yaml ...`'s panorama_range.exr (width:
 --panorama-width, even, 4 to 32768; min_confidence: --panorama-min-confidence, samples
 below it are left out). centre: 3 values in the body frame, default the rig's centre. The
-GIL is released while it runs. The fusion (the cameras' rays, its working memory) is kept
-by the RigStereo for the next call with the same width and centre.)doc");
+GIL is released while it runs. It runs on the RigStereo's backend; the fusion (the
+cameras' rays and the backend's buffers) is kept by the RigStereo for the next call with the
+same width and centre.)doc");
 
   pb::class_<PyRigStereo>(m, "RigStereo",
                           R"doc(The solver for a rig of N cameras: every pair solved both ways by Stereo,
