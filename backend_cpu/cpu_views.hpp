@@ -27,6 +27,13 @@ inline float sampleBilinear(const View& v, float x, float y, int c = 0) {
   return top * (1.f - fy) + bottom * fy;
 }
 
+// The estimate (u, w) of pixel (x, y) whose match moved by (wx, wy): w in float, u = |w|.
+inline void storeWarp(const View& u, const View& w, double wx, double wy, int x, int y) {
+  w.at(x, y, 0) = float(wx);
+  w.at(x, y, 1) = float(wy);
+  u.at(x, y) = float(std::sqrt(wx * wx + wy * wy));
+}
+
 inline bool masked(const View& mask, int x, int y) { return mask.inside(x, y) && mask.at(x, y) != 0.f; }
 
 // Forward-difference links of the masked grid: the gradient across an image or mask

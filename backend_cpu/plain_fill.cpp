@@ -85,10 +85,7 @@ void fillPlanes(const View& u, const View& w, const View& planeConfidence, const
       if (!(q >= 0.0) ||
           !cam.project(Vec3<double>(ray.x() + q * tPrime[0], ray.y() + q * tPrime[1], ray.z() + q * tPrime[2]), px))
         continue;
-      const double wx = px.x() - x, wy = px.y() - y;
-      w.at(x, y, 0) = float(wx);
-      w.at(x, y, 1) = float(wy);
-      u.at(x, y) = float(std::sqrt(wx * wx + wy * wy));
+      storeWarp(u, w, px.x() - x, px.y() - y, x, y);
       planeConfidence.at(x, y) = labels.at(lx, ly, 1);
     }
   });

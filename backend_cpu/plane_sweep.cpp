@@ -316,10 +316,7 @@ bool setWarp(const View& u, const View& w, const BuiltCamera& cam, const SweepPa
              double q, int x, int y) {
   Vec2<double> there;
   if (!projectHypothesis(cam, ray, p.t, q, there)) return false;
-  const double wx = there.x() - x, wy = there.y() - y;
-  w.at(x, y, 0) = float(wx);
-  w.at(x, y, 1) = float(wy);
-  u.at(x, y) = float(std::sqrt(wx * wx + wy * wy));
+  storeWarp(u, w, there.x() - x, there.y() - y, x, y);
   return true;
 }
 

@@ -44,10 +44,7 @@ void temporalFilter(const View& state, const View& u, const View& w, const View&
       state.at(x, y, 1) = float((1 - K) * (1 - K) * P + K * K * Rm);
       Vec2<double> moved;
       if (p.strength == 0.f || !cam.project(ray + q * tPrime, moved)) continue;
-      const double wx = moved.x() - x, wy = moved.y() - y;
-      w.at(x, y, 0) = float(wx);
-      w.at(x, y, 1) = float(wy);
-      u.at(x, y) = float(std::sqrt(wx * wx + wy * wy));
+      storeWarp(u, w, moved.x() - x, moved.y() - y, x, y);
       // The depth triangulate() would give from the new w, without a second pass.
       radial.at(x, y) = q > 0.0 ? float(1.0 / q) : std::numeric_limits<float>::infinity();
       for (int c = 0; c < 3; ++c)

@@ -14,6 +14,15 @@ struct V3 {
   double x, y, z;
 };
 
+// The estimate (u, w) of pixel (x, y) whose match lands at `there`: w in float, u = |w| (the
+// oracle's storeWarp).
+__device__ inline void storeWarp(const Img& u, const Img& w, const V2& there, int x, int y) {
+  const double wx = there.x - x, wy = there.y - y;
+  at(w, x, y, 0) = float(wx);
+  at(w, x, y, 1) = float(wy);
+  at(u, x, y) = float(sqrt(wx * wx + wy * wy));
+}
+
 // CameraModel's order.
 enum : int { kKannalaBrandt4 = 0, kUnified = 1, kExtendedUnified = 2, kDoubleSphere = 3, kPinholeRadtan = 4, kMei = 5 };
 constexpr double kEpsD = 2.220446049250313080847e-16;

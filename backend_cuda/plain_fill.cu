@@ -76,10 +76,7 @@ __global__ void fillPlanesKernel(Img u, Img w, Img planeConfidence, Img labels, 
       double(planes.data[i]) * ray.x + double(planes.data[i + 1]) * ray.y + double(planes.data[i + 2]) * ray.z;
   V2 px;
   if (!(q >= 0.0) || !cameraProject(cam, V3{ray.x + q * t.v[0], ray.y + q * t.v[1], ray.z + q * t.v[2]}, px)) return;
-  const double wx = px.x - x, wy = px.y - y;
-  at(w, x, y, 0) = float(wx);
-  at(w, x, y, 1) = float(wy);
-  at(u, x, y) = float(sqrt(wx * wx + wy * wy));
+  storeWarp(u, w, px, x, y);
   at(planeConfidence, x, y) = at(labels, lx, ly, 1);
 }
 

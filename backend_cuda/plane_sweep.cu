@@ -375,14 +375,6 @@ __device__ bool roundTrip(const Img& best, const Img& other, const Img& mask, co
   return true;
 }
 
-// The warp (u, w) of pixel (x, y) whose hypothesis lands at `there` (the oracle's setWarp).
-__device__ void storeWarp(const Img& u, const Img& w, const V2& there, int x, int y) {
-  const double wx = there.x - x, wy = there.y - y;
-  at(w, x, y, 0) = float(wx);
-  at(w, x, y, 1) = float(wy);
-  at(u, x, y) = float(sqrt(wx * wx + wy * wy));
-}
-
 // Pass 1: confidence everywhere; consistent pixels take the sweep's hypothesis.
 __global__ void sweepInitialiseKernel(Img u, Img w, Img confidence, Img best, Img other, Img mask, SweepParams p,
                                       ConsistencyParams c) {

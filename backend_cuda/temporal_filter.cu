@@ -44,10 +44,7 @@ __global__ void temporalFilterKernel(Img state, Img u, Img w, Img prior, Img rad
       V2 moved;
       if (p.strength != 0.f &&
           cameraProject(p.cam, V3{ray.x + q * p.tPrime[0], ray.y + q * p.tPrime[1], ray.z + q * p.tPrime[2]}, moved)) {
-        const double wx = moved.x - x, wy = moved.y - y;
-        at(w, x, y, 0) = float(wx);
-        at(w, x, y, 1) = float(wy);
-        at(u, x, y) = float(sqrt(wx * wx + wy * wy));
+        storeWarp(u, w, moved, x, y);
         // The depth triangulate() would give from the new w, without a second pass.
         const float nan = __int_as_float(0x7fc00000);
         at(radial, x, y) = q > 0.0 ? float(1.0 / q) : __int_as_float(0x7f800000);
