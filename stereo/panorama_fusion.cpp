@@ -7,19 +7,11 @@
 #include <limits>
 
 #include "curvestereo/backend.hpp"
+#include "curvestereo/fusion_checks.hpp"
 #include "curvestereo/parallel.hpp"
 #include "curvestereo/rig_fusion.hpp"
 
 namespace cs {
-
-namespace {
-
-template <class T>
-bool sameSize(const Image<T>& image, const Camera& cam) {
-  return image.width == cam.width && image.height == cam.height;
-}
-
-}  // namespace
 
 // One camera's buffers, and its centre in the panorama's frame.
 struct PanoramaCamera {
@@ -100,11 +92,7 @@ void PanoramaFusion::fuse(const std::vector<DepthResult>& cameras, const std::ve
                 " images for a rig of " + std::to_string(rig_.size()) + " cameras");
   for (int k = 0; k < rig_.size(); ++k) {
     const Camera& cam = rig_.cameras[size_t(k)];
-    const DepthResult& r = cameras[size_t(k)];
-    if (!sameSize(r.valid, cam) || !sameSize(r.depth.radial, cam) || !sameSize(r.confidence, cam))
-      throw Error("fusePanorama: a result for a camera of " + std::to_string(cam.width) + "x" +
-                  std::to_string(cam.height) +
-                  " px needs valid, depth and confidence at that size (Stereo::setOutputs)");
+    checkFusionInput(cameras[size_t(k)], cam, false, "fusePanorama");
     if (!images.empty() && !sameSize(images[size_t(k)], cam))
       throw Error("fusePanorama: image " + std::to_string(k) + " is not its camera's size");
   }

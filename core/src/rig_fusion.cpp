@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "curvestereo/fusion_checks.hpp"
 #include "curvestereo/parallel.hpp"
 
 namespace cs {
@@ -48,16 +49,7 @@ CameraRays cameraRays(const Camera& cam) {
   return rays;
 }
 
-namespace {
-
-template <class T>
-bool sameSize(const Image<T>& image, const Camera& cam) {
-  return image.width == cam.width && image.height == cam.height;
-}
-
-// The fusion reads a result's valid mask, radial depth and confidence (and, for a camera's
-// fusion, every other output), so each must be the camera's size.
-void checkResult(const DepthResult& r, const Camera& cam, bool allOutputs, const char* what) {
+void checkFusionInput(const DepthResult& r, const Camera& cam, bool allOutputs, const char* what) {
   const bool sizes = sameSize(r.valid, cam) && sameSize(r.depth.radial, cam) && sameSize(r.confidence, cam);
   const bool others = !allOutputs || (sameSize(r.disparity, cam) && sameSize(r.warp, cam) && sameSize(r.depth.z, cam) &&
                                       sameSize(r.depth.points, cam));
@@ -67,11 +59,9 @@ void checkResult(const DepthResult& r, const Camera& cam, bool allOutputs, const
                 (allOutputs ? "every output" : "valid, depth and confidence") + " at that size (Stereo::setOutputs)");
 }
 
-}  // namespace
-
 DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates) {
   if (estimates.empty()) throw Error("fuseCameraEstimates: no estimates");
-  for (const DepthResult* e : estimates) checkResult(*e, cam, true, "fuseCameraEstimates");
+  for (const DepthResult* e : estimates) checkFusionInput(*e, cam, true, "fuseCameraEstimates");
   DepthResult out;
   fuseCameraEstimates(cam, estimates, cameraRays(cam), out);
   return out;
@@ -126,7 +116,7 @@ void fusePixel(const std::vector<const DepthResult*>& estimates, const Eigen::Ve
 void fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates, const CameraRays& rays,
                          DepthResult& out) {
   if (estimates.empty()) throw Error("fuseCameraEstimates: no estimates");
-  for (const DepthResult* e : estimates) checkResult(*e, cam, false, "fuseCameraEstimates");
+  for (const DepthResult* e : estimates) checkFusionInput(*e, cam, false, "fuseCameraEstimates");
   if (!sameSize(rays, cam)) throw Error("fuseCameraEstimates: the rays are not the camera's size");
   bool withFlow = true;
   for (const DepthResult* e : estimates) withFlow = withFlow && sameSize(e->disparity, cam) && sameSize(e->warp, cam);
@@ -161,8 +151,8 @@ bool consistent(double inverseA, double inverseB, double tolerance) {
 }  // namespace
 
 long long crossCheck(const Rig& pair, DepthResult& forward, const DepthResult& backward, double tolerance) {
-  checkResult(forward, pair.cam0, false, "crossCheck");
-  checkResult(backward, pair.cam1, false, "crossCheck");
+  checkFusionInput(forward, pair.cam0, false, "crossCheck");
+  checkFusionInput(backward, pair.cam1, false, "crossCheck");
   const Image<Eigen::Vector3f> rays = cameraRays(pair.cam0);
   const BuiltCamera other(pair.cam1);
   long long invalidated = 0;
