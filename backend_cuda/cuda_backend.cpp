@@ -141,6 +141,12 @@ const CudaBackend::Slot& CudaBackend::slot(const Buffer& b) const {
   return s;
 }
 
+cudak::Img CudaBackend::onDevice(const Buffer& b) const { return img(slot(b).dev, b); }
+
+cudak::Img CudaBackend::onDeviceOrNone(const Buffer& b) const {
+  return b.id >= 0 ? onDevice(b) : cudak::Img{nullptr, 0, 0, 0};
+}
+
 float* CudaBackend::devicePointer(const Buffer& b) {
   const Slot& s = slot(b);
   if (s.dev != s.home) {  // moved by a kernel called outside a frame
@@ -356,8 +362,7 @@ void CudaBackend::doFields(const Buffer& mask, const Buffer& calibration, const 
   const Eigen::Vector3d dir = tPrime.normalized();
   cudak::FieldsBaseline baseline{};
   for (int i = 0; i < 3; ++i) baseline.tPrime[i] = tPrime[i], baseline.direction[i] = dir[i];
-  check(cudak::launchFields(stream_, img(slot(mask).dev, mask), img(slot(calibration).dev, calibration),
-                            img(slot(trajectory).dev, trajectory), p, baseline),
+  check(cudak::launchFields(stream_, onDevice(mask), onDevice(calibration), onDevice(trajectory), p, baseline),
         "fields");
   dropGraph();  // a new pose changes the frame's parameters (t' of triangulate)
 }
@@ -365,45 +370,43 @@ void CudaBackend::doFields(const Buffer& mask, const Buffer& calibration, const 
 void CudaBackend::doTriangulate(const Buffer& radial, const Buffer& points, const Buffer& w, const Buffer& mask,
                                 const CameraParams& cam0, const double tPrime[3]) {
   flush();
-  check(cudak::launchTriangulate(stream_, img(slot(radial).dev, radial), img(slot(points).dev, points),
-                                 img(slot(w).dev, w), img(slot(mask).dev, mask), cam0, tPrime),
-        "triangulate");
+  check(
+      cudak::launchTriangulate(stream_, onDevice(radial), onDevice(points), onDevice(w), onDevice(mask), cam0, tPrime),
+      "triangulate");
 }
 
 void CudaBackend::doCarryEstimate(const Buffer& dst, const Buffer& src, const Buffer& guess, const Buffer& motion,
                                   const Buffer& mask, const CarryParams& p) {
   flush();
-  const cudak::Img guessImg = guess.id >= 0 ? img(slot(guess).dev, guess) : cudak::Img{nullptr, 0, 0, 0};
-  check(cudak::launchCarryEstimate(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), guessImg,
-                                   slot(motion).dev, img(slot(mask).dev, mask), p),
-        "carryEstimate");
+  const cudak::Img guessImg = onDeviceOrNone(guess);
+  check(
+      cudak::launchCarryEstimate(stream_, onDevice(dst), onDevice(src), guessImg, slot(motion).dev, onDevice(mask), p),
+      "carryEstimate");
 }
 
 void CudaBackend::doTemporalFilter(const Buffer& state, const Buffer& u, const Buffer& w, const Buffer& prior,
                                    const Buffer& radial, const Buffer& points, const Buffer& confidence,
                                    const Buffer& mask, const TemporalParams& p) {
   flush();
-  const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
-  check(cudak::launchTemporalFilter(stream_, img(slot(state).dev, state), img(slot(u).dev, u), img(slot(w).dev, w),
-                                    img(slot(prior).dev, prior), img(slot(radial).dev, radial),
-                                    img(slot(points).dev, points), weight, img(slot(mask).dev, mask), p),
+  const cudak::Img weight = onDeviceOrNone(confidence);
+  check(cudak::launchTemporalFilter(stream_, onDevice(state), onDevice(u), onDevice(w), onDevice(prior),
+                                    onDevice(radial), onDevice(points), weight, onDevice(mask), p),
         "temporalFilter");
 }
 
 void CudaBackend::doFinishResult(const Buffer& valid, const Buffer& z, const Buffer& radial, const Buffer& points,
                                  const Buffer& disparity, const Buffer& warp, const Buffer& confidence) {
   flush();
-  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
-  check(cudak::launchFinishResult(stream_, on(valid), on(z), on(radial), on(points), on(disparity), on(warp),
-                                  on(confidence)),
+  check(cudak::launchFinishResult(stream_, onDevice(valid), onDevice(z), onDevice(radial), onDevice(points),
+                                  onDevice(disparity), onDevice(warp), onDevice(confidence)),
         "finishResult");
 }
 
 void CudaBackend::doPlainSupport(const Buffer& support, const Buffer& confidence, const Buffer& w, const Buffer& mask,
                                  const Buffer& levelImage, const Buffer& levelMask) {
   flush();
-  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
-  check(cudak::launchPlainSupport(stream_, on(support), on(confidence), on(w), on(mask), on(levelImage), on(levelMask)),
+  check(cudak::launchPlainSupport(stream_, onDevice(support), onDevice(confidence), onDevice(w), onDevice(mask),
+                                  onDevice(levelImage), onDevice(levelMask)),
         "plainSupport");
 }
 
@@ -411,40 +414,37 @@ void CudaBackend::doFillPlanes(const Buffer& u, const Buffer& w, const Buffer& p
                                const Buffer& planes, const Buffer& mask, const CameraParams& cam0,
                                const double tPrime[3]) {
   flush();
-  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
-  check(cudak::launchFillPlanes(stream_, on(u), on(w), on(planeConfidence), on(labels), on(planes), on(mask), cam0,
-                                tPrime),
+  check(cudak::launchFillPlanes(stream_, onDevice(u), onDevice(w), onDevice(planeConfidence), onDevice(labels),
+                                onDevice(planes), onDevice(mask), cam0, tPrime),
         "fillPlanes");
 }
 
 void CudaBackend::doPanoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays,
                                   const PanoramaParams& p) {
   flush();
-  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
-  check(cudak::launchPanoramaPlace(stream_, on(place), on(radial), on(rays), p), "panoramaPlace");
+  check(cudak::launchPanoramaPlace(stream_, onDevice(place), onDevice(radial), onDevice(rays), p), "panoramaPlace");
 }
 
 void CudaBackend::doPanoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence,
                                   const Buffer& grey, const PanoramaParams& p) {
   flush();
-  auto on = [&](const Buffer& b) { return b.id >= 0 ? img(slot(b).dev, b) : cudak::Img{nullptr, 0, 0, 0}; };
-  check(cudak::launchPanoramaSplat(stream_, on(accum), on(place), on(confidence), on(grey), p), "panoramaSplat");
+  check(cudak::launchPanoramaSplat(stream_, onDevice(accum), onDevice(place), onDevice(confidence),
+                                   onDeviceOrNone(grey), p),
+        "panoramaSplat");
 }
 
 void CudaBackend::doPanoramaResolve(const Buffer& range, const Buffer& grey, const Buffer& confidence,
                                     const Buffer& accum) {
   flush();
-  auto on = [&](const Buffer& b) { return img(slot(b).dev, b); };
-  check(cudak::launchPanoramaResolve(stream_, on(range), on(grey), on(confidence), on(accum)), "panoramaResolve");
+  check(cudak::launchPanoramaResolve(stream_, onDevice(range), onDevice(grey), onDevice(confidence), onDevice(accum)),
+        "panoramaResolve");
 }
 
 void CudaBackend::doRoundTrip(const Buffer& error, const Buffer& w, const Buffer& calibration, const Buffer& reverseW,
                               const Buffer& reverseCalibration, const Buffer& reverseMask, const Buffer& mask) {
   flush();
-  check(cudak::launchRoundTrip(stream_, img(slot(error).dev, error), img(slot(w).dev, w),
-                               img(slot(calibration).dev, calibration), img(slot(reverseW).dev, reverseW),
-                               img(slot(reverseCalibration).dev, reverseCalibration),
-                               img(slot(reverseMask).dev, reverseMask), img(slot(mask).dev, mask)),
+  check(cudak::launchRoundTrip(stream_, onDevice(error), onDevice(w), onDevice(calibration), onDevice(reverseW),
+                               onDevice(reverseCalibration), onDevice(reverseMask), onDevice(mask)),
         "roundTrip");
 }
 
@@ -458,27 +458,23 @@ void CudaBackend::doResultConfidence(const Buffer& confidence, const Buffer& rad
                                      const Buffer& roundTripError, const Buffer& planeConfidence, const Buffer& mask,
                                      const ConfidenceParams& p) {
   flush();
-  auto optional = [&](const Buffer& b) { return b.id >= 0 ? img(slot(b).dev, b) : cudak::Img{nullptr, 0, 0, 0}; };
-  check(cudak::launchResultConfidence(stream_, img(slot(confidence).dev, confidence), img(slot(radial).dev, radial),
-                                      img(slot(points).dev, points), img(slot(image).dev, image), img(slot(n0).dev, n0),
-                                      img(slot(n1).dev, n1), img(slot(w).dev, w), img(slot(trajectory).dev, trajectory),
-                                      optional(sweepConfidence), optional(roundTripError), optional(planeConfidence),
-                                      img(slot(mask).dev, mask), p, scratch(4 * mask.count(), kConfidenceTermsKey)),
+  check(cudak::launchResultConfidence(stream_, onDevice(confidence), onDevice(radial), onDevice(points),
+                                      onDevice(image), onDevice(n0), onDevice(n1), onDevice(w), onDevice(trajectory),
+                                      onDeviceOrNone(sweepConfidence), onDeviceOrNone(roundTripError),
+                                      onDeviceOrNone(planeConfidence), onDevice(mask), p,
+                                      scratch(4 * mask.count(), kConfidenceTermsKey)),
         "resultConfidence");
 }
 
 void CudaBackend::doSweepWarp(const Buffer& volume, const Buffer& image, const Buffer& mask, const SweepParams& p) {
   flush();
-  check(cudak::launchSweepWarp(stream_, img(slot(volume).dev, volume), img(slot(image).dev, image),
-                               img(slot(mask).dev, mask), p),
-        "sweepWarp");
+  check(cudak::launchSweepWarp(stream_, onDevice(volume), onDevice(image), onDevice(mask), p), "sweepWarp");
 }
 
 void CudaBackend::doSweepCost(const Buffer& costs, const Buffer& reference, const Buffer& volume, const Buffer& mask,
                               const SweepParams& p) {
   flush();
-  check(cudak::launchSweepCost(stream_, img(slot(costs).dev, costs), img(slot(reference).dev, reference),
-                               img(slot(volume).dev, volume), img(slot(mask).dev, mask), p),
+  check(cudak::launchSweepCost(stream_, onDevice(costs), onDevice(reference), onDevice(volume), onDevice(mask), p),
         "sweepCost");
 }
 
@@ -487,16 +483,14 @@ void CudaBackend::doSweepAggregate(const Buffer& aggregated, const Buffer& costs
   flush();
   // The three directions walked beside +x need a buffer each (scratch, kept for the next frame).
   const cudak::Img spare{scratch(3 * aggregated.count(), 3), aggregated.width, aggregated.height, aggregated.channels};
-  check(cudak::launchSweepAggregate(stream_, img(slot(aggregated).dev, aggregated), spare, img(slot(costs).dev, costs),
-                                    img(slot(mask).dev, mask), p),
+  check(cudak::launchSweepAggregate(stream_, onDevice(aggregated), spare, onDevice(costs), onDevice(mask), p),
         "sweepAggregate");
 }
 
 void CudaBackend::doSweepSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs, const Buffer& mask,
                                 const SweepParams& p) {
   flush();
-  check(cudak::launchSweepSelect(stream_, img(slot(best).dev, best), img(slot(aggregated).dev, aggregated),
-                                 img(slot(costs).dev, costs), img(slot(mask).dev, mask), p),
+  check(cudak::launchSweepSelect(stream_, onDevice(best), onDevice(aggregated), onDevice(costs), onDevice(mask), p),
         "sweepSelect");
 }
 
@@ -504,9 +498,8 @@ void CudaBackend::doSweepInitialise(const Buffer& u, const Buffer& w, const Buff
                                     const Buffer& other, const Buffer& mask, const SweepParams& p,
                                     const ConsistencyParams& c) {
   flush();
-  check(cudak::launchSweepInitialise(stream_, img(slot(u).dev, u), img(slot(w).dev, w),
-                                     img(slot(confidence).dev, confidence), img(slot(best).dev, best),
-                                     img(slot(other).dev, other), img(slot(mask).dev, mask), p, c),
+  check(cudak::launchSweepInitialise(stream_, onDevice(u), onDevice(w), onDevice(confidence), onDevice(best),
+                                     onDevice(other), onDevice(mask), p, c),
         "sweepInitialise");
 }
 
@@ -514,18 +507,16 @@ void CudaBackend::doSweepBandWarp(const Buffer& volume, const Buffer& first, con
                                   const Buffer& coarseBest, const Buffer& mask, const SweepParams& p,
                                   float coarseScale) {
   flush();
-  check(cudak::launchSweepBandWarp(stream_, img(slot(volume).dev, volume), img(slot(first).dev, first),
-                                   img(slot(image).dev, image), img(slot(coarseBest).dev, coarseBest),
-                                   img(slot(mask).dev, mask), p, coarseScale),
+  check(cudak::launchSweepBandWarp(stream_, onDevice(volume), onDevice(first), onDevice(image), onDevice(coarseBest),
+                                   onDevice(mask), p, coarseScale),
         "sweepBandWarp");
 }
 
 void CudaBackend::doSweepBandCost(const Buffer& costs, const Buffer& reference, const Buffer& volume,
                                   const Buffer& first, const Buffer& mask, const SweepParams& p) {
   flush();
-  check(cudak::launchSweepBandCost(stream_, img(slot(costs).dev, costs), img(slot(reference).dev, reference),
-                                   img(slot(volume).dev, volume), img(slot(first).dev, first),
-                                   img(slot(mask).dev, mask), p),
+  check(cudak::launchSweepBandCost(stream_, onDevice(costs), onDevice(reference), onDevice(volume), onDevice(first),
+                                   onDevice(mask), p),
         "sweepBandCost");
 }
 
@@ -535,43 +526,39 @@ void CudaBackend::doSweepBandAggregate(const Buffer& aggregated, const Buffer& c
   // As sweepAggregate: the three directions walked beside +x need a buffer each (the same
   // scratch role: the two aggregations never run at once).
   const cudak::Img spare{scratch(3 * aggregated.count(), 3), aggregated.width, aggregated.height, aggregated.channels};
-  check(cudak::launchSweepBandAggregate(stream_, img(slot(aggregated).dev, aggregated), spare,
-                                        img(slot(costs).dev, costs), img(slot(first).dev, first),
-                                        img(slot(mask).dev, mask), p),
+  check(cudak::launchSweepBandAggregate(stream_, onDevice(aggregated), spare, onDevice(costs), onDevice(first),
+                                        onDevice(mask), p),
         "sweepBandAggregate");
 }
 
 void CudaBackend::doSweepBandSelect(const Buffer& best, const Buffer& aggregated, const Buffer& costs,
                                     const Buffer& first, const Buffer& mask, const SweepParams& p) {
   flush();
-  check(cudak::launchSweepBandSelect(stream_, img(slot(best).dev, best), img(slot(aggregated).dev, aggregated),
-                                     img(slot(costs).dev, costs), img(slot(first).dev, first),
-                                     img(slot(mask).dev, mask), p),
+  check(cudak::launchSweepBandSelect(stream_, onDevice(best), onDevice(aggregated), onDevice(costs), onDevice(first),
+                                     onDevice(mask), p),
         "sweepBandSelect");
 }
 
 void CudaBackend::doWarp(const Buffer& dst, const Buffer& src, const Buffer& flow) {
   flush();
-  check(cudak::launchWarp(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(flow).dev, flow)),
-        "warp");
+  check(cudak::launchWarp(stream_, onDevice(dst), onDevice(src), onDevice(flow)), "warp");
 }
 
 void CudaBackend::doDownsample(const Buffer& dst, const Buffer& src, float scale) {
   flush();
-  check(cudak::launchDownsample(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), scale), "downsample");
+  check(cudak::launchDownsample(stream_, onDevice(dst), onDevice(src), scale), "downsample");
 }
 
 void CudaBackend::doUpsample(const Buffer& dst, const Buffer& src, float scale, float valueScale) {
   flush();
-  check(cudak::launchUpsample(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), scale, valueScale),
-        "upsample");
+  check(cudak::launchUpsample(stream_, onDevice(dst), onDevice(src), scale, valueScale), "upsample");
 }
 
 void CudaBackend::doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buffer& coarseU, const Buffer& coarseW,
                                      const Buffer& n0, const Buffer& n1, const Buffer& mask,
                                      const EstimateUpsampleParams& p) {
   flush();
-  auto dev = [&](const Buffer& b) { return img(slot(b).dev, b); };
+  auto dev = [&](const Buffer& b) { return onDevice(b); };
   check(cudak::launchUpsampleEstimate(stream_, dev(u), dev(w), dev(coarseU), dev(coarseW), dev(n0), dev(n1), dev(mask),
                                       p),
         "upsampleEstimate");
@@ -580,8 +567,7 @@ void CudaBackend::doUpsampleEstimate(const Buffer& u, const Buffer& w, const Buf
 void CudaBackend::doNormalise(const Buffer& dst, const Buffer& moments, const Buffer& src, const Buffer& mask,
                               const NormaliseParams& p) {
   flush();
-  check(cudak::launchNormalise(stream_, img(slot(dst).dev, dst), img(slot(moments).dev, moments),
-                               img(slot(src).dev, src), img(slot(mask).dev, mask), p),
+  check(cudak::launchNormalise(stream_, onDevice(dst), onDevice(moments), onDevice(src), onDevice(mask), p),
         "normalise");
 }
 
@@ -597,9 +583,8 @@ void CudaBackend::doStructureTensor(const Buffer& tensor, const Buffer& steps, c
     taps.radius = int(t.size() / 2);
   }
   const size_t n = size_t(image.width) * image.height;
-  check(cudak::launchStructureTensor(stream_, img(slot(tensor).dev, tensor), img(slot(steps).dev, steps),
-                                     img(slot(image).dev, image), img(slot(mask).dev, mask), p, taps, scratch(n, 0),
-                                     scratch(n, 1)),
+  check(cudak::launchStructureTensor(stream_, onDevice(tensor), onDevice(steps), onDevice(image), onDevice(mask), p,
+                                     taps, scratch(n, 0), scratch(n, 1)),
         "structureTensor");
 }
 
@@ -616,18 +601,10 @@ void CudaBackend::doWarpDerivatives(const DataTermBuffers& data, const Buffer& t
                                     const Buffer& i1, const Buffer& trajectory, const Buffer& w, const Buffer& u,
                                     const Buffer& mask, const Buffer& confidence, float weightFloor) {
   flush();
-  const cudak::Img weight = confidence.id >= 0 ? img(slot(confidence).dev, confidence) : cudak::Img{nullptr, 0, 0, 0};
-  const cudak::DataTermOut out =
-      dataTermOut(img(slot(data.iu).dev, data.iu), img(slot(data.iz).dev, data.iz), img(slot(tangent).dev, tangent));
-  const cudak::DataTermIn in{img(slot(i0).dev, i0),
-                             img(slot(i1).dev, i1),
-                             img(slot(trajectory).dev, trajectory),
-                             img(slot(mask).dev, mask),
-                             weight,
-                             weightFloor};
-  check(cudak::launchWarpDerivatives(stream_, img(slot(data.u0).dev, data.u0), out, in, img(slot(w).dev, w),
-                                     img(slot(u).dev, u)),
-        "warpDerivatives");
+  const cudak::Img weight = onDeviceOrNone(confidence);
+  const cudak::DataTermOut out = dataTermOut(onDevice(data.iu), onDevice(data.iz), onDevice(tangent));
+  const cudak::DataTermIn in{onDevice(i0), onDevice(i1), onDevice(trajectory), onDevice(mask), weight, weightFloor};
+  check(cudak::launchWarpDerivatives(stream_, onDevice(data.u0), out, in, onDevice(w), onDevice(u)), "warpDerivatives");
   lastLaunch_ = LastLaunch::DataTerm;
 }
 
@@ -698,15 +675,14 @@ void CudaBackend::iterate(const PrimalDualBuffers& pd, const DataTermBuffers& da
 
 void CudaBackend::doMedian(const Buffer& dst, const Buffer& src, const Buffer& mask) {
   flush();
-  check(cudak::launchMedian(stream_, img(slot(dst).dev, dst), img(slot(src).dev, src), img(slot(mask).dev, mask)),
-        "median");
+  check(cudak::launchMedian(stream_, onDevice(dst), onDevice(src), onDevice(mask)), "median");
 }
 
 void CudaBackend::doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u0, const Buffer& tangent,
                                const Buffer& mask, float duMax) {
   flush();
-  check(cudak::launchAccumulate(stream_, img(slot(u).dev, u), img(slot(w).dev, w), img(slot(u0).dev, u0),
-                                img(slot(tangent).dev, tangent), img(slot(mask).dev, mask), duMax),
+  check(cudak::launchAccumulate(stream_, onDevice(u), onDevice(w), onDevice(u0), onDevice(tangent), onDevice(mask),
+                                duMax),
         "accumulate");
   lastLaunch_ = LastLaunch::DataTerm;
 }
@@ -719,17 +695,11 @@ void CudaBackend::doAccumulate(const Buffer& u, const Buffer& w, const Buffer& u
 void CudaBackend::doWarpTail(const WarpBuffers& warp, const Buffer& medianScratch, float duMax, bool nextWarp) {
   flush();
   const Buffer& u = warp.u;
-  const cudak::Img w = img(slot(warp.w).dev, warp.w), u0 = img(slot(warp.data.u0).dev, warp.data.u0);
-  const cudak::Img tangent = img(slot(warp.tangent).dev, warp.tangent), mask = img(slot(warp.mask).dev, warp.mask);
-  const cudak::Img weight =
-      warp.confidence.id >= 0 ? img(slot(warp.confidence).dev, warp.confidence) : cudak::Img{nullptr, 0, 0, 0};
-  const cudak::DataTermOut nextOut =
-      dataTermOut(img(slot(warp.data.iu).dev, warp.data.iu), img(slot(warp.data.iz).dev, warp.data.iz), tangent);
-  const cudak::DataTermIn nextIn{img(slot(warp.i0).dev, warp.i0),
-                                 img(slot(warp.i1).dev, warp.i1),
-                                 img(slot(warp.trajectory).dev, warp.trajectory),
-                                 mask,
-                                 weight,
+  const cudak::Img w = onDevice(warp.w), u0 = onDevice(warp.data.u0);
+  const cudak::Img tangent = onDevice(warp.tangent), mask = onDevice(warp.mask);
+  const cudak::Img weight = onDeviceOrNone(warp.confidence);
+  const cudak::DataTermOut nextOut = dataTermOut(onDevice(warp.data.iu), onDevice(warp.data.iz), tangent);
+  const cudak::DataTermIn nextIn{onDevice(warp.i0), onDevice(warp.i1), onDevice(warp.trajectory), mask, weight,
                                  warp.weightFloor};
   const cudak::DataTermOut* out = nextWarp ? &nextOut : nullptr;
   const cudak::DataTermIn* in = nextWarp ? &nextIn : nullptr;
@@ -737,12 +707,11 @@ void CudaBackend::doWarpTail(const WarpBuffers& warp, const Buffer& medianScratc
     float*& spare = scratchSlot(u.count(), 2);
     float* const uIn = slot(u).dev;
     std::swap(slots_[size_t(u.id)].dev, spare);
-    check(cudak::launchMedianAccumulate(stream_, img(slot(u).dev, u), img(slot(medianScratch).dev, medianScratch),
-                                        img(uIn, u), w, u0, tangent, mask, duMax, out, in,
-                                        lastLaunch_ == LastLaunch::PrimalDual),
+    check(cudak::launchMedianAccumulate(stream_, onDevice(u), onDevice(medianScratch), img(uIn, u), w, u0, tangent,
+                                        mask, duMax, out, in, lastLaunch_ == LastLaunch::PrimalDual),
           nextWarp ? "median + accumulate + derivatives" : "median + accumulate");
   } else {
-    check(cudak::launchAccumulate(stream_, img(slot(u).dev, u), w, u0, tangent, mask, duMax, out, in),
+    check(cudak::launchAccumulate(stream_, onDevice(u), w, u0, tangent, mask, duMax, out, in),
           nextWarp ? "accumulate + derivatives" : "accumulate");
   }
   lastLaunch_ = LastLaunch::DataTerm;

@@ -12,6 +12,10 @@
 
 #include "curvestereo/backend.hpp"
 
+namespace cs::cudak {
+struct Img;  // kernels.hpp
+}
+
 struct CUstream_st;
 struct CUevent_st;
 struct CUgraph_st;
@@ -181,6 +185,9 @@ class CudaBackend final : public Backend {
   void returnBuffersHome();
   float** scratchHolding(const float* memory);
   const Slot& slot(const Buffer& b) const;
+  // A buffer's device memory as the kernels take it; OrNone: a null view for an absent one (id -1).
+  cudak::Img onDevice(const Buffer& b) const;
+  cudak::Img onDeviceOrNone(const Buffer& b) const;
   float* pinnedFor(Slot& s);
   void dropGraph();  // every slot's
   // Every launch goes through check(), which sets lastLaunch_ to Other; the launches that
