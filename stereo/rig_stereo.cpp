@@ -21,19 +21,53 @@ Params rigParams(const CameraRig& rig, Params params) {
 
 RigStereo::RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, const Params& params,
                      const std::string& backend)
-    : rig_(rig) {
+    : rig_(rig), pairs_(pairs), params_(params), backend_(backend) {
   rig_.validate();
+  buildDirections();
   std::vector<bool> covered(size_t(rig.size()), false);
-  for (const PairInfo& p : pairs)
-    for (const auto& [a, b] : {std::pair{p.i, p.j}, std::pair{p.j, p.i}}) {
-      directions_.push_back({a, b, std::make_unique<Stereo>(pairRig(rig_, a, b), params, backend)});
-      covered[size_t(a)] = true;
-    }
+  for (const Direction& dir : directions_) covered[size_t(dir.reference)] = true;
   for (int k = 0; k < rig.size(); ++k)
     if (!covered[size_t(k)]) throw Error("cam" + std::to_string(k) + " is in none of the pairs to solve");
   for (const Camera& cam : rig_.cameras) rays_.push_back(cameraRays(cam));
-  estimates_.resize(directions_.size());
+}
+
+void RigStereo::buildDirections() {
+  directions_.clear();
+  const FieldOptions fields{params_.maxFovDeg, params_.epipoleDeg};
+  for (const PairInfo& p : pairs_)
+    for (const auto& [a, b] : {std::pair{p.i, p.j}, std::pair{p.j, p.i}}) {
+      Rig pair = pairRig(rig_, a, b);
+      ImageWindow window{0, 0, pair.cam0.width, pair.cam0.height};
+      if (windows_) {
+        window = solvableWindow(pair, fields, kWindowMargin);
+        if (window.empty())
+          throw Error("cam" + std::to_string(a) + " sees nothing of cam" + std::to_string(b) +
+                      "'s view within the field of view (max_fov_deg " + std::to_string(params_.maxFovDeg) + ")");
+        pair.cam0 = pair.cam0.cropped(window.x0, window.y0, window.width, window.height);
+      }
+      directions_.push_back({a, b, window, std::make_unique<Stereo>(pair, params_, backend_), ImageF()});
+    }
+  estimates_.assign(directions_.size(), DepthResult());
   applyOutputs();
+}
+
+void RigStereo::setSolveWindows(bool on) {
+  if (on == windows_) return;
+  windows_ = on;
+  buildDirections();
+}
+
+// The reference's image as its direction solves it: the whole image, or a copy of the window.
+const ImageF& RigStereo::referenceImage(Direction& dir, const std::vector<ImageF>& images) {
+  const ImageF& image = images[size_t(dir.reference)];
+  const ImageWindow& w = dir.window;
+  if (w.x0 == 0 && w.y0 == 0 && w.width == image.width && w.height == image.height) return image;
+  if (dir.windowImage.width != w.width || dir.windowImage.height != w.height) dir.windowImage = ImageF(w.width, w.height);
+  for (int y = 0; y < w.height; ++y) {
+    const float* row = &image.data[size_t(w.y0 + y) * size_t(image.width) + size_t(w.x0)];
+    std::copy(row, row + w.width, &dir.windowImage.data[size_t(y) * size_t(w.width)]);
+  }
+  return dir.windowImage;
 }
 
 // A camera's fused result computes its own z and points from its depth, so the directions
@@ -48,6 +82,17 @@ void RigStereo::setFlowOutputs(bool on) {
 }
 
 RigStereo::~RigStereo() = default;
+
+// The pair of direction d's reference and partner, each camera the window its direction
+// solves (d's and `back`'s), for the cross-check between their estimates.
+Rig RigStereo::windowPair(size_t d, size_t back) const {
+  Rig pair = pairRig(rig_, directions_[d].reference, directions_[d].other);
+  const ImageWindow& a = directions_[d].window;
+  const ImageWindow& b = directions_[back].window;
+  pair.cam0 = pair.cam0.cropped(a.x0, a.y0, a.width, a.height);
+  pair.cam1 = pair.cam1.cropped(b.x0, b.y0, b.width, b.height);
+  return pair;
+}
 
 void RigStereo::setCrossCheck(double tolerance) {
   if (!(tolerance >= 0 && tolerance <= 1)) throw Error("cross-check tolerance must be in [0, 1]");
@@ -66,7 +111,7 @@ RigResult RigStereo::compute(const std::vector<ImageF>& images) {
 
 void RigStereo::compute(const std::vector<ImageF>& images, RigResult& out) {
   solveAll(images, out, [&](Direction& dir, DepthResult& estimate) {
-    dir.stereo->compute(images[size_t(dir.reference)], images[size_t(dir.other)], estimate);
+    dir.stereo->compute(referenceImage(dir, images), images[size_t(dir.other)], estimate);
   });
 }
 
@@ -84,7 +129,7 @@ void RigStereo::next(const std::vector<ImageF>& images, RigResult& out, const Po
       camera.R = bodyPose->R * inBody.R;
       camera.t = bodyPose->R * inBody.p + bodyPose->t;
     }
-    dir.stereo->next(images[size_t(dir.reference)], images[size_t(dir.other)], estimate, bodyPose ? &camera : nullptr);
+    dir.stereo->next(referenceImage(dir, images), images[size_t(dir.other)], estimate, bodyPose ? &camera : nullptr);
   });
 }
 
@@ -138,22 +183,21 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
   for (size_t d = 0; d < directions_.size(); ++d) {
     const Direction& dir = directions_[d];
     out.solves.push_back(
-        {dir.reference, dir.other, estimates_[d].totalMs, 0, estimates_[d].warm, estimates_[d].redone});
+        {dir.reference, dir.other, dir.window, estimates_[d].totalMs, 0, estimates_[d].warm, estimates_[d].redone});
   }
   if (crossCheck_ > 0) {
-    // Against the other directions as solved, not as already checked.
+    // Against the other directions as solved, not as already checked; each on its window.
     const std::vector<DepthResult> solved = estimates_;
     for (size_t d = 0; d < directions_.size(); ++d)
       for (size_t back = 0; back < directions_.size(); ++back)
         if (directions_[back].reference == directions_[d].other && directions_[back].other == directions_[d].reference)
-          out.solves[d].crossCheckInvalidated = crossCheck(
-              pairRig(rig_, directions_[d].reference, directions_[d].other), estimates_[d], solved[back], crossCheck_);
+          out.solves[d].crossCheckInvalidated = crossCheck(windowPair(d, back), estimates_[d], solved[back], crossCheck_);
   }
   out.cameras.resize(size_t(rig_.size()));
   for (int k = 0; k < rig_.size(); ++k) {
-    std::vector<const DepthResult*> mine;
+    std::vector<PlacedEstimate> mine;
     for (size_t d = 0; d < directions_.size(); ++d)
-      if (directions_[d].reference == k) mine.push_back(&estimates_[d]);
+      if (directions_[d].reference == k) mine.push_back({&estimates_[d], directions_[d].window});
     fuseCameraEstimates(rig_.cameras[size_t(k)], mine, rays_[size_t(k)], out.cameras[size_t(k)]);
   }
   out.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -364,6 +364,23 @@ TEST_CASE("scaled() keeps the image of every ray at the scaled pixel") {
   CHECK((b - (0.5 * (a.array() + 0.5) - 0.5).matrix()).norm() < 1e-12);
 }
 
+TEST_CASE("cropped() keeps every ray at its pixel moved by the window's origin") {
+  const TestCamera cam = Camera::kannalaBrandt4(848, 800, 285.7, 286.8, 420.1, 403.4, -0.0066, 0.0473, -0.0458, 0.0090);
+  const TestCamera window = cam.cropped(300, 120, 400, 500);
+  CHECK(window.width == 400);
+  CHECK(window.height == 500);
+  for (const Vec3<double>& p : {Vec3<double>(0.3, -0.2, 1.0), Vec3<double>(-0.9, 0.4, 0.2)}) {
+    Vec2<double> a, b;
+    REQUIRE(cam.project(p, a));
+    REQUIRE(window.project(p, b));
+    CHECK((b - (a - Vec2<double>(300, 120))).norm() < 1e-9);
+  }
+  CHECK_THROWS_WITH_AS(cam.cropped(500, 0, 400, 10), "a window of 400x10 px at (500, 0) does not fit a 848x800 image",
+                       cs::Error);
+  CHECK_THROWS_AS(cam.cropped(-1, 0, 10, 10), cs::Error);
+  CHECK_THROWS_AS(cam.cropped(0, 0, 0, 10), cs::Error);
+}
+
 TEST_CASE("inImage uses the pixel-edge rectangle") {
   const Camera cam = Camera::pinholeRadtan(640, 480, 500, 500, 319.5, 239.5);
   CHECK(cam.inImage(Vec2<double>(-0.5, -0.5)));

@@ -164,6 +164,41 @@ TEST_CASE("lenses wider than 180 degrees: rays beyond 90 degrees, and back-to-ba
   CHECK_NOTHROW(wide.validate());
 }
 
+TEST_CASE("a pair's solvable window holds every pixel the fields keep, and only the side its partner sees") {
+  const cs::FieldOptions fov{180.0, 3.0};
+  // Two 180-degree lenses 90 degrees apart on a ring: camera 0 sees camera 1's view with
+  // the half of its image on camera 1's side.
+  const CameraRig rig = ring(4, 180);
+  for (const auto& [i, j] : {std::pair{0, 1}, std::pair{1, 0}, std::pair{0, 3}}) {
+    CAPTURE(i);
+    CAPTURE(j);
+    const cs::Rig pair = cs::pairRig(rig, i, j);
+    const cs::ImageWindow w = cs::solvableWindow(pair, fov, 0);
+    const cs::RigFields fields = cs::computeFields(pair.cam0, pair.cam1, pair.R, pair.t, fov);
+    long long kept = 0, outside = 0;
+    for (int y = 0; y < fields.mask.height; ++y)
+      for (int x = 0; x < fields.mask.width; ++x) {
+        if (!fields.mask(x, y)) continue;
+        ++kept;
+        outside += x < w.x0 || y < w.y0 || x >= w.x0 + w.width || y >= w.y0 + w.height;
+      }
+    CHECK(kept > 0);
+    CHECK(outside == 0);
+    CHECK(w.width < 0.6 * pair.cam0.width);  // about half: the other half faces away from camera j
+    CHECK(w.height > 0.9 * pair.cam0.height);
+  }
+  // The margin grows the window and the image's edges clamp it.
+  const cs::Rig pair = cs::pairRig(rig, 0, 1);
+  const cs::ImageWindow tight = cs::solvableWindow(pair, fov, 4), grown = cs::solvableWindow(pair, fov, 16);
+  CHECK(grown.x0 == std::max(0, tight.x0 - 12));
+  CHECK(grown.x0 + grown.width == std::min(pair.cam0.width, tight.x0 + tight.width + 12));
+  CHECK(grown.y0 >= 0);
+  CHECK(grown.y0 + grown.height <= pair.cam0.height);
+  // Two back-to-back 180-degree lenses share no pixel within the field of view.
+  const CameraRig backToBack = ring(2, 180);
+  CHECK(cs::solvableWindow(cs::pairRig(backToBack, 0, 1), fov, 16).empty());
+}
+
 TEST_CASE("pair choice takes the neighbours on a ring, and a given list is checked") {
   const CameraRig rig = ring(4, 200);
   const std::vector<cs::PairInfo> pairs = cs::choosePairs(rig);
@@ -296,6 +331,51 @@ TEST_CASE("a camera's estimates are fused by confidence where they agree") {
   // The points follow the fused depth along the pixel's ray.
   const cs::Point3f q = f.depth.points(x, y);
   CHECK(std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z) == doctest::Approx(expected).epsilon(1e-5));
+}
+
+// The window's pixels of a result, as a solve on that window returns them.
+cs::DepthResult windowOf(const cs::DepthResult& r, const cs::ImageWindow& w) {
+  cs::DepthResult out;
+  out.valid = cs::ImageU8(w.width, w.height), out.confidence = cs::ImageF(w.width, w.height);
+  out.depth.radial = cs::ImageF(w.width, w.height), out.disparity = cs::ImageF(w.width, w.height);
+  out.warp = cs::FlowImage(w.width, w.height);
+  for (int y = 0; y < w.height; ++y)
+    for (int x = 0; x < w.width; ++x) {
+      out.valid(x, y) = r.valid(x + w.x0, y + w.y0), out.confidence(x, y) = r.confidence(x + w.x0, y + w.y0);
+      out.depth.radial(x, y) = r.depth.radial(x + w.x0, y + w.y0);
+      out.disparity(x, y) = r.disparity(x + w.x0, y + w.y0), out.warp(x, y) = r.warp(x + w.x0, y + w.y0);
+    }
+  return out;
+}
+
+TEST_CASE("estimates of windows fuse as the same estimates over the whole image with nothing outside") {
+  const CameraRig rig = ring(4, 200);
+  const cs::Camera& cam = rig.cameras[0];
+  const cs::DepthResult a = sphereResult(rig, 0, 3.0, 0.9f);
+  cs::DepthResult b = sphereResult(rig, 0, 3.5, 0.95f);  // more confident, and disagrees inside its window
+  for (int y = 0; y < cam.height; y += 3) b.depth.radial(y % cam.width, y) *= 0.99f;  // and agrees here and there
+  const cs::ImageWindow window{37, 11, 120, 150};
+  // The whole-image equivalent: b only inside the window.
+  cs::DepthResult bWhole = b;
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x)
+      if (x < window.x0 || y < window.y0 || x >= window.x0 + window.width || y >= window.y0 + window.height)
+        bWhole.valid(x, y) = 0;
+  const cs::DepthResult bWindow = windowOf(b, window);
+  const cs::CameraRays rays = cs::cameraRays(cam);
+  cs::DepthResult whole, placed;
+  cs::fuseCameraEstimates(cam, std::vector<const cs::DepthResult*>{&a, &bWhole}, rays, whole);
+  cs::fuseCameraEstimates(cam, std::vector<cs::PlacedEstimate>{{&a, {}}, {&bWindow, window}}, rays, placed);
+  CHECK(placed.valid.data == whole.valid.data);
+  CHECK(cs::test::sameBits(placed.depth.radial, whole.depth.radial));
+  CHECK(cs::test::sameBits(placed.confidence, whole.confidence));
+  CHECK(cs::test::sameBits(placed.disparity, whole.disparity));
+  CHECK(placed.confidence(50, 50) == 0.95f);  // b's, inside its window
+  CHECK(placed.confidence(20, 50) == 0.9f);   // a's, left of it
+  // A result that is not its window's size is refused in one line.
+  CHECK(errorOf([&] {
+          cs::fuseCameraEstimates(cam, std::vector<cs::PlacedEstimate>{{&bWindow, {0, 0, 100, 150}}}, rays, placed);
+        }).find("fuseCameraEstimates: a result for a camera of 100x150 px") == 0);
 }
 
 TEST_CASE("the cross-check between a pair's directions takes away what the other direction contradicts") {

@@ -148,8 +148,9 @@ TEST_CASE("run --sequence on a rig's folder: every frame's cameras and panorama,
   std::string poses = "# t_ns,px,py,pz,qx,qy,qz,qw\n";
   for (long long t : times[0]) poses += std::to_string(t) + ",0,0,0,0,0,0,1\n";
   writeText(dir / "seq/poses_cam0.csv", poses);
-  // Small images: three levels keep the band sweep's level wide enough for warm starts.
-  const std::string solve = " --backend cpu --levels 3 --min-width 16 --panorama-width 128";
+  // Small images: three levels keep the band sweep's level wide enough for warm starts, on
+  // the window of about 36 x 64 px each direction solves (the side its partner sees).
+  const std::string solve = " --backend cpu --levels 3 --min-width 8 --panorama-width 128";
 
   const cs::test::CliOutcome o = runCli(dir, "run --sequence seq -o out" + solve);
   CAPTURE(o.out);

@@ -88,6 +88,40 @@ TEST_CASE("a rig's directions solved concurrently equal one after the other, bit
   }
 }
 
+TEST_CASE("each direction solves the window its partner sees, with the whole image's result") {
+  const synth::SynthRig& synthetic = ring4();
+  const CameraRig& rig = synthetic.layout.rig;
+  const std::vector<PairInfo> pairs = choosePairs(rig);
+  RigStereo stereo(rig, pairs, shortSolve(rig), "cpu");
+  const RigResult windowed = stereo.compute(synthetic.images);
+  stereo.setSolveWindows(false);
+  const RigResult whole = stereo.compute(synthetic.images);
+  REQUIRE(windowed.solves.size() == 2 * pairs.size());
+  for (size_t d = 0; d < windowed.solves.size(); ++d) {
+    const ImageWindow& w = windowed.solves[d].window;
+    CAPTURE(d);
+    CHECK(w.width < 0.8 * 64);  // about half the image, and the margin
+    CHECK(w.height == 64);
+    CHECK(whole.solves[d].window.width == 64);
+  }
+  for (size_t k = 0; k < 4; ++k) {
+    CAPTURE(k);
+    const DepthResult &a = windowed.cameras[k], &b = whole.cameras[k];
+    long long both = 0, agree = 0, onlyOne = 0;
+    for (size_t i = 0; i < a.valid.size(); ++i) {
+      onlyOne += a.valid.data[i] != b.valid.data[i];
+      if (!a.valid.data[i] || !b.valid.data[i]) continue;
+      ++both;
+      const double ia = 1.0 / a.depth.radial.data[i], ib = 1.0 / b.depth.radial.data[i];
+      agree += std::abs(ia - ib) <= 0.05 * std::max(ia, ib) + 1e-3;
+    }
+    MESSAGE("cam" << k << ": " << both << " px in both, " << agree << " agree, " << onlyOne << " in one");
+    CHECK(both > 1000);
+    CHECK(double(onlyOne) <= 0.02 * double(both));
+    CHECK(double(agree) >= 0.9 * double(both));
+  }
+}
+
 // The GPU backends sum in their atomics' order, and their atan2 and cos may differ by ulps,
 // which may move a footprint's edge across a pixel where it lies within 1e-4 px of one: the
 // same panorama to rounding but for those few pixels, on the second frame as on the first

@@ -181,13 +181,15 @@ int benchSequence(const Args& args, Stereo& stereo, const Sequence& sequence, in
 
 int cmdBench(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"calib", "size", "runs", "scale-intrinsics", "outputs", "sequence", "poses", "pairs", "partners",
-                "panorama-width", "serial"});
+  known.insert({"calib", "size", "runs", "scale-intrinsics", "outputs", "sequence", "poses", "panorama-width", "serial"});
+  known.insert(kRigOptions.begin(), kRigOptions.end());
   args.allowOnly(known);
   if (args.has("runs") && args.getInt("runs", 0) < 1) throw Error("option --runs must be >= 1");
   // Three images or more: a rig of as many cameras (cmd_rig.cpp), as for run.
   if (args.positional().size() >= 3 && !args.has("sequence")) return benchRig(args);
-  for (const char* option : {"pairs", "partners", "panorama-width", "serial"})
+  std::vector<std::string> rigOnly(kRigOptions.begin(), kRigOptions.end());
+  rigOnly.insert(rigOnly.end(), {"panorama-width", "serial"});
+  for (const std::string& option : rigOnly)
     if (args.has(option)) throw UsageError(std::string("--") + option + " is for a rig (three images or more)");
   const Params params = paramsFromArgs(args);
   if (args.has("sequence")) {

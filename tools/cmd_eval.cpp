@@ -209,7 +209,7 @@ int cmdEval(const Args& args) {
   known.insert({"csv", "md", "maps", "methods", "fov", "sgbm-fov", "ps-scale", "ps-window", "ps-step", "min-depth",
                 "sweep", "warps-list", "step", "plot", "replot", "sparsification"});
   known.insert({"sequence", "cold", "compare", "frames", "calib", "blind"});
-  known.insert({"pairs", "partners", "panorama-min-confidence", "cross-check"});
+  known.insert(kRigOptions.begin(), kRigOptions.end());
   args.allowOnly(known);
   if (args.has("sequence")) return runSequences(args, paramsFromArgs(args), backendFromArgs(args));
   for (const char* sequenceOnly : {"cold", "compare", "frames", "calib"})
@@ -220,7 +220,7 @@ int cmdEval(const Args& args) {
       if (args.has(pairOnly)) throw UsageError(std::string("--") + pairOnly + " is for pair folders, not a rig folder");
     return evalRig(args);
   }
-  for (const char* rigOnly : {"pairs", "partners", "panorama-min-confidence", "cross-check"})
+  for (const char* rigOnly : kRigOptions)
     if (args.has(rigOnly)) throw UsageError(std::string("--") + rigOnly + " is for a rig folder");
   const Params params = paramsFromArgs(args);
   const std::string backend = backendFromArgs(args);

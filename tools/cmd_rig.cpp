@@ -89,10 +89,15 @@ Params rigParamsFromArgs(const Args& args, const CameraRig& rig) {
   return rigParams(rig, params);
 }
 
-double crossCheckFromArgs(const Args& args) {
-  const double t = args.getDouble("cross-check", 0.0);
-  if (!(t >= 0.0 && t <= 1.0)) throw UsageError("--cross-check expects a tolerance in [0, 1] (e.g. 0.1)");
-  return t;
+std::unique_ptr<RigStereo> rigStereoFromArgs(const Args& args, const CameraRig& rig,
+                                             const std::vector<PairInfo>& pairs, const Params& params) {
+  const double crossCheck = args.getDouble("cross-check", 0.0);
+  if (!(crossCheck >= 0.0 && crossCheck <= 1.0))
+    throw UsageError("--cross-check expects a tolerance in [0, 1] (e.g. 0.1)");
+  auto stereo = std::make_unique<RigStereo>(rig, pairs, params, backendFromArgs(args));
+  stereo->setCrossCheck(crossCheck);
+  if (args.has("whole-images")) stereo->setSolveWindows(false);
+  return stereo;
 }
 
 float panoramaMinConfidence(const Args& args) {
@@ -133,15 +138,15 @@ int runRig(const Args& args, const std::string& outDir) {
   for (int k = 0; k < rig.size(); ++k)
     images.push_back(loadImageFor(paths[size_t(k)], rig.cameras[size_t(k)], ("cam" + std::to_string(k)).c_str()));
 
-  const double crossCheckTolerance = crossCheckFromArgs(args);
-  RigStereo stereo(rig, pairs, params, backendFromArgs(args));
-  stereo.setCrossCheck(crossCheckTolerance);
+  const std::unique_ptr<RigStereo> solver = rigStereoFromArgs(args, rig, pairs, params);
+  RigStereo& stereo = *solver;
   std::printf("backend: %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
   std::printf("pairs: %s\n", describePairs(pairs).c_str());
   const RigResult r = stereo.compute(images);
   for (const RigResult::Solve& s : r.solves)
-    std::printf("  cam%d from cam%d: %.1f ms%s\n", s.reference, s.other, s.ms,
-                crossCheckTolerance > 0
+    std::printf("  cam%d from cam%d: %.1f ms, %dx%d px at (%d, %d)%s\n", s.reference, s.other, s.ms, s.window.width,
+                s.window.height, s.window.x0, s.window.y0,
+                args.has("cross-check")
                     ? (", cross-check took " + std::to_string(s.crossCheckInvalidated) + " px").c_str()
                     : "");
 
@@ -177,8 +182,8 @@ int runRigSequence(const Args& args, const std::string& outDir) {
   if (cold) params.warmStart = false, params.temporalStrength = 0.f;  // every frame alone: the baseline
   const std::vector<PairInfo> pairs = rigPairsFromArgs(args, rig);
   const float minConfidence = minConfidenceFromArgs(args);
-  RigStereo stereo(rig, pairs, params, backendFromArgs(args));
-  stereo.setCrossCheck(crossCheckFromArgs(args));
+  const std::unique_ptr<RigStereo> solver = rigStereoFromArgs(args, rig, pairs, params);
+  RigStereo& stereo = *solver;
   const PanoramaFrame frame = panoramaFrame(rig);
   PanoramaFusion fusion(rig, frame, panoramaWidth(args), stereo.rays(), stereo.backendName());
   const float panoramaConfidence = panoramaMinConfidence(args);
@@ -240,11 +245,13 @@ int benchRig(const Args& args) {
   std::vector<ImageF> images;
   for (int k = 0; k < rig.size(); ++k)
     images.push_back(loadImageFor(paths[size_t(k)], rig.cameras[size_t(k)], ("cam" + std::to_string(k)).c_str()));
-  RigStereo stereo(rig, pairs, params, backendFromArgs(args));
+  const std::unique_ptr<RigStereo> solver = rigStereoFromArgs(args, rig, pairs, params);
+  RigStereo& stereo = *solver;
   const bool serial = args.has("serial");
   stereo.setConcurrentSolves(!serial);
   stereo.setFlowOutputs(false);  // a panorama needs neither disparity nor warp
   PanoramaFusion fusion(rig, panoramaFrame(rig), panoramaWidth(args), stereo.rays(), stereo.backendName());
+  const float panoramaConfidence = panoramaMinConfidence(args);
   const int runs = args.getInt("runs", stereo.backendName() == "cpu" ? 1 : 20);
   std::printf("backend:  %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
   std::printf("input:    %d cameras, %s\n", rig.size(), describePairs(pairs).c_str());
@@ -258,7 +265,7 @@ int benchRig(const Args& args) {
     const auto start = std::chrono::steady_clock::now();
     stereo.compute(images, r);
     const auto solved = std::chrono::steady_clock::now();
-    fusion.fuse(r.cameras, images, panorama);
+    fusion.fuse(r.cameras, images, panorama, panoramaConfidence);
     const auto end = std::chrono::steady_clock::now();
     if (i == 0) continue;  // the warm-up: allocations, first-use compilation
     solves.push_back(std::chrono::duration<double, std::milli>(solved - start).count());

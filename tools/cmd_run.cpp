@@ -25,6 +25,15 @@ namespace cs::cli {
 
 namespace {
 
+// The rig options a pair's run refuses: every rig command's and run's own (and --rig, where
+// it cannot make the run a rig's).
+std::vector<std::string> rigOnlyOptions(bool withRig) {
+  std::vector<std::string> out(kRigOptions.begin(), kRigOptions.end());
+  out.push_back("panorama-width");
+  if (withRig) out.push_back("rig");
+  return out;
+}
+
 // The extra depth forms for other tools (docs/guide.md "Outputs for ROS, Open3D and mapping").
 struct ViewOptions {
   bool pinhole = false;
@@ -228,7 +237,8 @@ int cmdRun(const Args& args) {
   std::set<std::string> known = kSolverOptions;
   known.insert(
       {"min-confidence", "calib", "o", "output", "scale-intrinsics", "pinhole", "equirect", "sampling", "image-size"});
-  known.insert({"rig", "pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"});
+  known.insert({"rig", "panorama-width"});
+  known.insert(kRigOptions.begin(), kRigOptions.end());
   known.insert(
       {"sequence", "poses", "cold", "pair-tolerance-ms", "log", "topics", "compression", "read-threads", "frames"});
   args.allowOnly(known);
@@ -246,7 +256,7 @@ int cmdRun(const Args& args) {
       requireOutputFolder(outDir);
       return runRigSequence(args, outDir);
     }
-    for (const char* option : {"rig", "pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"})
+    for (const std::string& option : rigOnlyOptions(true))
       if (args.has(option))
         throw UsageError(std::string("--") + option + " is for a rig: " + which +
                          " solves a pair (a rig's sequence: --sequence DIR --rig)");
@@ -265,7 +275,7 @@ int cmdRun(const Args& args) {
       if (args.has(option)) throw UsageError(std::string("--") + option + " is for a pair, not a rig of cameras");
     return runRig(args, outDir);
   }
-  for (const char* option : {"pairs", "partners", "panorama-width", "panorama-min-confidence", "cross-check"})
+  for (const std::string& option : rigOnlyOptions(false))
     if (args.has(option))
       throw UsageError(std::string("--") + option + " is for a rig (three images or more, or --rig)");
   if (args.positional().size() != 2)

@@ -1,5 +1,5 @@
 // curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N]
-//                         [--cross-check T] [--panorama-min-confidence C] [solver options]
+//                         [--cross-check T] [--panorama-min-confidence C] [--whole-images] [solver options]
 // A rig folder (../shared/data/rigs layout): each camera's tau against its depth<k>.exr, in
 // the pixel terms of its pairs; the panorama's range error where the truth is finite, as a
 // relative error and as tau in the panorama's pixel terms (parallaxErrorPx); and the
@@ -177,8 +177,8 @@ int evalRig(const Args& args) {
   const std::vector<PairInfo> pairs = rigPairsFromArgs(args, f.rig);
   const Params params = rigParamsFromArgs(args, f.rig);
   const float panoramaConfidence = panoramaMinConfidence(args);
-  RigStereo stereo(f.rig, pairs, params, backendFromArgs(args));
-  stereo.setCrossCheck(crossCheckFromArgs(args));
+  const std::unique_ptr<RigStereo> solver = rigStereoFromArgs(args, f.rig, pairs, params);
+  RigStereo& stereo = *solver;
   std::printf("rig %s: %d cameras; backend %s; pairs %s\n", dir.c_str(), f.rig.size(), stereo.backendName().c_str(),
               describePairs(pairs).c_str());
   const RigResult r = stereo.compute(f.images);

@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
     std::string dashO = "--o";
     for (int i = 2; i < argc; ++i) rest.push_back(!std::strcmp(argv[i], "-o") ? dashO.data() : argv[i]);
     // Options without a value; --sequence is one for synth only (run and bench take a source).
-    std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold", "compare", "blind", "serial"};
+    std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold", "compare", "blind", "serial", "whole-images"};
     if (command == "synth") flags.insert("sequence");
     if (command == "log") flags.insert("time-read");
     if (command == "run") flags.insert("rig");

@@ -1,5 +1,7 @@
 // The rig commands' pieces (cmd_rig.cpp: run with N images; eval_rig.cpp: eval of a rig folder).
 #pragma once
+#include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -7,8 +9,14 @@
 #include "curvestereo/camera_rig.hpp"
 #include "curvestereo/depth_result.hpp"
 #include "curvestereo/params.hpp"
+#include "curvestereo/rig_stereo.hpp"
 
 namespace cs::cli {
+
+// The options of every rig command (run, eval, bench) beside the solver's: one list, for
+// their checks.
+inline constexpr std::array<const char*, 5> kRigOptions = {"pairs", "partners", "panorama-min-confidence",
+                                                           "cross-check", "whole-images"};
 
 // run --calib RIG IMG0 ... IMGN-1 -o OUTDIR.
 int runRig(const Args& args, const std::string& outDir);
@@ -29,8 +37,10 @@ std::vector<PairInfo> rigPairsFromArgs(const Args& args, const CameraRig& rig);
 // (viewHalfAngle), at least the preset's.
 Params rigParamsFromArgs(const Args& args, const CameraRig& rig);
 
-// --cross-check T (0 when absent): the tolerance of RigStereo::setCrossCheck.
-double crossCheckFromArgs(const Args& args);
+// A rig's solver as the options ask: --cross-check T (RigStereo::setCrossCheck) and
+// --whole-images (setSolveWindows(false)).
+std::unique_ptr<RigStereo> rigStereoFromArgs(const Args& args, const CameraRig& rig,
+                                             const std::vector<PairInfo>& pairs, const Params& params);
 // --panorama-min-confidence C (0 when absent): the panorama leaves out samples below C.
 float panoramaMinConfidence(const Args& args);
 

@@ -70,6 +70,21 @@ Camera Camera::scaled(double s) const {
   return out;
 }
 
+Camera Camera::cropped(int x0, int y0, int w, int h) const {
+  if (x0 < 0 || y0 < 0 || w < 1 || h < 1 || x0 + w > width || y0 + h > height)
+    throw Error("a window of " + std::to_string(w) + "x" + std::to_string(h) + " px at (" + std::to_string(x0) + ", " +
+                std::to_string(y0) + ") does not fit a " + std::to_string(width) + "x" + std::to_string(height) +
+                " image");
+  Camera out = *this;
+  out.width = w;
+  out.height = h;
+  if (out.params.size() >= 4) {
+    out.params[2] -= x0;
+    out.params[3] -= y0;
+  }
+  return out;
+}
+
 std::string Camera::modelName() const {
   std::string name = "unknown";
   models::visitModelType(model, [&](auto tag) { name = decltype(tag)::type::kName; });

@@ -86,6 +86,29 @@ void CameraRig::validate() const {
   }
 }
 
+ImageWindow solvableWindow(const Rig& pair, const FieldOptions& options, int margin) {
+  const BuiltCamera cam0(pair.cam0), cam1(pair.cam1);
+  const int width = pair.cam0.width, height = pair.cam0.height;
+  // Sampled every kStep px (and on the last row and column): the mask's outline is smooth
+  // at that scale, and the margin covers what falls between the samples.
+  constexpr int kStep = 4;
+  margin = std::max(margin, kStep);
+  int left = width, right = -1, top = height, bottom = -1;
+  for (int y = 0; y < height; y = (y == height - 1) ? height : std::min(y + kStep, height - 1))
+    for (int x = 0; x < width; x = (x == width - 1) ? width : std::min(x + kStep, width - 1)) {
+      if (!fieldsAtPixel(cam0, cam1, pair.R, pair.t, options, x, y).valid) continue;
+      left = std::min(left, x), right = std::max(right, x);
+      top = std::min(top, y), bottom = std::max(bottom, y);
+    }
+  if (right < 0) return {};
+  ImageWindow w;
+  w.x0 = std::max(0, left - margin);
+  w.y0 = std::max(0, top - margin);
+  w.width = std::min(width - 1, right + margin) - w.x0 + 1;
+  w.height = std::min(height - 1, bottom + margin) - w.y0 + 1;
+  return w;
+}
+
 Rig pairRig(const CameraRig& rig, int i, int j) {
   if (i < 0 || j < 0 || i >= rig.size() || j >= rig.size() || i == j || rig.poses.size() != rig.cameras.size())
     throw Error("pairRig: cameras " + std::to_string(i) + " and " + std::to_string(j) +

@@ -64,9 +64,13 @@ static Params reverseParams(Params p) {
 // sweep's, a volume and costs of band channels each, two results and `first` (1), and a warm frame's volume and
 // costs of warmBand channels where narrower. With plainFill, 8 at its level (support 6, labels 2), the planes and 1
 // at level 0 (the planes' confidence). A sequence adds 6 more at level 0 (resetSequence: three states).
-static unsigned long long levelFloats(const std::vector<LevelSize>& plan, const Params& params) {
+// rawRight is image 1's size, which may differ from image 0's (the calibration warp resamples
+// it onto image 0's grid).
+static unsigned long long levelFloats(const Rig& rig, const Params& params) {
+  const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
   auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
-  unsigned long long floats = (params.lrCheck ? 11ull : 10ull) * pixels(plan[0]);
+  unsigned long long floats = (params.lrCheck ? 10ull : 9ull) * pixels(plan[0]) +
+                              (unsigned long long)rig.cam1.width * (unsigned long long)rig.cam1.height;
   if (params.plainFill)
     floats += (kPlainSupportChannels + 2ull) * pixels(plan[std::min(plan.size() - 1, size_t(params.plainFillLevel))]) +
               3ull * kMaxPlainPlanes + pixels(plan[0]);
@@ -76,13 +80,13 @@ static unsigned long long levelFloats(const std::vector<LevelSize>& plan, const 
 }
 
 unsigned long long Pipeline::bufferBytesBeforeSweep(const Rig& rig, const Params& params) {
-  return levelFloats(pyramidPlan(rig.cam0.width, rig.cam0.height, params), params) * sizeof(float);
+  return levelFloats(rig, params) * sizeof(float);
 }
 
 unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
   const std::vector<LevelSize> plan = pyramidPlan(rig.cam0.width, rig.cam0.height, params);
   auto pixels = [](const LevelSize& s) { return (unsigned long long)s.width * (unsigned long long)s.height; };
-  unsigned long long floats = levelFloats(plan, params);
+  unsigned long long floats = levelFloats(rig, params);
   if (params.init == Params::Init::PlaneSweep) {
     const size_t level = size_t(sweepLevel(params, int(plan.size())));
     const bool banded = sweepBanded(params, int(plan.size()));
@@ -101,7 +105,8 @@ unsigned long long Pipeline::bufferBytes(const Rig& rig, const Params& params) {
   }
   unsigned long long bytes = floats * sizeof(float);
   if (params.lrCheck)
-    bytes += bufferBytes(reversedRig(rig), reverseParams(params)) - 2ull * pixels(plan[0]) * sizeof(float);
+    bytes += bufferBytes(reversedRig(rig), reverseParams(params)) -  // its grid is image 1's
+             2ull * (unsigned long long)rig.cam1.width * (unsigned long long)rig.cam1.height * sizeof(float);
   return bytes;
 }
 
@@ -139,7 +144,10 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
     // Fields are computed exactly at each level from the scaled cameras rather than
     // resampled from level 0: the same cost (once per pose) and no averaging of tangents.
     L.cam0 = levelCamera(rig.cam0, size);
-    L.cam1 = levelCamera(rig.cam1, size);
+    // Camera 1 keeps its own image size where it differs from camera 0's: its fields ask
+    // whether a ray lands inside image 1.
+    const bool oneSize = rig.cam1.width == rig.cam0.width && rig.cam1.height == rig.cam0.height;
+    L.cam1 = oneSize ? levelCamera(rig.cam1, size) : rig.cam1.scaled(size.scale);
     auto make = [&](int channels) { return backend_.create(size.width, size.height, channels); };
     L.userMask = make(1), L.i0 = make(1), L.i1 = make(1), L.mask = make(1), L.trajectory = make(2);
     L.tensor = make(4), L.steps = make(4), L.w = make(2), L.tangent = make(2), L.scratch = make(1);
@@ -196,7 +204,7 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
   }
   setUserMask(userMask);
   const int w = rig.cam0.width, h = rig.cam0.height;
-  rawRight_ = backend_.create(w, h, 1);
+  rawRight_ = backend_.create(rig.cam1.width, rig.cam1.height, 1);
   calibration_ = backend_.create(w, h, 2);
   radial_ = backend_.create(w, h, 1);
   points_ = backend_.create(w, h, 3);

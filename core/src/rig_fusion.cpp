@@ -85,25 +85,38 @@ void invalidate(DepthResult& r, size_t p) {
   if (!r.depth.points.empty()) r.depth.points.data[p] = {kNaNf, kNaNf, kNaNf};
 }
 
-// Pixel p of `out` from the estimates: the most confident one, averaged with those that agree.
-void fusePixel(const std::vector<const DepthResult*>& estimates, const Eigen::Vector3f& ray, bool withFlow, size_t p,
-               DepthResult& out) {
+// Where camera pixel (x, y) lies in an estimate of a window, if it has a depth there.
+bool covers(const PlacedEstimate& e, int x, int y, size_t& at) {
+  const int u = x - e.window.x0, v = y - e.window.y0;
+  if (u < 0 || v < 0 || u >= e.window.width || v >= e.window.height) return false;
+  at = size_t(v) * size_t(e.window.width) + size_t(u);
+  return e.result->valid.data[at] != 0;
+}
+
+// Pixel (x, y), index p, of `out` from the estimates: the most confident one, averaged with
+// those that agree.
+void fusePixel(const std::vector<PlacedEstimate>& estimates, const Eigen::Vector3f& ray, bool withFlow, int x, int y,
+               size_t p, DepthResult& out) {
   const DepthResult* best = nullptr;
-  for (const DepthResult* e : estimates)
-    if (e->valid.data[p] && (!best || weightOf(e->confidence.data[p]) > weightOf(best->confidence.data[p]))) best = e;
+  size_t bestAt = 0, at = 0;
+  for (const PlacedEstimate& e : estimates)
+    if (covers(e, x, y, at) &&
+        (!best || weightOf(e.result->confidence.data[at]) > weightOf(best->confidence.data[bestAt])))
+      best = e.result, bestAt = at;
   if (!best) return invalidate(out, p);
-  const double bestDepth = best->depth.radial.data[p];
+  const double bestDepth = best->depth.radial.data[bestAt];
   double inverseSum = 0, weightSum = 0;
-  for (const DepthResult* e : estimates) {
-    const double d = e->depth.radial.data[p];
-    if (!e->valid.data[p] || !agrees(d, bestDepth)) continue;
-    const double w = weightOf(e->confidence.data[p]);
+  for (const PlacedEstimate& e : estimates) {
+    if (!covers(e, x, y, at)) continue;
+    const double d = e.result->depth.radial.data[at];
+    if (!agrees(d, bestDepth)) continue;
+    const double w = weightOf(e.result->confidence.data[at]);
     inverseSum += w / d, weightSum += w;
   }
   const double depth = 1.0 / (inverseSum / weightSum);
   out.valid.data[p] = 1;
-  if (withFlow) out.disparity.data[p] = best->disparity.data[p], out.warp.data[p] = best->warp.data[p];
-  out.confidence.data[p] = best->confidence.data[p];
+  if (withFlow) out.disparity.data[p] = best->disparity.data[bestAt], out.warp.data[p] = best->warp.data[bestAt];
+  out.confidence.data[p] = best->confidence.data[bestAt];
   out.depth.radial.data[p] = float(depth);
   out.depth.z.data[p] = std::isfinite(depth) ? float(depth * ray.z()) : INFINITY;
   out.depth.points.data[p] = std::isfinite(depth)
@@ -115,12 +128,24 @@ void fusePixel(const std::vector<const DepthResult*>& estimates, const Eigen::Ve
 
 void fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates, const CameraRays& rays,
                          DepthResult& out) {
+  std::vector<PlacedEstimate> placed;
+  for (const DepthResult* e : estimates) placed.push_back({e, {}});
+  fuseCameraEstimates(cam, placed, rays, out);
+}
+
+void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& estimates, const CameraRays& rays,
+                         DepthResult& out) {
   if (estimates.empty()) throw Error("fuseCameraEstimates: no estimates");
-  for (const DepthResult* e : estimates) checkFusionInput(*e, cam, false, "fuseCameraEstimates");
-  if (!sameSize(rays, cam)) throw Error("fuseCameraEstimates: the rays are not the camera's size");
+  std::vector<PlacedEstimate> placed = estimates;
   bool withFlow = true;
-  for (const DepthResult* e : estimates) withFlow = withFlow && sameSize(e->disparity, cam) && sameSize(e->warp, cam);
-  const DepthResult& first = *estimates.front();
+  for (PlacedEstimate& e : placed) {
+    if (e.window.empty()) e.window = {0, 0, cam.width, cam.height};
+    const Camera part = cam.cropped(e.window.x0, e.window.y0, e.window.width, e.window.height);
+    checkFusionInput(*e.result, part, false, "fuseCameraEstimates");
+    withFlow = withFlow && sameSize(e.result->disparity, part) && sameSize(e.result->warp, part);
+  }
+  if (!sameSize(rays, cam)) throw Error("fuseCameraEstimates: the rays are not the camera's size");
+  const DepthResult& first = *placed.front().result;
   out.stages = first.stages;
   out.totalMs = first.totalMs;
   out.warm = first.warm, out.redone = first.redone;
@@ -134,8 +159,11 @@ void fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*
     out.disparity = ImageF(), out.warp = FlowImage();
   }
   inChunks(cam.height, [&](int y0, int y1) {
-    for (size_t p = size_t(y0) * size_t(cam.width); p < size_t(y1) * size_t(cam.width); ++p)
-      fusePixel(estimates, rays.data[p], withFlow, p, out);
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
+        fusePixel(placed, rays.data[p], withFlow, x, y, p, out);
+      }
   });
 }
 

@@ -12,15 +12,16 @@ std::string sizeText(int w, int h) { return std::to_string(w) + "x" + std::to_st
 void StereoCore::validate(const Rig& rig, const Params& params) {
   rig.validate();
   params.validate();
-  if (rig.cam0.width < kMinSide || rig.cam0.height < kMinSide)
-    throw Error("images of " + sizeText(rig.cam0.width, rig.cam0.height) + " are too small (at least " +
-                sizeText(kMinSide, kMinSide) + ")");
-  if (rig.cam0.width > kMaxSide || rig.cam0.height > kMaxSide)
-    throw Error("images of " + sizeText(rig.cam0.width, rig.cam0.height) + " are too large (at most " +
-                std::to_string(kMaxSide) + " px per side)");
-  if (rig.cam1.width != rig.cam0.width || rig.cam1.height != rig.cam0.height)
-    throw Error("the cameras differ in resolution (" + sizeText(rig.cam0.width, rig.cam0.height) + " and " +
-                sizeText(rig.cam1.width, rig.cam1.height) + "): both images must have the same size");
+  // The cameras may differ in resolution: image 1 is resampled onto image 0's grid once
+  // (the calibration warp), and everything after works there.
+  for (const Camera* cam : {&rig.cam0, &rig.cam1}) {
+    if (cam->width < kMinSide || cam->height < kMinSide)
+      throw Error("images of " + sizeText(cam->width, cam->height) + " are too small (at least " +
+                  sizeText(kMinSide, kMinSide) + ")");
+    if (cam->width > kMaxSide || cam->height > kMaxSide)
+      throw Error("images of " + sizeText(cam->width, cam->height) + " are too large (at most " +
+                  std::to_string(kMaxSide) + " px per side)");
+  }
 }
 
 // Every buffer of every level is allocated here, so this is where a frame too large for

@@ -37,8 +37,8 @@ struct DeviceIO {
 
 class StereoCore {
  public:
-  // Validates the rig (Rig::validate, sizes kMinSide..kMaxSide per side, both cameras of
-  // one resolution) and the parameters, then calls makeBackend (only when both are good),
+  // Validates the rig (Rig::validate, sizes kMinSide..kMaxSide per side; the cameras may
+  // differ in resolution) and the parameters, then calls makeBackend (only when both are good),
   // checks that the frame's buffers fit in the backend's memory (Pipeline::bufferBytes
   // against Backend::memoryBytes) and builds the pipeline with the rig's pose. Every
   // failure is one cs::Error; the memory and set-up ones name the frame size and backend.

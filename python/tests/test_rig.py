@@ -157,7 +157,10 @@ def test_field_of_view_as_the_cli(cli, tmp_path):
     rig = cs.load_rig(tmp_path / "camchain.yaml")
     assert cs.preset_params("fast")["max_fov_deg"] == 180
     assert cs.RigStereo(rig, "fast", "cpu").params["max_fov_deg"] > 200
-    assert cs.RigStereo(rig, "fast", "cpu", max_fov=120).params["max_fov_deg"] == 120
+    assert cs.RigStereo(rig, "fast", "cpu", max_fov=210).params["max_fov_deg"] == 210
+    # Within 120 degrees two lenses back to back see nothing of each other.
+    with pytest.raises(cs.Error, match="cam0 sees nothing of cam1's view within the field of view"):
+        cs.RigStereo(rig, "fast", "cpu", max_fov=120)
 
 
 def test_rig_sequence_frames_feed_next(ring4, tmp_path):

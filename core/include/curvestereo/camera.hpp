@@ -37,6 +37,9 @@ class Camera {
   bool inImage(const Vec2<double>& px, double margin = 0.0) const;
   // The camera for the same lens imaged at resolution scaled by s (pixel-centre aware).
   Camera scaled(double s) const;
+  // The camera of the window of this image from pixel (x0, y0), width x height px: the
+  // same rays, each at its pixel moved by (-x0, -y0).
+  Camera cropped(int x0, int y0, int width, int height) const;
   // "kannala-brandt4", "unified", ... for messages.
   std::string modelName() const;
   // Throws cs::Error naming the problem if any parameter is non-finite or absurd.

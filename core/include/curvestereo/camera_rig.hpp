@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "curvestereo/camera.hpp"
+#include "curvestereo/fields.hpp"
 #include "curvestereo/rig.hpp"
 
 namespace cs {
@@ -32,6 +33,19 @@ struct CameraRig {
 
 // The solver's pair: camera i as cam0, camera j as cam1, X_j = R X_i + t.
 Rig pairRig(const CameraRig& rig, int i, int j);
+// A rectangle of an image: from pixel (x0, y0), width x height px.
+struct ImageWindow {
+  int x0 = 0, y0 = 0, width = 0, height = 0;
+  bool empty() const { return width <= 0 || height <= 0; }
+};
+// The part of camera 0's image that a pair can solve: the bounding box of the pixels the
+// fields keep (computeFields' mask: in the field of view, seen by camera 1, off the
+// epipoles), found on a grid of every 4th pixel, grown by `margin` (at least 4) px and
+// clamped to the image; empty when there are none. Two
+// fisheyes 90 degrees apart share about half of each image, and a solve on the window
+// costs what its pixels do (RigStereo solves on it).
+ImageWindow solvableWindow(const Rig& pair, const FieldOptions& options, int margin);
+
 // The rig of a pair: cam0 at the body origin.
 CameraRig rigFromPair(const Rig& pair);
 

@@ -30,6 +30,16 @@ CameraRays cameraRays(const Camera& cam);
 // points always, from the fused depth.
 void fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*>& estimates, const CameraRays& rays,
                          DepthResult& out);
+// An estimate of a window of the camera's image (RigStereo solves each direction on the part
+// of the reference's image its partner can see, solvableWindow): the result is the window's
+// size, and the camera's pixels outside it have no estimate from it.
+struct PlacedEstimate {
+  const DepthResult* result = nullptr;
+  ImageWindow window;  // empty: the whole image
+};
+// The same fusion of estimates of windows (each result the size of its window, else cs::Error).
+void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& estimates, const CameraRays& rays,
+                         DepthResult& out);
 
 // The round trip between a pair's two directions, on the host, at no solve's cost: each pixel
 // of `forward` (camera i's depth from the pair with j; pair = pairRig(rig, i, j)) is carried

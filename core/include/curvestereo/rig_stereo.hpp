@@ -30,6 +30,7 @@ struct RigResult {
   std::vector<DepthResult> cameras;  // per camera, radial depth from that camera
   struct Solve {
     int reference = 0, other = 0;  // the pair's cameras: depth for `reference`
+    ImageWindow window;            // the part of the reference's image solved (setSolveWindows)
     double ms = 0;
     long long crossCheckInvalidated = 0;  // pixels the cross-check took away (setCrossCheck)
     bool warm = false, redone = false;    // next(): as the direction's DepthResult says
@@ -41,8 +42,9 @@ struct RigResult {
 class RigStereo {
  public:
   // Each pair is solved both ways (reference i against j, and j against i), so each camera
-  // of a pair gets a depth from it. Throws cs::Error as Stereo's constructor does, or when a
-  // camera of the rig is in no pair.
+  // of a pair gets a depth from it, each on the window of the reference's image that the
+  // other camera sees (setSolveWindows). Throws cs::Error as Stereo's constructor does, or
+  // when a camera of the rig is in no pair.
   RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, const Params& params = preset("realtime"),
             const std::string& backend = "auto");
   ~RigStereo();
@@ -68,6 +70,15 @@ class RigStereo {
   // Whether each camera's result carries the disparity and warp of its most confident pair
   // (default: on). Off, the solves return less: a panorama or a point cloud needs neither.
   void setFlowOutputs(bool on);
+  // Whether each direction solves only the window of its reference's image that its partner
+  // can see (solvableWindow, grown by kWindowMargin px; default: on) or the whole image. Two
+  // fisheyes 90 degrees apart share about half of each image: the window halves the solve.
+  // The pixels outside it have no estimate either way; inside, the results differ only by
+  // where the pyramid's coarse levels meet the window's edge, and by the levels themselves:
+  // a window narrower than the image may have one level fewer (Params::minWidth). Changing
+  // it builds the directions' solvers again (and starts a new sequence).
+  void setSolveWindows(bool on);
+  static constexpr int kWindowMargin = 16;
   // Whether the directions solve concurrently, one thread each (default: on). The results
   // are the same either way; off, they run one after the other on the calling thread.
   void setConcurrentSolves(bool on);
@@ -80,8 +91,13 @@ class RigStereo {
  private:
   struct Direction {
     int reference, other;
+    ImageWindow window;  // of the reference's image
     std::unique_ptr<Stereo> stereo;
+    ImageF windowImage;  // the reference's image in the window, reused frame after frame
   };
+  void buildDirections();
+  Rig windowPair(size_t d, size_t back) const;
+  const ImageF& referenceImage(Direction& dir, const std::vector<ImageF>& images);
   template <class Solve>
   void solveAll(const std::vector<ImageF>& images, RigResult& out, Solve&& solve);
   void applyOutputs();
@@ -89,6 +105,10 @@ class RigStereo {
   void solveDirections(Solve& solve);  // into estimates_
 
   CameraRig rig_;
+  std::vector<PairInfo> pairs_;
+  Params params_;
+  std::string backend_;
+  bool windows_ = true;
   std::vector<Direction> directions_;
   std::vector<CameraRays> rays_;        // per camera, for the fusion
   std::vector<DepthResult> estimates_;  // per direction, reused frame after frame
