@@ -76,6 +76,8 @@ void RigStereo::applyOutputs() {
   for (Direction& dir : directions_) dir.stereo->setOutputs({flow_, flow_, false, true});
 }
 
+void RigStereo::setPointOutputs(bool on) { points_ = on; }
+
 void RigStereo::setFlowOutputs(bool on) {
   flow_ = on;
   applyOutputs();
@@ -179,6 +181,7 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
   }
   const auto start = std::chrono::steady_clock::now();
   solveDirections(solve);  // into estimates_, reused: a frame allocates nothing
+  const auto solved = std::chrono::steady_clock::now();
   out.solves.clear();
   for (size_t d = 0; d < directions_.size(); ++d) {
     const Direction& dir = directions_[d];
@@ -198,9 +201,11 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
     std::vector<PlacedEstimate> mine;
     for (size_t d = 0; d < directions_.size(); ++d)
       if (directions_[d].reference == k) mine.push_back({&estimates_[d], directions_[d].window});
-    fuseCameraEstimates(rig_.cameras[size_t(k)], mine, rays_[size_t(k)], out.cameras[size_t(k)]);
+    fuseCameraEstimates(rig_.cameras[size_t(k)], mine, rays_[size_t(k)], out.cameras[size_t(k)], points_);
   }
-  out.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const auto end = std::chrono::steady_clock::now();
+  out.totalMs = std::chrono::duration<double, std::milli>(end - start).count();
+  out.fusionMs = std::chrono::duration<double, std::milli>(end - solved).count();
 }
 
 }  // namespace cs

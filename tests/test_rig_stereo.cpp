@@ -94,6 +94,18 @@ TEST_CASE("each direction solves the window its partner sees, with the whole ima
   const std::vector<PairInfo> pairs = choosePairs(rig);
   RigStereo stereo(rig, pairs, shortSolve(rig), "cpu");
   const RigResult windowed = stereo.compute(synthetic.images);
+  // Without points the fusion leaves z and points out, and changes nothing else.
+  stereo.setPointOutputs(false);
+  const RigResult depthOnly = stereo.compute(synthetic.images);
+  for (size_t k = 0; k < 4; ++k) {
+    CHECK(depthOnly.cameras[k].depth.points.empty());
+    CHECK(depthOnly.cameras[k].depth.z.empty());
+    CHECK(sameResult(depthOnly.cameras[k], windowed.cameras[k]));
+    CHECK(windowed.cameras[k].depth.points.width == 64);
+  }
+  CHECK(windowed.fusionMs > 0);
+  CHECK(windowed.fusionMs < windowed.totalMs);
+  stereo.setPointOutputs(true);
   stereo.setSolveWindows(false);
   const RigResult whole = stereo.compute(synthetic.images);
   REQUIRE(windowed.solves.size() == 2 * pairs.size());

@@ -95,8 +95,8 @@ bool covers(const PlacedEstimate& e, int x, int y, size_t& at) {
 
 // Pixel (x, y), index p, of `out` from the estimates: the most confident one, averaged with
 // those that agree.
-void fusePixel(const std::vector<PlacedEstimate>& estimates, const Eigen::Vector3f& ray, bool withFlow, int x, int y,
-               size_t p, DepthResult& out) {
+void fusePixel(const std::vector<PlacedEstimate>& estimates, const Eigen::Vector3f& ray, bool withFlow,
+               bool withPoints, int x, int y, size_t p, DepthResult& out) {
   const DepthResult* best = nullptr;
   size_t bestAt = 0, at = 0;
   for (const PlacedEstimate& e : estimates)
@@ -118,6 +118,7 @@ void fusePixel(const std::vector<PlacedEstimate>& estimates, const Eigen::Vector
   if (withFlow) out.disparity.data[p] = best->disparity.data[bestAt], out.warp.data[p] = best->warp.data[bestAt];
   out.confidence.data[p] = best->confidence.data[bestAt];
   out.depth.radial.data[p] = float(depth);
+  if (!withPoints) return;
   out.depth.z.data[p] = std::isfinite(depth) ? float(depth * ray.z()) : INFINITY;
   out.depth.points.data[p] = std::isfinite(depth)
                                  ? Point3f{float(depth * ray.x()), float(depth * ray.y()), float(depth * ray.z())}
@@ -134,7 +135,7 @@ void fuseCameraEstimates(const Camera& cam, const std::vector<const DepthResult*
 }
 
 void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& estimates, const CameraRays& rays,
-                         DepthResult& out) {
+                         DepthResult& out, bool withPoints) {
   if (estimates.empty()) throw Error("fuseCameraEstimates: no estimates");
   std::vector<PlacedEstimate> placed = estimates;
   bool withFlow = true;
@@ -152,7 +153,11 @@ void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& e
   out.consistentShare = first.consistentShare, out.meanConfidence = first.meanConfidence;
   out.lrPassShare = first.lrPassShare;
   sizeFor(out.valid, cam), sizeFor(out.confidence, cam), sizeFor(out.depth.radial, cam);
-  sizeFor(out.depth.z, cam), sizeFor(out.depth.points, cam);
+  if (withPoints) {
+    sizeFor(out.depth.z, cam), sizeFor(out.depth.points, cam);
+  } else {
+    out.depth.z = ImageF(), out.depth.points = Image<Point3f>();
+  }
   if (withFlow) {
     sizeFor(out.disparity, cam), sizeFor(out.warp, cam);
   } else {
@@ -162,7 +167,7 @@ void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& e
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < cam.width; ++x) {
         const size_t p = size_t(y) * size_t(cam.width) + size_t(x);
-        fusePixel(placed, rays.data[p], withFlow, x, y, p, out);
+        fusePixel(placed, rays.data[p], withFlow, withPoints, x, y, p, out);
       }
   });
 }

@@ -38,8 +38,9 @@ struct PlacedEstimate {
   ImageWindow window;  // empty: the whole image
 };
 // The same fusion of estimates of windows (each result the size of its window, else cs::Error).
+// withPoints false: no z or points (empty), a third of what the fusion writes.
 void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& estimates, const CameraRays& rays,
-                         DepthResult& out);
+                         DepthResult& out, bool withPoints = true);
 
 // The round trip between a pair's two directions, on the host, at no solve's cost: each pixel
 // of `forward` (camera i's depth from the pair with j; pair = pairRig(rig, i, j)) is carried

@@ -36,7 +36,8 @@ struct RigResult {
     bool warm = false, redone = false;    // next(): as the direction's DepthResult says
   };
   std::vector<Solve> solves;
-  double totalMs = 0;  // the solves and the fusion
+  double totalMs = 0;   // the solves and the fusion
+  double fusionMs = 0;  // of which the cross-check and the per-camera fusion (host)
 };
 
 class RigStereo {
@@ -70,6 +71,9 @@ class RigStereo {
   // Whether each camera's result carries the disparity and warp of its most confident pair
   // (default: on). Off, the solves return less: a panorama or a point cloud needs neither.
   void setFlowOutputs(bool on);
+  // Whether each camera's result carries z and points (default: on). Off, the fusion writes
+  // a third less: a panorama needs neither.
+  void setPointOutputs(bool on);
   // Whether each direction solves only the window of its reference's image that its partner
   // can see (solvableWindow, grown by kWindowMargin px; default: on) or the whole image. Two
   // fisheyes 90 degrees apart share about half of each image: the window halves the solve.
@@ -113,7 +117,7 @@ class RigStereo {
   std::vector<CameraRays> rays_;        // per camera, for the fusion
   std::vector<DepthResult> estimates_;  // per direction, reused frame after frame
   double crossCheck_ = 0;
-  bool concurrent_ = true, flow_ = true;
+  bool concurrent_ = true, flow_ = true, points_ = true;
 };
 
 }  // namespace cs
