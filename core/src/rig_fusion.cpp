@@ -99,21 +99,28 @@ void fusePixel(const std::vector<PlacedEstimate>& estimates, const Eigen::Vector
                bool withPoints, int x, int y, size_t p, DepthResult& out) {
   const DepthResult* best = nullptr;
   size_t bestAt = 0, at = 0;
-  for (const PlacedEstimate& e : estimates)
-    if (covers(e, x, y, at) &&
-        (!best || weightOf(e.result->confidence.data[at]) > weightOf(best->confidence.data[bestAt])))
-      best = e.result, bestAt = at;
-  if (!best) return invalidate(out, p);
-  const double bestDepth = best->depth.radial.data[bestAt];
-  double inverseSum = 0, weightSum = 0;
+  double bestWeight = 0;
+  int covering = 0;
   for (const PlacedEstimate& e : estimates) {
     if (!covers(e, x, y, at)) continue;
-    const double d = e.result->depth.radial.data[at];
-    if (!agrees(d, bestDepth)) continue;
+    ++covering;
     const double w = weightOf(e.result->confidence.data[at]);
-    inverseSum += w / d, weightSum += w;
+    if (!best || w > bestWeight) best = e.result, bestAt = at, bestWeight = w;
   }
-  const double depth = 1.0 / (inverseSum / weightSum);
+  if (!best) return invalidate(out, p);
+  const double bestDepth = best->depth.radial.data[bestAt];
+  double depth = bestDepth;  // alone: as it is (most pixels, and no division)
+  if (covering > 1) {
+    double inverseSum = 0, weightSum = 0;
+    for (const PlacedEstimate& e : estimates) {
+      if (!covers(e, x, y, at)) continue;
+      const double d = e.result->depth.radial.data[at];
+      if (!agrees(d, bestDepth)) continue;
+      const double w = weightOf(e.result->confidence.data[at]);
+      inverseSum += w / d, weightSum += w;
+    }
+    depth = 1.0 / (inverseSum / weightSum);
+  }
   out.valid.data[p] = 1;
   if (withFlow) out.disparity.data[p] = best->disparity.data[bestAt], out.warp.data[p] = best->warp.data[bestAt];
   out.confidence.data[p] = best->confidence.data[bestAt];
