@@ -288,7 +288,8 @@ class RigResult:
     def cameras(self) -> list[Result]: ...
     @property
     def solves(self) -> list[dict[str, Any]]:
-        """{'reference', 'other', 'ms', 'cross_check_invalidated'} per pair direction."""
+        """{'reference', 'other', 'window', 'ms', 'cross_check_invalidated', 'warm', 'redone'} per pair
+        direction; window: (x0, y0, width, height), the part of the reference's image solved."""
     @property
     def total_ms(self) -> float: ...
     def panorama(

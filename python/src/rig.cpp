@@ -164,6 +164,7 @@ pb::dict solveDict(const RigResult::Solve& s) {
   d["cross_check_invalidated"] = s.crossCheckInvalidated;
   d["warm"] = s.warm;
   d["redone"] = s.redone;
+  d["window"] = pb::make_tuple(s.window.x0, s.window.y0, s.window.width, s.window.height);
   return d;
 }
 
@@ -434,7 +435,9 @@ void bindRigs(pb::module_& m) {
       .def_readonly("cameras", &PyRigResult::cameras,
                     "One Result per camera, in order: its radial depth from its own centre, fused from its pairs.")
       .def_readonly("solves", &PyRigResult::solves,
-                    "Each pair direction solved: {'reference', 'other', 'ms', 'cross_check_invalidated'}.")
+                    "Each pair direction solved: {'reference', 'other', 'window', 'ms', 'cross_check_invalidated', "
+                    "'warm', 'redone'}; window: (x0, y0, width, height), the part of the reference's image solved "
+                    "(the side its partner sees).")
       .def_readonly("total_ms", &PyRigResult::totalMs, "The solves and the per-camera fusion, milliseconds.")
       .def("panorama", &PyRigResult::panorama, pb::arg("width") = 2048, pb::arg("centre") = pb::none(),
            pb::arg("min_confidence") = 0.0f,

@@ -55,6 +55,9 @@ def test_cameras_match_the_cli_bit_for_bit(ring4, solved):
     rig, stereo, _, r = solved
     assert stereo.backend == "cpu"
     assert len(r.cameras) == 4 and len(r.solves) == 2 * len(stereo.pairs)
+    for s in r.solves:  # each direction solved the side of its image its partner sees
+        x0, y0, w, h = s["window"]
+        assert 0 < w < 0.8 * SIZE and h == SIZE and 0 <= x0 <= SIZE - w and y0 == 0, s
     for k, cam in enumerate(r.cameras):
         assert cam.depth.shape == (SIZE, SIZE) and cam.depth.dtype == np.float32
         assert cam.valid.mean() > 0.5, k
