@@ -363,15 +363,18 @@ std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& inst
   if (!d) {
     d = std::make_shared<SharedDevice>();
     d->instance = instance;
-    uint32_t most = 1;
-    for (const auto& [family, count] : c.computeFamilies) most = std::max(most, count);
-    const std::vector<float> priorities(most, 1.f);
+    // One queue per family: NVIDIA's driver time-slices a family's queues rather than running
+    // them side by side, so more queues of one family only cost switches (eight rig
+    // directions on 16 + 8 queues: 31.1-31.3 ms a frame on an H100; on one queue of each
+    // family: 25.9-26.9 ms). Two families do overlap.
+    const float priority = 1.f;
     std::vector<VkDeviceQueueCreateInfo> qcis;
-    for (const auto& [family, count] : c.computeFamilies) {
+    for (const auto& familyQueues : c.computeFamilies) {
+      const uint32_t family = familyQueues.first;
       auto qci = vkStruct<VkDeviceQueueCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO);
       qci.queueFamilyIndex = family;
-      qci.queueCount = count;
-      qci.pQueuePriorities = priorities.data();
+      qci.queueCount = 1;
+      qci.pQueuePriorities = &priority;
       qcis.push_back(qci);
     }
     auto f12 = vkStruct<VkPhysicalDeviceVulkan12Features>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES);
@@ -402,14 +405,13 @@ std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& inst
       d->device = VK_NULL_HANDLE;
       throw Error("vulkan backend: vkCreateDevice failed: " + resultText(r));
     }
-    for (uint32_t i = 0; i < most; ++i)
-      for (const auto& [family, count] : c.computeFamilies) {
-        if (i >= count) continue;
-        auto q = std::make_unique<SharedDevice::Queue>();
-        q->family = family;
-        instance->fn.vkGetDeviceQueue(d->device, family, i, &q->queue);
-        d->queues.push_back(std::move(q));
-      }
+    for (const auto& familyQueues : c.computeFamilies) {
+      const uint32_t family = familyQueues.first;
+      auto q = std::make_unique<SharedDevice::Queue>();
+      q->family = family;
+      instance->fn.vkGetDeviceQueue(d->device, family, 0, &q->queue);
+      d->queues.push_back(std::move(q));
+    }
     liveDevices[c.device] = d;
   }
   queue = d->queues[d->queuesTaken++ % d->queues.size()].get();

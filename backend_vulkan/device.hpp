@@ -190,8 +190,9 @@ struct SharedDevice {
     uint32_t family = 0;
     std::mutex lock;
   };
-  // Every queue of every family that computes, the families taken in turn (the first queue
-  // of each, then the second of each, ...), so that consecutive backends use other families.
+  // The first queue of every family that computes, taken in turn by the backends, so that
+  // consecutive backends use other families; backends beyond them share (each queue's
+  // submissions under its lock).
   std::vector<std::unique_ptr<Queue>> queues;
   bool atomicFloatAdd = false;  // enabled at creation (Candidate::atomicFloatAdd)
   bool abandoned = false;       // set by a backend that saw the device hang: never destroyed (leaked)
@@ -203,7 +204,7 @@ struct SharedDevice {
   ~SharedDevice();
 };
 
-// The logical device of candidate c (made on first use, with every queue of its compute families and
+// The logical device of candidate c (made on first use, with one queue of each compute family and
 // the features the backend enables), and the queue this caller is to use.
 // Throws cs::Error.
 std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& instance, const Candidate& c,
