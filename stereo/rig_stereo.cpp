@@ -62,7 +62,8 @@ const ImageF& RigStereo::referenceImage(Direction& dir, const std::vector<ImageF
   const ImageF& image = images[size_t(dir.reference)];
   const ImageWindow& w = dir.window;
   if (w.x0 == 0 && w.y0 == 0 && w.width == image.width && w.height == image.height) return image;
-  if (dir.windowImage.width != w.width || dir.windowImage.height != w.height) dir.windowImage = ImageF(w.width, w.height);
+  if (dir.windowImage.width != w.width || dir.windowImage.height != w.height)
+    dir.windowImage = ImageF(w.width, w.height);
   for (int y = 0; y < w.height; ++y) {
     const float* row = &image.data[size_t(w.y0 + y) * size_t(image.width) + size_t(w.x0)];
     std::copy(row, row + w.width, &dir.windowImage.data[size_t(y) * size_t(w.width)]);
@@ -194,7 +195,8 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
     for (size_t d = 0; d < directions_.size(); ++d)
       for (size_t back = 0; back < directions_.size(); ++back)
         if (directions_[back].reference == directions_[d].other && directions_[back].other == directions_[d].reference)
-          out.solves[d].crossCheckInvalidated = crossCheck(windowPair(d, back), estimates_[d], solved[back], crossCheck_);
+          out.solves[d].crossCheckInvalidated =
+              crossCheck(windowPair(d, back), estimates_[d], solved[back], crossCheck_);
   }
   out.cameras.resize(size_t(rig_.size()));
   for (int k = 0; k < rig_.size(); ++k) {

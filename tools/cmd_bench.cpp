@@ -181,7 +181,8 @@ int benchSequence(const Args& args, Stereo& stereo, const Sequence& sequence, in
 
 int cmdBench(const Args& args) {
   std::set<std::string> known = kSolverOptions;
-  known.insert({"calib", "size", "runs", "scale-intrinsics", "outputs", "sequence", "poses", "panorama-width", "serial"});
+  known.insert(
+      {"calib", "size", "runs", "scale-intrinsics", "outputs", "sequence", "poses", "panorama-width", "serial"});
   known.insert(kRigOptions.begin(), kRigOptions.end());
   args.allowOnly(known);
   if (args.has("runs") && args.getInt("runs", 0) < 1) throw Error("option --runs must be >= 1");

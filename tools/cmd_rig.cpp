@@ -89,8 +89,8 @@ Params rigParamsFromArgs(const Args& args, const CameraRig& rig) {
   return rigParams(rig, params);
 }
 
-std::unique_ptr<RigStereo> rigStereoFromArgs(const Args& args, const CameraRig& rig,
-                                             const std::vector<PairInfo>& pairs, const Params& params) {
+std::unique_ptr<RigStereo> rigStereoFromArgs(const Args& args, const CameraRig& rig, const std::vector<PairInfo>& pairs,
+                                             const Params& params) {
   const double crossCheck = args.getDouble("cross-check", 0.0);
   if (!(crossCheck >= 0.0 && crossCheck <= 1.0))
     throw UsageError("--cross-check expects a tolerance in [0, 1] (e.g. 0.1)");

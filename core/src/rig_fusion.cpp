@@ -95,8 +95,8 @@ bool covers(const PlacedEstimate& e, int x, int y, size_t& at) {
 
 // Pixel (x, y), index p, of `out` from the estimates: the most confident one, averaged with
 // those that agree.
-void fusePixel(const std::vector<PlacedEstimate>& estimates, const Eigen::Vector3f& ray, bool withFlow,
-               bool withPoints, int x, int y, size_t p, DepthResult& out) {
+void fusePixel(const std::vector<PlacedEstimate>& estimates, const Eigen::Vector3f& ray, bool withFlow, bool withPoints,
+               int x, int y, size_t p, DepthResult& out) {
   const DepthResult* best = nullptr;
   size_t bestAt = 0, at = 0;
   double bestWeight = 0;

@@ -55,8 +55,8 @@ class DeviceStereo {
   // non-blocking stream (see stream()). The legacy default stream (0 passed explicitly as cudaStreamLegacy) cannot be
   // recorded into a graph and is refused. device: the CUDA device index the stream belongs to. Validates as cs::Stereo
   // does (the same code): throws cs::Error on a bad rig or parameters, images smaller than 16x16 or larger than 32768
-  // px per side, cameras of different resolutions (which cs::Stereo takes: compute() has one pitch for both), a frame whose buffers do not fit in the device's memory, or when no
-  // usable CUDA device is present.
+  // px per side, cameras of different resolutions (which cs::Stereo takes: compute() has one pitch for both), a frame
+  // whose buffers do not fit in the device's memory, or when no usable CUDA device is present.
   explicit DeviceStereo(const Rig& rig, const Params& params = preset("realtime"), cudaStream_t stream = nullptr,
                         int device = 0);
   ~DeviceStereo();
