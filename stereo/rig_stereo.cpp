@@ -20,8 +20,8 @@ Params rigParams(const CameraRig& rig, Params params) {
 }
 
 RigStereo::RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, const Params& params,
-                     const std::string& backend)
-    : rig_(rig), pairs_(pairs), params_(params), backend_(backend) {
+                     const std::string& backend, bool solveWindows)
+    : rig_(rig), pairs_(pairs), params_(params), backend_(backend), windows_(solveWindows) {
   rig_.validate();
   buildDirections();
   std::vector<bool> covered(size_t(rig.size()), false);
@@ -182,7 +182,7 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
   }
   const auto start = std::chrono::steady_clock::now();
   solveDirections(solve);  // into estimates_, reused: a frame allocates nothing
-  const auto solved = std::chrono::steady_clock::now();
+  const auto solvedAt = std::chrono::steady_clock::now();
   out.solves.clear();
   for (size_t d = 0; d < directions_.size(); ++d) {
     const Direction& dir = directions_[d];
@@ -207,7 +207,7 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
   }
   const auto end = std::chrono::steady_clock::now();
   out.totalMs = std::chrono::duration<double, std::milli>(end - start).count();
-  out.fusionMs = std::chrono::duration<double, std::milli>(end - solved).count();
+  out.fusionMs = std::chrono::duration<double, std::milli>(end - solvedAt).count();
 }
 
 }  // namespace cs

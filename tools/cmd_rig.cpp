@@ -94,9 +94,8 @@ std::unique_ptr<RigStereo> rigStereoFromArgs(const Args& args, const CameraRig& 
   const double crossCheck = args.getDouble("cross-check", 0.0);
   if (!(crossCheck >= 0.0 && crossCheck <= 1.0))
     throw UsageError("--cross-check expects a tolerance in [0, 1] (e.g. 0.1)");
-  auto stereo = std::make_unique<RigStereo>(rig, pairs, params, backendFromArgs(args));
+  auto stereo = std::make_unique<RigStereo>(rig, pairs, params, backendFromArgs(args), !args.has("whole-images"));
   stereo->setCrossCheck(crossCheck);
-  if (args.has("whole-images")) stereo->setSolveWindows(false);
   return stereo;
 }
 

@@ -38,7 +38,7 @@ std::vector<PairInfo> rigPairsFromArgs(const Args& args, const CameraRig& rig);
 Params rigParamsFromArgs(const Args& args, const CameraRig& rig);
 
 // A rig's solver as the options ask: --cross-check T (RigStereo::setCrossCheck) and
-// --whole-images (setSolveWindows(false)).
+// --whole-images (whole images rather than solve windows).
 std::unique_ptr<RigStereo> rigStereoFromArgs(const Args& args, const CameraRig& rig, const std::vector<PairInfo>& pairs,
                                              const Params& params);
 // --panorama-min-confidence C (0 when absent): the panorama leaves out samples below C.

@@ -46,8 +46,9 @@ class RigStereo {
   // of a pair gets a depth from it, each on the window of the reference's image that the
   // other camera sees (setSolveWindows). Throws cs::Error as Stereo's constructor does, or
   // when a camera of the rig is in no pair.
+  // solveWindows: as setSolveWindows, from the start.
   RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, const Params& params = preset("realtime"),
-            const std::string& backend = "auto");
+            const std::string& backend = "auto", bool solveWindows = true);
   ~RigStereo();
   RigStereo(const RigStereo&) = delete;
   RigStereo& operator=(const RigStereo&) = delete;
