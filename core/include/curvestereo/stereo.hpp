@@ -31,9 +31,10 @@ class Stereo {
  public:
   // params: preset("realtime") unless given; backend: "auto", "cpu", ... (see
   // availableBackends()). Throws cs::Error on a bad rig, bad parameters, an unavailable
-  // backend, images smaller than 16x16 or larger than 32768 px per side, cameras of
-  // different resolutions, or a frame whose buffers do not fit in the backend's memory
-  // (the message names the frame size and the bytes).
+  // backend, images smaller than 16x16 or larger than 32768 px per side, or a frame whose
+  // buffers do not fit in the backend's memory (the message names the frame size and the
+  // bytes). The two cameras may differ in resolution: image 1 is resampled onto image 0's
+  // grid (RigStereo solves a window of one camera against the whole other).
   explicit Stereo(const Rig& rig, const Params& params = preset("realtime"), const std::string& backend = "auto");
   ~Stereo();
   Stereo(const Stereo&) = delete;
