@@ -231,17 +231,13 @@ std::vector<Candidate> candidates(const Instance& inst) {
     inst.fn.vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, nullptr);
     std::vector<VkQueueFamilyProperties> qf(nq);
     inst.fn.vkGetPhysicalDeviceQueueFamilyProperties(d, &nq, qf.data());
-    bool compute = false;
-    for (uint32_t i = 0; i < nq; ++i) {
-      if (!(qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT) || qf[i].queueCount == 0) continue;
-      if (!compute) compute = true, c.queueFamily = i, c.queueCount = qf[i].queueCount;
-      c.computeFamilies.emplace_back(i, qf[i].queueCount);
-    }
+    for (uint32_t i = 0; i < nq; ++i)
+      if ((qf[i].queueFlags & VK_QUEUE_COMPUTE_BIT) && qf[i].queueCount > 0) c.computeFamilies.push_back(i);
     if (c.props.apiVersion < VK_API_VERSION_1_2)
       c.unusable = "supports only Vulkan < 1.2";
     else if (!f12.bufferDeviceAddress)
       c.unusable = "lacks bufferDeviceAddress";
-    else if (!compute)
+    else if (c.computeFamilies.empty())
       c.unusable = "has no compute queue";
     else if (c.props.limits.maxPushConstantsSize < 128)
       c.unusable = "has < 128 bytes of push constants";
@@ -369,8 +365,7 @@ std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& inst
     // family: 25.9-26.9 ms). Two families do overlap.
     const float priority = 1.f;
     std::vector<VkDeviceQueueCreateInfo> qcis;
-    for (const auto& familyQueues : c.computeFamilies) {
-      const uint32_t family = familyQueues.first;
+    for (uint32_t family : c.computeFamilies) {
       auto qci = vkStruct<VkDeviceQueueCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO);
       qci.queueFamilyIndex = family;
       qci.queueCount = 1;
@@ -405,8 +400,7 @@ std::shared_ptr<SharedDevice> sharedDevice(const std::shared_ptr<Instance>& inst
       d->device = VK_NULL_HANDLE;
       throw Error("vulkan backend: vkCreateDevice failed: " + resultText(r));
     }
-    for (const auto& familyQueues : c.computeFamilies) {
-      const uint32_t family = familyQueues.first;
+    for (uint32_t family : c.computeFamilies) {
       auto q = std::make_unique<SharedDevice::Queue>();
       q->family = family;
       instance->fn.vkGetDeviceQueue(d->device, family, 0, &q->queue);

@@ -9,7 +9,6 @@
 #include <memory>
 #include <mutex>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace cs::vk {
@@ -149,11 +148,9 @@ const char* typeName(VkPhysicalDeviceType t);
 struct Candidate {
   VkPhysicalDevice device = VK_NULL_HANDLE;
   VkPhysicalDeviceProperties props{};
-  uint32_t queueFamily = 0, queueCount = 0;  // the first family that computes, and its queues
-  // Every family that computes, with its queue count: a rig's backends are dealt queues from
-  // all of them, since a driver may run two families' work side by side where it runs one
-  // family's queues one after another.
-  std::vector<std::pair<uint32_t, uint32_t>> computeFamilies;
+  // Every queue family that computes (none: unusable). The device gets one queue of each,
+  // dealt to its backends in turn (sharedDevice).
+  std::vector<uint32_t> computeFamilies;
   bool float64 = false, int64 = false;
   bool atomicFloatAdd = false;  // VK_EXT_shader_atomic_float's shaderBufferFloat32AtomicAdd
   std::string unusable;         // why this device cannot run the backend ("" if it can)

@@ -73,18 +73,16 @@ VulkanBackend::VulkanBackend(const std::string& spec) : instance_(sharedInstance
   // CURVESTEREO_VULKAN_SUBGROUPS=0 turns them off, as on a device without them, for tests of
   // the fallback).
   const char* useSubgroups = std::getenv("CURVESTEREO_VULKAN_SUBGROUPS");
-  const VkSubgroupFeatureFlags needed =
-      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_SHUFFLE_BIT;
-  subgroupArithmetic_ = props_.apiVersion >= VK_API_VERSION_1_1 &&
-                        (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
-                        (subgroup.supportedOperations & needed) == needed && subgroup.subgroupSize >= 1 &&
-                        !(useSubgroups && std::string(useSubgroups) == "0");
-  // Subgroup ballots (and their broadcasts) in compute shaders, for panorama_splat.comp's
-  // shared large footprints; off with the rest under CURVESTEREO_VULKAN_SUBGROUPS=0.
-  const VkSubgroupFeatureFlags ballots = VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
-  subgroupBallot_ =
-      props_.apiVersion >= VK_API_VERSION_1_1 && (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
-      (subgroup.supportedOperations & ballots) == ballots && !(useSubgroups && std::string(useSubgroups) == "0");
+  auto subgroupsHave = [&](VkSubgroupFeatureFlags needed) {
+    return props_.apiVersion >= VK_API_VERSION_1_1 && (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
+           (subgroup.supportedOperations & needed) == needed && subgroup.subgroupSize >= 1 &&
+           !(useSubgroups && std::string(useSubgroups) == "0");
+  };
+  subgroupArithmetic_ = subgroupsHave(VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT |
+                                      VK_SUBGROUP_FEATURE_SHUFFLE_BIT);
+  // Subgroup ballots (and their broadcasts), for panorama_splat.comp's shared large
+  // footprints; off with the rest under CURVESTEREO_VULKAN_SUBGROUPS=0.
+  subgroupBallot_ = subgroupsHave(VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT);
   subgroupSize_ = subgroup.subgroupSize;
   description_ = std::string(props_.deviceName) + " (" + typeName(props_.deviceType) + ", Vulkan " +
                  std::to_string(VK_API_VERSION_MAJOR(props_.apiVersion)) + "." +
