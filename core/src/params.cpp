@@ -138,13 +138,16 @@ Params::Init parseInit(const std::string& name) {
   return p.init;
 }
 
+LevelSize levelSize(int width, int height, double scale) {
+  return {int(std::ceil(width * scale)), int(std::ceil(height * scale)), scale};
+}
+
 std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p) {
   std::vector<LevelSize> plan{{width, height, 1.0}};
   for (int l = 1; l < p.levels; ++l) {
-    double s = std::pow(p.scale, -l);
-    int w = int(std::ceil(width * s)), h = int(std::ceil(height * s));
-    if (w < p.minWidth || h < p.minWidth) break;
-    plan.push_back({w, h, s});
+    const LevelSize level = levelSize(width, height, std::pow(p.scale, -l));
+    if (level.width < p.minWidth || level.height < p.minWidth) break;
+    plan.push_back(level);
   }
   return plan;
 }

@@ -144,10 +144,9 @@ Pipeline::Pipeline(Backend& backend, const Rig& rig, const Params& params, const
     // Fields are computed exactly at each level from the scaled cameras rather than
     // resampled from level 0: the same cost (once per pose) and no averaging of tangents.
     L.cam0 = levelCamera(rig.cam0, size);
-    // Camera 1 keeps its own image size where it differs from camera 0's: its fields ask
-    // whether a ray lands inside image 1.
-    const bool oneSize = rig.cam1.width == rig.cam0.width && rig.cam1.height == rig.cam0.height;
-    L.cam1 = oneSize ? levelCamera(rig.cam1, size) : rig.cam1.scaled(size.scale);
+    // Camera 1 at its own image's size at this scale (it may differ from camera 0's): its
+    // fields ask whether a ray lands inside image 1.
+    L.cam1 = levelCamera(rig.cam1, levelSize(rig.cam1.width, rig.cam1.height, size.scale));
     auto make = [&](int channels) { return backend_.create(size.width, size.height, channels); };
     L.userMask = make(1), L.i0 = make(1), L.i1 = make(1), L.mask = make(1), L.trajectory = make(2);
     L.tensor = make(4), L.steps = make(4), L.w = make(2), L.tangent = make(2), L.scratch = make(1);

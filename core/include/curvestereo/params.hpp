@@ -265,6 +265,8 @@ struct LevelSize {
 
 // Level 0 first (full resolution).
 std::vector<LevelSize> pyramidPlan(int width, int height, const Params& p);
+// An image of width x height at a level of the given scale (as pyramidPlan sizes its levels).
+LevelSize levelSize(int width, int height, double scale);
 
 // "levels=5 scale=2 warps=30 ..." for logs and bench reports.
 std::string describe(const Params& p);
