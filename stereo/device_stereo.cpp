@@ -45,8 +45,8 @@ DeviceStereo::DeviceStereo(const Rig& rig, const Params& params, cudaStream_t st
     : impl_(std::make_unique<Impl>()) {
   if (rig.cam1.width != rig.cam0.width || rig.cam1.height != rig.cam0.height)  // compute() takes one pitch
     throw Error("cuda: DeviceStereo needs both cameras at one resolution, and these differ (" +
-                std::to_string(rig.cam0.width) + "x" + std::to_string(rig.cam0.height) + " and " +
-                std::to_string(rig.cam1.width) + "x" + std::to_string(rig.cam1.height) + ")");
+                detail::sizeText(rig.cam0.width, rig.cam0.height) + " and " +
+                detail::sizeText(rig.cam1.width, rig.cam1.height) + ")");
   impl_->core = std::make_unique<detail::StereoCore>(rig, params, [&]() -> std::unique_ptr<Backend> {
     if (stream == cudaStreamLegacy)
       throw Error("cuda: the legacy default stream cannot be recorded into a graph; pass a created stream or nullptr");

@@ -41,9 +41,9 @@ struct ImageWindow {
 // The part of camera 0's image that a pair can solve: the bounding box of the pixels the
 // fields keep (computeFields' mask: in the field of view, seen by camera 1, off the
 // epipoles), found on a grid of every 4th pixel, grown by `margin` (at least 4) px and
-// clamped to the image; empty when there are none. Two
-// fisheyes 90 degrees apart share about half of each image, and a solve on the window
-// costs what its pixels do (RigStereo solves on it).
+// clamped to the image; empty when there are none. Two fisheyes 90 degrees apart share about
+// half of each image, and a solve on the window costs what its pixels do (RigStereo solves
+// on it).
 ImageWindow solvableWindow(const Rig& pair, const FieldOptions& options, int margin);
 
 // The rig of a pair: cam0 at the body origin.
