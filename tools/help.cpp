@@ -69,7 +69,8 @@ a rig of N cameras (three images or more, or --rig; docs/guide.md "run on a rig"
   --panorama-min-confidence C   the panorama leaves out estimates of confidence below C
                          (default 0: every estimate; fewer holes, or fewer errors)
   --whole-images         solve each pair direction on the whole reference image, not only
-                         the window its partner sees (the same result, slower; a check)
+                         the window its partner sees (slower; the depth differs only where
+                         the pyramid's levels meet the window's edge: a check)
 sequences:
   --sequence SRC         an ASL/EuRoC folder (mav0/cam0, mav0/cam1; its poses_cam0.csv and
                          camchain.yaml are used) or "LEFT,RIGHT" folders or globs paired by
