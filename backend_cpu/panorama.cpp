@@ -15,9 +15,11 @@ namespace {
 
 constexpr float kPi = 3.14159265358979323846f;
 
-// Two inverse ranges on one surface (backend.hpp): +inf's 0 agrees only with nearly 0.
-bool sameSurface(float inverseA, float inverseB) {
-  return std::fabs(inverseA - inverseB) <= kPanoramaAgreement * std::max(inverseA, inverseB);
+// Two inverse ranges on one surface (backend.hpp): within a share of the larger, or within
+// the parallax the solves cannot resolve (far points: the share alone would split one
+// distant wall's noisy estimates and keep the nearest).
+bool sameSurface(float inverseA, float inverseB, const PanoramaParams& p) {
+  return std::fabs(inverseA - inverseB) <= kPanoramaAgreement * std::max(inverseA, inverseB) + p.parallaxSlack;
 }
 
 bool rayAt(const View& rays, int x, int y, float d[3]) {
@@ -56,7 +58,7 @@ void footprint(const View& radial, const View& rays, int x, int y, float column,
     if (!radial.inside(nx[k], ny[k])) continue;
     const float rn = radial.at(nx[k], ny[k]);
     float c, r, range;
-    if (std::isnan(rn) || !sameSurface(1.f / rn, inverse) || !placePixel(radial, rays, nx[k], ny[k], p, c, r, range))
+    if (std::isnan(rn) || !sameSurface(1.f / rn, inverse, p) || !placePixel(radial, rays, nx[k], ny[k], p, c, r, range))
       continue;
     float step[2] = {c - column, r - row};
     if (std::fabs(step[0]) > 0.5f * width) step[0] = std::remainder(step[0], width);  // across the seam
@@ -70,8 +72,8 @@ void footprint(const View& radial, const View& rays, int x, int y, float column,
 }
 
 // One splat's contribution to panorama pixel k (6 channels at acc).
-void splatInto(float* acc, int pass, float confidence, float weight, float inverse, float grey) {
-  switch (pass) {
+void splatInto(float* acc, const PanoramaParams& p, float confidence, float weight, float inverse, float grey) {
+  switch (p.pass) {
     case kPanoramaBest:
       acc[0] = std::max(acc[0], confidence);
       break;
@@ -79,7 +81,7 @@ void splatInto(float* acc, int pass, float confidence, float weight, float inver
       if (confidence >= 0.5f * acc[0]) acc[1] = std::max(acc[1], inverse);
       break;
     default:
-      if (!(confidence >= 0.5f * acc[0]) || !sameSurface(inverse, acc[1])) break;
+      if (!(confidence >= 0.5f * acc[0]) || !sameSurface(inverse, acc[1], p)) break;
       acc[2] += weight * inverse;
       acc[3] += weight;
       if (std::isfinite(grey)) acc[4] += weight * grey, acc[5] += weight;
@@ -127,7 +129,7 @@ void panoramaSplat(const View& accum, const View& place, const View& confidence,
             for (int y = y0; y <= y1; ++y)
               for (int x = x0, wrapped = ((x0 % width) + width) % width; x <= x1;
                    ++x, wrapped = wrapped + 1 == width ? 0 : wrapped + 1)
-                splatInto(&accum.at(wrapped, y), p.pass, c, weight, inverse, g);
+                splatInto(&accum.at(wrapped, y), p, c, weight, inverse, g);
           }
       },
       1);

@@ -16,9 +16,10 @@ constexpr float kPi = 3.14159265358979323846f;
 __device__ __forceinline__ float stdMax(float a, float b) { return a < b ? b : a; }
 __device__ __forceinline__ float stdClamp(float v, float lo, float hi) { return v < lo ? lo : (hi < v ? hi : v); }
 
-// Two inverse ranges on one surface: +inf's 0 agrees only with nearly 0.
-__device__ __forceinline__ bool sameSurface(float inverseA, float inverseB) {
-  return fabsf(inverseA - inverseB) <= kPanoramaAgreement * stdMax(inverseA, inverseB);
+// Two inverse ranges on one surface: within a share of the larger or the solves' parallax
+// noise (the oracle's sum, unfused).
+__device__ __forceinline__ bool sameSurface(float inverseA, float inverseB, const PanoramaParams& p) {
+  return fabsf(inverseA - inverseB) <= kPanoramaAgreement * stdMax(inverseA, inverseB) + p.parallaxSlack;
 }
 
 struct Placed {
@@ -56,7 +57,7 @@ __device__ void footprint(const Img& radial, const Img& rays, int x, int y, cons
     if (!inside(radial, nx[k], ny[k])) continue;
     const float rn = at(radial, nx[k], ny[k]);
     Placed n;
-    if (isnan(rn) || !sameSurface(1.f / rn, inverse) || !placePixel(radial, rays, nx[k], ny[k], p, n)) continue;
+    if (isnan(rn) || !sameSurface(1.f / rn, inverse, p) || !placePixel(radial, rays, nx[k], ny[k], p, n)) continue;
     float step[2] = {n.column - own.column, n.row - own.row};
     if (fabsf(step[0]) > 0.5f * width) step[0] = remainderf(step[0], width);  // across the seam
     float* along = ny[k] == y ? a : b;
@@ -96,12 +97,13 @@ __device__ __forceinline__ void growTo(float* address, float value) {
 
 // One splat's contribution to the panorama pixel at acc (6 channels), by pass. best and
 // nearest are read plainly: the passes that write them finished before this launch.
-__device__ void splatInto(float* acc, int pass, float confidence, float weight, float inverse, float grey) {
-  if (pass == kPanoramaBest) {
+__device__ void splatInto(float* acc, const PanoramaParams& p, float confidence, float weight, float inverse,
+                          float grey) {
+  if (p.pass == kPanoramaBest) {
     growTo(acc, confidence);
-  } else if (pass == kPanoramaNearest) {
+  } else if (p.pass == kPanoramaNearest) {
     if (confidence >= 0.5f * acc[0]) growTo(acc + 1, inverse);
-  } else if (confidence >= 0.5f * acc[0] && sameSurface(inverse, acc[1])) {
+  } else if (confidence >= 0.5f * acc[0] && sameSurface(inverse, acc[1], p)) {
     atomicAdd(acc + 2, weight * inverse);
     atomicAdd(acc + 3, weight);
     if (isfinite(grey)) atomicAdd(acc + 4, weight * grey), atomicAdd(acc + 5, weight);
@@ -137,7 +139,7 @@ __device__ Box boxOf(Img place, Img confidence, Img grey, int cx, int cy, const 
 // Pixel k (row-major) of box b.
 __device__ void splatPixel(Img accum, const Box& b, int k, const PanoramaParams& p) {
   const int x = b.x0 + k % b.columns, y = b.y0 + k / b.columns;
-  splatInto(&at(accum, ((x % p.width) + p.width) % p.width, y), p.pass, b.confidence, b.weight, b.inverse, b.grey);
+  splatInto(&at(accum, ((x % p.width) + p.width) % p.width, y), p, b.confidence, b.weight, b.inverse, b.grey);
 }
 
 // Boxes of at most this many pixels are their own thread's work.

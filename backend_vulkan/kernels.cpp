@@ -253,12 +253,12 @@ struct PcResultConfidence {
 struct PcPanoramaPlace {
   Addr place, radial, rays;
   int32_t width, height, panoWidth;
-  float cx, cy, cz, agreement, maxSplat;
+  float cx, cy, cz, agreement, maxSplat, parallaxSlack;
 };
 struct PcPanoramaSplat {
   Addr accum, place, confidence, grey;  // grey: place when absent
   int32_t width, height, panoWidth, pass, hasGrey;
-  float minConfidence, agreement;
+  float minConfidence, agreement, parallaxSlack;
 };
 struct PcPanoramaResolve {
   Addr range, grey, confidence, accum;
@@ -854,17 +854,26 @@ void VulkanBackend::doResultConfidence(const Buffer& confidence, const Buffer& r
 
 void VulkanBackend::doPanoramaPlace(const Buffer& place, const Buffer& radial, const Buffer& rays,
                                     const PanoramaParams& p) {
-  PcPanoramaPlace pc{addr(place), addr(radial), addr(rays),  radial.width,       radial.height,    p.width,
-                     p.centre[0], p.centre[1],  p.centre[2], kPanoramaAgreement, kPanoramaMaxSplat};
+  PcPanoramaPlace pc{addr(place), addr(radial), addr(rays),  radial.width,       radial.height,     p.width,
+                     p.centre[0], p.centre[1],  p.centre[2], kPanoramaAgreement, kPanoramaMaxSplat, p.parallaxSlack};
   dispatch(kPanoramaPlace, pc, radial.width, radial.height);
 }
 
 void VulkanBackend::doPanoramaSplat(const Buffer& accum, const Buffer& place, const Buffer& confidence,
                                     const Buffer& grey, const PanoramaParams& p) {
   const bool hasGrey = grey.id >= 0;
-  PcPanoramaSplat pc{addr(accum),     addr(place),     addr(confidence),  addr(hasGrey ? grey : place),
-                     place.width,     place.height,    p.width,           p.pass,
-                     hasGrey ? 1 : 0, p.minConfidence, kPanoramaAgreement};
+  PcPanoramaSplat pc{addr(accum),
+                     addr(place),
+                     addr(confidence),
+                     addr(hasGrey ? grey : place),
+                     place.width,
+                     place.height,
+                     p.width,
+                     p.pass,
+                     hasGrey ? 1 : 0,
+                     p.minConfidence,
+                     kPanoramaAgreement,
+                     p.parallaxSlack};
   const Shader s = subgroupBallot_ ? (atomicFloatAdd_ ? kPanoramaSplatSubgroupAtomic : kPanoramaSplatSubgroup)
                                    : (atomicFloatAdd_ ? kPanoramaSplatAtomic : kPanoramaSplat);
   dispatch(s, pc, place.width, place.height);

@@ -12,6 +12,7 @@ layout(push_constant) uniform PC {
   int panoWidth;      // W; the panorama's rows W / 2
   float cx, cy, cz;   // the camera's centre in the panorama's frame
   float agreement, maxSplat;  // kPanoramaAgreement, kPanoramaMaxSplat
+  float parallaxSlack;
 } pc;
 
 
@@ -88,7 +89,7 @@ void main() {
     if (isnan(rn) || !hasRay(j)) continue;
     precise float qn = 1.0 / rn, q = 1.0 / r;
     precise float gap = abs(qn - q);
-    precise float tolerance = pc.agreement * max(qn, q);
+    precise float tolerance = pc.agreement * max(qn, q) + pc.parallaxSlack;
     if (!(gap <= tolerance)) continue;
     precise vec2 step = placed(j, rn).xy - own.xy;
     // Across the seam: W / 2 < |step.x| <= W (columns lie in [-0.5, W - 0.5]), where

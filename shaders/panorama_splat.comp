@@ -35,6 +35,7 @@ layout(push_constant) uniform PC {
   int hasGrey;
   float minConfidence;
   float agreement;  // kPanoramaAgreement
+  float parallaxSlack;
 } pc;
 
 // PanoramaPass (kernel_params.hpp).
@@ -108,7 +109,7 @@ void splat(Box b, int k) {
   }
   const float nearest = load(k6 + 1u);
   precise float gap = abs(b.inverse - nearest);
-  precise float tolerance = pc.agreement * max(b.inverse, nearest);
+  precise float tolerance = pc.agreement * max(b.inverse, nearest) + pc.parallaxSlack;
   if (!(gap <= tolerance)) return;
   precise float weighted = b.w * b.inverse;  // as the oracle: w (1 / range), not w / range
   addInto(k6 + 2u, weighted);

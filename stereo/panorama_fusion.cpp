@@ -24,6 +24,7 @@ struct PanoramaFusion::State {
   std::vector<PanoramaCamera> cameras;
   Buffer accum, range, grey, confidence;
   std::vector<float> radial;  // a camera's radial depth, NaN where it is not valid
+  float parallaxSlack = 0.f;  // panoramaParallaxSlack of the rig
 };
 
 PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::string& backend)
@@ -40,6 +41,7 @@ PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame,
   if (width < 4 || width % 2 || width > 32768)
     throw Error("panorama width must be even and 4 to 32768 px, got " + std::to_string(width));
   State& s = *state_;
+  s.parallaxSlack = float(panoramaParallaxSlack(rig));
   s.backend = createBackend(backend);
   Backend& b = *s.backend;
   for (int k = 0; k < rig.size(); ++k) {
@@ -110,14 +112,15 @@ void PanoramaFusion::fuse(const std::vector<DepthResult>& cameras, const std::ve
     b.upload(c.radial, s.radial.data());
     b.upload(c.confidence, r.confidence.data.data());
     if (!images.empty() && !images[size_t(k)].empty()) b.upload(c.grey, images[size_t(k)].data.data());
-    b.panoramaPlace(c.place, c.radial, c.rays, PanoramaParams{width_, {c.centre[0], c.centre[1], c.centre[2]}, 0.f, 0});
+    b.panoramaPlace(c.place, c.radial, c.rays,
+                    PanoramaParams{width_, {c.centre[0], c.centre[1], c.centre[2]}, 0.f, 0, s.parallaxSlack});
   }
   for (int pass = kPanoramaBest; pass <= kPanoramaSums; ++pass)
     for (int k = 0; k < rig_.size(); ++k) {
       const PanoramaCamera& c = s.cameras[size_t(k)];
       const bool grey = !images.empty() && !images[size_t(k)].empty();
       b.panoramaSplat(s.accum, c.place, c.confidence, grey ? c.grey : none,
-                      PanoramaParams{width_, {0.f, 0.f, 0.f}, minConfidence, pass});
+                      PanoramaParams{width_, {0.f, 0.f, 0.f}, minConfidence, pass, s.parallaxSlack});
     }
   b.panoramaResolve(s.range, s.grey, s.confidence, s.accum);
   for (ImageF* image : {&out.range, &out.grey, &out.confidence})

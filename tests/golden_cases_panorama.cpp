@@ -48,7 +48,9 @@ Host wallAndBox() {
 std::vector<Output> panoramaPlaceCase(Backend& b) {
   Session s{b};
   Host rays = backwardRays(), radial = wallAndBox();
-  PanoramaParams p{kPanoramaWidth, {0.08f, -0.03f, 0.05f}, 0.f, kPanoramaBest};
+  // A parallax slack that joins some of the sky's rows (inverse range 0) to the wall's
+  // (0.18 to 0.32), so that both sides of the test are taken.
+  PanoramaParams p{kPanoramaWidth, {0.08f, -0.03f, 0.05f}, 0.f, kPanoramaBest, 0.25f};
   Buffer place = s.make(kW, kH, kPanoramaPlaceChannels);
   b.panoramaPlace(place, s.put(radial), s.put(rays), p);
   // atan2, cos and sqrt of the device: a few ulps of positions up to 48 px.
@@ -89,7 +91,9 @@ std::vector<Output> panoramaSplatCase(Backend& b) {
   const Buffer none{};
   for (int pass = kPanoramaBest; pass <= kPanoramaSums; ++pass)
     for (size_t camera = 0; camera < 2; ++camera) {
-      const PanoramaParams p{kPanoramaWidth, {0.f, 0.f, 0.f}, camera == 1 ? 0.3f : 0.f, pass};
+      // A slack of a tenth of the ranges' inverse span (0.25 to 1): some samples off the
+      // nearest surface by its share join it.
+      const PanoramaParams p{kPanoramaWidth, {0.f, 0.f, 0.f}, camera == 1 ? 0.3f : 0.f, pass, 0.08f};
       b.panoramaSplat(accum, places[camera], confidences[camera], camera == 0 ? greys[camera] : none, p);
     }
   Output splatted = s.get("panorama_accum", accum);

@@ -303,6 +303,23 @@ TEST_CASE("the panorama of exact depths inside a sphere is the sphere's radius, 
   CHECK(std::isnan(p.range(int(between.x()), int(between.y()))));
 }
 
+TEST_CASE("a distant surface's estimates within the rig's parallax noise are averaged, not the nearest taken") {
+  const CameraRig rig = ring(4, 200);
+  // Half a pixel of parallax over the neighbours' 11.3 cm, at the lenses' 57.3 px a radian.
+  const double pxPerRadian = 100.0 / (100.0 * M_PI / 180.0);
+  const double slack = cs::panoramaParallaxSlack(rig);
+  CHECK(slack == doctest::Approx(cs::kPanoramaParallaxPx / (0.08 * std::sqrt(2.0) * pxPerRadian)).epsilon(1e-6));
+  std::vector<cs::DepthResult> results;
+  for (int k = 0; k < 4; ++k) results.push_back(sphereResult(rig, k, 20.0, 0.8f));
+  // 20 and 25 m are 0.01 / m apart in inverse range: a quarter of a pixel here, though a
+  // fifth of the range. One surface, so the mean of the inverses, not the nearer.
+  results[1] = sphereResult(rig, 1, 25.0, 0.8f);
+  const int width = 128;
+  const cs::Panorama p = cs::fusePanorama(rig, results, {}, cs::panoramaFrame(rig), width);
+  const Eigen::Vector2d between = cs::panoramaPixel(Eigen::Vector3d(1, 0, 1), width);
+  CHECK(p.range(int(between.x()), int(between.y())) == doctest::Approx(2.0 / (1.0 / 20 + 1.0 / 25)).epsilon(1e-3));
+}
+
 TEST_CASE("a camera's estimates are fused by confidence where they agree") {
   const CameraRig rig = ring(4, 200);
   cs::DepthResult a = sphereResult(rig, 0, 3.0, 0.9f), b = sphereResult(rig, 0, 3.0, 0.3f);

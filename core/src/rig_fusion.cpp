@@ -233,6 +233,26 @@ PanoramaFrame panoramaFrame(const CameraRig& rig) {
   return f;
 }
 
+double panoramaParallaxSlack(const CameraRig& rig) {
+  if (rig.size() < 2 || rig.poses.size() != rig.cameras.size()) return 0.0;
+  double baselines = 0, pxPerRadian = INFINITY;
+  for (int k = 0; k < rig.size(); ++k) {
+    double nearest = INFINITY;
+    for (int j = 0; j < rig.size(); ++j)
+      if (j != k) nearest = std::min(nearest, (rig.poses[size_t(j)].p - rig.poses[size_t(k)].p).norm());
+    baselines += nearest;
+    const Camera& cam = rig.cameras[size_t(k)];
+    const BuiltCamera built(cam);
+    Vec3<double> a, b;
+    const double cx = 0.5 * (cam.width - 1), cy = 0.5 * (cam.height - 1);
+    if (!built.unproject(Vec2<double>(cx, cy), a) || !built.unproject(Vec2<double>(cx + 1, cy), b)) continue;
+    const double angle = std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0));
+    if (angle > 0) pxPerRadian = std::min(pxPerRadian, 1.0 / angle);
+  }
+  if (!std::isfinite(pxPerRadian)) return 0.0;  // no camera unprojects its centre: no slack
+  return kPanoramaParallaxPx / (baselines / double(rig.size()) * pxPerRadian);
+}
+
 Eigen::Vector3d panoramaRay(double j, double i, int width) {
   const int height = width / 2;
   const double lon = -M_PI + 2.0 * M_PI * (j + 0.5) / width;

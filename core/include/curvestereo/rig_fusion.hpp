@@ -69,6 +69,15 @@ Eigen::Vector3d panoramaRay(double j, double i, int width);
 // The inverse: the (fractional) column and row of a direction.
 Eigen::Vector2d panoramaPixel(const Eigen::Vector3d& direction, int width);
 
+// How far apart (1/m) two inverse ranges of one surface may lie in the panorama beyond
+// kAgreement's share: the parallax of kPanoramaParallaxPx over the rig's baseline (the mean
+// distance from each camera to its nearest neighbour), at its cameras' coarsest resolution
+// (px per radian at the image centre). A share alone splits a distant wall: at 15 m over 11 cm
+// a solve's few tenths of a pixel are a tenth of the range, and of the split estimates the
+// nearest would win. 0 for fewer than two cameras or none that unprojects its centre.
+constexpr double kPanoramaParallaxPx = 0.5;
+double panoramaParallaxSlack(const CameraRig& rig);
+
 struct Panorama {
   ImageF range;       // metres from the centre; +inf at infinity; NaN where no camera gave one
   ImageF grey;        // the images' grey level, [0, 1]; NaN where no range
@@ -78,12 +87,11 @@ struct Panorama {
 // Forward-projects every camera's points (per-camera results, cameras[k]'s frame) into the
 // panorama, each pixel as a footprint the size of its neighbours' spacing there. Per
 // panorama pixel, samples below half the best confidence there are dropped; of the rest, the
-// nearest range and those within kAgreement of it (the visible surface: a z-buffer) are
-// averaged, weighted by confidence. Samples below minConfidence are left out altogether (a
-// panorama with fewer holes, or fewer errors: the choice is the caller's). width: even, 4 to
-// 32768. Throws cs::Error when a result lacks its valid mask, radial depth or confidence at its
-// camera's size, or an image (optional: none gives NaN grey) is not that size. Runs on the
-// CPU backend; PanoramaFusion chooses.
+// nearest range and those on its surface (within kAgreement of its inverse range, plus
+// panoramaParallaxSlack: a z-buffer) are averaged, weighted by confidence. Samples below minConfidence are left out
+// altogether (a panorama with fewer holes, or fewer errors: the choice is the caller's). width: even, 4 to 32768.
+// Throws cs::Error when a result lacks its valid mask, radial depth or confidence at its camera's size, or an image
+// (optional: none gives NaN grey) is not that size. Runs on the CPU backend; PanoramaFusion chooses.
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
                       const PanoramaFrame& frame, int width, float minConfidence = 0.f);
 

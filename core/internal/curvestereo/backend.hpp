@@ -371,7 +371,7 @@ class Backend {
   // H - 0.5, hx, hy, range) with W = p.width, H = W / 2, range = |P| (+inf where r is +inf).
   // The footprint: a = b = (0, 0); for the neighbours (x+1, y), (x, y+1), (x-1, y), (x, y-1)
   // in that order, inside the grid, with a radial rn that is not NaN, a finite ray, and rn
-  // on x's surface (|1/rn - 1/r| <= kPanoramaAgreement max(1/rn, 1/r)): step = (column, row)
+  // on x's surface (|1/rn - 1/r| <= kPanoramaAgreement max(1/rn, 1/r) + p.parallaxSlack): step = (column, row)
   // of the neighbour minus x's (placed the same way); where |step.x| > W/2, step.x =
   // remainder(step.x, W) (across the seam); a (row neighbours) or b (column neighbours) =
   // max(itself, |step|) per axis. With s = a + b and latitude l = pi/2 - pi (row + 0.5) / H:
@@ -388,7 +388,7 @@ class Backend {
   // - kPanoramaBest: best = max(best, c);
   // - kPanoramaNearest: where c >= 0.5 best, nearest = max(nearest, 1 / range);
   // - kPanoramaSums: where c >= 0.5 best and |1/range - nearest| <= kPanoramaAgreement
-  //   max(1/range, nearest): the sums += w (1/range), w, and where g is finite w g, w.
+  //   max(1/range, nearest) + p.parallaxSlack: the sums += w (1/range), w, and where g is finite w g, w.
   // Every camera's best pass runs before any nearest pass, and those before the sums. The
   // order of the sums is the backend's (GPUs: atomics), so they agree to rounding.
   // confidence, grey 1 ch on place's grid.

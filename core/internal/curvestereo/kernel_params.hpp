@@ -164,7 +164,7 @@ struct ConfidenceParams {
 // core/src/rig_fusion.cpp PanoramaFusion): each camera's pixels placed as footprints in a
 // panorama of `width` columns and width / 2 rows, then splatted in three passes.
 constexpr float kPanoramaMaxSplat = 3.f;     // a footprint's largest half-size, px of arc
-constexpr float kPanoramaAgreement = 0.05f;  // inverse ranges within this share are one surface
+constexpr float kPanoramaAgreement = 0.05f;  // inverse ranges within this share are one surface,
 constexpr int kPanoramaPlaceChannels = 5;    // column, row, half-width, half-height, range
 constexpr int kPanoramaChannels = 6;         // see Backend::panoramaSplat
 enum PanoramaPass : int { kPanoramaBest = 0, kPanoramaNearest = 1, kPanoramaSums = 2 };
@@ -173,6 +173,7 @@ struct PanoramaParams {
   float centre[3];      // panoramaPlace: the camera's centre in the panorama's frame (m)
   float minConfidence;  // panoramaSplat: pixels of lower confidence do not splat; <= 0: all do
   int pass;             // panoramaSplat: PanoramaPass
+  float parallaxSlack;  // ... or within this of each other (1/m, >= 0): the solves' parallax noise
 };
 
 }  // namespace cs
