@@ -13,7 +13,8 @@
 
 namespace cs {
 
-// One camera's buffers, and its centre in the panorama's frame.
+// One view's buffers (a camera's image or a window of it), and its camera's centre in the
+// panorama's frame.
 struct PanoramaCamera {
   Buffer rays, radial, confidence, grey, place;
   float centre[3];
@@ -21,17 +22,46 @@ struct PanoramaCamera {
 
 struct PanoramaFusion::State {
   std::unique_ptr<Backend> backend;
-  std::vector<PanoramaCamera> cameras;
+  std::vector<PanoramaView> views;
+  std::vector<PanoramaCamera> cameras;  // per view
   Buffer accum, range, grey, confidence;
-  std::vector<float> radial;  // a camera's radial depth, NaN where it is not valid
-  float parallaxSlack = 0.f;  // panoramaParallaxSlack of the rig
+  std::vector<float> radial, image;  // a view's radial depth (NaN where it is not valid) and grey level
+  float parallaxSlack = 0.f;         // panoramaParallaxSlack of the rig
 };
 
+namespace {
+
+std::vector<PanoramaView> wholeCameras(const CameraRig& rig) {
+  std::vector<PanoramaView> views;
+  for (int k = 0; k < rig.size(); ++k) views.push_back({k, {}});
+  return views;
+}
+
+// The view's window of `camera`'s image, the whole image where it is empty. Throws cs::Error
+// for a camera index or a window outside the image.
+ImageWindow viewWindow(const CameraRig& rig, const PanoramaView& v) {
+  if (v.camera < 0 || v.camera >= rig.size())
+    throw Error("PanoramaFusion: a view of camera " + std::to_string(v.camera) + " in a rig of " +
+                std::to_string(rig.size()) + " cameras");
+  const Camera& cam = rig.cameras[size_t(v.camera)];
+  const ImageWindow w = v.window.empty() ? ImageWindow{0, 0, cam.width, cam.height} : v.window;
+  if (w.x0 < 0 || w.y0 < 0 || w.x0 + w.width > cam.width || w.y0 + w.height > cam.height)
+    throw Error("PanoramaFusion: a view's window does not fit camera " + std::to_string(v.camera) + "'s image");
+  return w;
+}
+
+}  // namespace
+
 PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::string& backend)
-    : PanoramaFusion(rig, frame, width, std::vector<CameraRays>{}, backend) {}
+    : PanoramaFusion(rig, frame, width, wholeCameras(rig), std::vector<CameraRays>{}, backend) {}
 
 PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width,
                                const std::vector<CameraRays>& given, const std::string& backend)
+    : PanoramaFusion(rig, frame, width, wholeCameras(rig), given, backend) {}
+
+PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width,
+                               const std::vector<PanoramaView>& views, const std::vector<CameraRays>& given,
+                               const std::string& backend)
     : rig_(rig), width_(width), state_(std::make_unique<State>()) {
   if (!given.empty()) {
     bool fits = int(given.size()) == rig.size();
@@ -40,29 +70,35 @@ PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame,
   }
   if (width < 4 || width % 2 || width > 32768)
     throw Error("panorama width must be even and 4 to 32768 px, got " + std::to_string(width));
+  if (views.empty()) throw Error("PanoramaFusion: no views");
   State& s = *state_;
   s.parallaxSlack = float(panoramaParallaxSlack(rig));
   s.backend = createBackend(backend);
   Backend& b = *s.backend;
-  for (int k = 0; k < rig.size(); ++k) {
-    const BodyPose& pose = rig.poses[size_t(k)];
-    const Camera& cam = rig.cameras[size_t(k)];
-    // X_pano = Rf^T (R X_cam + p - centre): the rays turned once, for every frame.
+  std::vector<CameraRays> computed(size_t(rig.size()));
+  for (const PanoramaView& view : views) {
+    const ImageWindow w = viewWindow(rig, view);
+    s.views.push_back({view.camera, w});
+    const BodyPose& pose = rig.poses[size_t(view.camera)];
+    const Camera& cam = rig.cameras[size_t(view.camera)];
+    CameraRays& mine = computed[size_t(view.camera)];
+    if (given.empty() && mine.empty()) mine = cameraRays(cam);
+    const CameraRays& rays = given.empty() ? mine : given[size_t(view.camera)];
+    // X_pano = Rf^T (R X_cam + p - centre): the window's rays turned once, for every frame.
     const Eigen::Matrix3d R = frame.R.transpose() * pose.R;
-    const CameraRays rays = given.empty() ? cameraRays(cam) : given[size_t(k)];
-    std::vector<float> turned(3 * rays.data.size());
-    detail::parallelFor(cam.height, [&](int y) {
-      for (int x = 0; x < cam.width; ++x) {
-        const size_t i = size_t(y) * size_t(cam.width) + size_t(x);
-        const Eigen::Vector3f d = (R * rays.data[i].cast<double>()).cast<float>();
+    std::vector<float> turned(3 * size_t(w.width) * size_t(w.height));
+    detail::parallelFor(w.height, [&](int y) {
+      for (int x = 0; x < w.width; ++x) {
+        const size_t i = size_t(y) * size_t(w.width) + size_t(x);
+        const Eigen::Vector3f d = (R * rays(w.x0 + x, w.y0 + y).cast<double>()).cast<float>();
         for (int c = 0; c < 3; ++c) turned[3 * i + size_t(c)] = d[c];
       }
     });
-    PanoramaCamera c{b.create(cam.width, cam.height, 3),
-                     b.create(cam.width, cam.height, 1),
-                     b.create(cam.width, cam.height, 1),
-                     b.create(cam.width, cam.height, 1),
-                     b.create(cam.width, cam.height, kPanoramaPlaceChannels),
+    PanoramaCamera c{b.create(w.width, w.height, 3),
+                     b.create(w.width, w.height, 1),
+                     b.create(w.width, w.height, 1),
+                     b.create(w.width, w.height, 1),
+                     b.create(w.width, w.height, kPanoramaPlaceChannels),
                      {}};
     const Eigen::Vector3d centre = frame.R.transpose() * (pose.p - frame.centre);
     for (int i = 0; i < 3; ++i) c.centre[i] = float(centre[i]);
@@ -89,36 +125,57 @@ Panorama PanoramaFusion::fuse(const std::vector<DepthResult>& cameras, const std
 
 void PanoramaFusion::fuse(const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images, Panorama& out,
                           float minConfidence) {
-  if (int(cameras.size()) != rig_.size() || (!images.empty() && int(images.size()) != rig_.size()))
-    throw Error("fusePanorama: " + std::to_string(cameras.size()) + " results and " + std::to_string(images.size()) +
-                " images for a rig of " + std::to_string(rig_.size()) + " cameras");
-  for (int k = 0; k < rig_.size(); ++k) {
-    const Camera& cam = rig_.cameras[size_t(k)];
-    checkFusionInput(cameras[size_t(k)], cam, false, "fusePanorama");
-    if (!images.empty() && !sameSize(images[size_t(k)], cam))
-      throw Error("fusePanorama: image " + std::to_string(k) + " is not its camera's size");
-  }
+  std::vector<const DepthResult*> estimates;
+  for (const DepthResult& r : cameras) estimates.push_back(&r);
+  fuse(estimates, images, out, minConfidence);
+}
+
+void PanoramaFusion::fuse(const std::vector<const DepthResult*>& estimates, const std::vector<ImageF>& images,
+                          Panorama& out, float minConfidence) {
   State& s = *state_;
+  if (estimates.size() != s.views.size() || (!images.empty() && int(images.size()) != rig_.size()))
+    throw Error("fusePanorama: " + std::to_string(estimates.size()) + " results and " + std::to_string(images.size()) +
+                " images for " + std::to_string(s.views.size()) + " views of a rig of " + std::to_string(rig_.size()) +
+                " cameras");
+  for (size_t v = 0; v < s.views.size(); ++v) {
+    const ImageWindow& w = s.views[v].window;
+    const Camera& cam = rig_.cameras[size_t(s.views[v].camera)];
+    checkFusionInput(*estimates[v], cam.cropped(w.x0, w.y0, w.width, w.height), false, "fusePanorama");
+  }
+  for (int k = 0; k < int(images.size()); ++k)
+    if (!images[size_t(k)].empty() && !sameSize(images[size_t(k)], rig_.cameras[size_t(k)]))
+      throw Error("fusePanorama: image " + std::to_string(k) + " is not its camera's size");
   Backend& b = *s.backend;
   const Buffer none{};
-  for (int k = 0; k < rig_.size(); ++k) {
-    const DepthResult& r = cameras[size_t(k)];
-    PanoramaCamera& c = s.cameras[size_t(k)];
+  for (size_t v = 0; v < s.views.size(); ++v) {
+    const DepthResult& r = *estimates[v];
+    const ImageWindow& w = s.views[v].window;
+    const ImageF* image =
+        images.empty() || images[size_t(s.views[v].camera)].empty() ? nullptr : &images[size_t(s.views[v].camera)];
+    PanoramaCamera& c = s.cameras[v];
+    const bool whole = image && w.width == image->width && w.height == image->height;
+    if (whole) image = nullptr;  // uploaded as it is, below: no copy
     s.radial.resize(r.depth.radial.data.size());
-    detail::parallelFor(r.depth.radial.height, [&](int y) {
-      for (size_t i = size_t(y) * size_t(r.depth.radial.width); i < size_t(y + 1) * size_t(r.depth.radial.width); ++i)
+    if (image) s.image.resize(r.depth.radial.data.size());
+    detail::parallelFor(w.height, [&](int y) {
+      for (size_t i = size_t(y) * size_t(w.width); i < size_t(y + 1) * size_t(w.width); ++i)
         s.radial[i] = r.valid.data[i] ? r.depth.radial.data[i] : std::numeric_limits<float>::quiet_NaN();
+      if (image) {
+        const float* row = &image->data[size_t(w.y0 + y) * size_t(image->width) + size_t(w.x0)];
+        std::copy(row, row + w.width, &s.image[size_t(y) * size_t(w.width)]);
+      }
     });
     b.upload(c.radial, s.radial.data());
     b.upload(c.confidence, r.confidence.data.data());
-    if (!images.empty() && !images[size_t(k)].empty()) b.upload(c.grey, images[size_t(k)].data.data());
+    if (image) b.upload(c.grey, s.image.data());
+    if (whole) b.upload(c.grey, images[size_t(s.views[v].camera)].data.data());
     b.panoramaPlace(c.place, c.radial, c.rays,
                     PanoramaParams{width_, {c.centre[0], c.centre[1], c.centre[2]}, 0.f, 0, s.parallaxSlack});
   }
   for (int pass = kPanoramaBest; pass <= kPanoramaSums; ++pass)
-    for (int k = 0; k < rig_.size(); ++k) {
-      const PanoramaCamera& c = s.cameras[size_t(k)];
-      const bool grey = !images.empty() && !images[size_t(k)].empty();
+    for (size_t v = 0; v < s.views.size(); ++v) {
+      const PanoramaCamera& c = s.cameras[v];
+      const bool grey = !images.empty() && !images[size_t(s.views[v].camera)].empty();
       b.panoramaSplat(s.accum, c.place, c.confidence, grey ? c.grey : none,
                       PanoramaParams{width_, {0.f, 0.f, 0.f}, minConfidence, pass, s.parallaxSlack});
     }

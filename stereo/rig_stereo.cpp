@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <thread>
 
 #include "curvestereo/stereo.hpp"
@@ -25,7 +26,7 @@ RigStereo::RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, c
   rig_.validate();
   buildDirections();
   std::vector<bool> covered(size_t(rig.size()), false);
-  for (const Direction& dir : directions_) covered[size_t(dir.reference)] = true;
+  for (const PairInfo& p : pairs_) covered[size_t(p.i)] = covered[size_t(p.j)] = true;
   for (int k = 0; k < rig.size(); ++k)
     if (!covered[size_t(k)]) throw Error("cam" + std::to_string(k) + " is in none of the pairs to solve");
   for (const Camera& cam : rig_.cameras) rays_.push_back(cameraRays(cam));
@@ -34,8 +35,13 @@ RigStereo::RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, c
 void RigStereo::buildDirections() {
   directions_.clear();
   const FieldOptions fields{params_.maxFovDeg, params_.epipoleDeg};
-  for (const PairInfo& p : pairs_)
+  std::vector<int> solvesFrom(size_t(rig_.size()), 0);
+  for (const PairInfo& p : pairs_) {
+    // One way: from the camera that solves fewer so far (ties: the first of the pair).
+    const int from = solvesFrom[size_t(p.j)] < solvesFrom[size_t(p.i)] ? p.j : p.i;
     for (const auto& [a, b] : {std::pair{p.i, p.j}, std::pair{p.j, p.i}}) {
+      if (oneWay_ && a != from) continue;
+      ++solvesFrom[size_t(a)];
       Rig pair = pairRig(rig_, a, b);
       ImageWindow window{0, 0, pair.cam0.width, pair.cam0.height};
       if (windows_) {
@@ -47,8 +53,23 @@ void RigStereo::buildDirections() {
       }
       directions_.push_back({a, b, window, std::make_unique<Stereo>(pair, params_, backend_), ImageF()});
     }
+  }
   estimates_.assign(directions_.size(), DepthResult());
   applyOutputs();
+}
+
+void RigStereo::setOneWay(bool on) {
+  if (on == oneWay_) return;
+  oneWay_ = on;
+  buildDirections();
+}
+
+void RigStereo::setCameraOutputs(bool on) { cameraOutputs_ = on; }
+
+std::vector<PanoramaView> RigStereo::views() const {
+  std::vector<PanoramaView> out;
+  for (const Direction& dir : directions_) out.push_back({dir.reference, dir.window});
+  return out;
 }
 
 void RigStereo::setSolveWindows(bool on) {
@@ -166,6 +187,28 @@ void RigStereo::solveDirections(Solve& solve) {
     if (e) std::rethrow_exception(e);
 }
 
+// Camera k's result from the directions that solve from it; all invalid where there are none
+// (one way: a camera may be no pair's reference).
+void RigStereo::fuseCamera(int k, DepthResult& out) const {
+  std::vector<PlacedEstimate> mine;
+  for (size_t d = 0; d < directions_.size(); ++d)
+    if (directions_[d].reference == k) mine.push_back({&estimates_[d], directions_[d].window});
+  const Camera& cam = rig_.cameras[size_t(k)];
+  if (!mine.empty()) return fuseCameraEstimates(cam, mine, rays_[size_t(k)], out, points_);
+  constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+  out = DepthResult();
+  out.valid = ImageU8(cam.width, cam.height, 0);
+  out.depth.radial = out.confidence = ImageF(cam.width, cam.height, nan);
+  if (points_) {
+    out.depth.z = ImageF(cam.width, cam.height, nan);
+    out.depth.points = Image<Point3f>(cam.width, cam.height, {nan, nan, nan});
+  }
+  if (flow_) {
+    out.disparity = ImageF(cam.width, cam.height, nan);
+    out.warp = FlowImage(cam.width, cam.height, {nan, nan});
+  }
+}
+
 // Every direction through `solve`, then the cross-check and the per-camera fusion.
 template <class Solve>
 void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solve&& solve) {
@@ -198,13 +241,16 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
           out.solves[d].crossCheckInvalidated =
               crossCheck(windowPair(d, back), estimates_[d], solved[back], crossCheck_);
   }
-  out.cameras.resize(size_t(rig_.size()));
-  for (int k = 0; k < rig_.size(); ++k) {
-    std::vector<PlacedEstimate> mine;
-    for (size_t d = 0; d < directions_.size(); ++d)
-      if (directions_[d].reference == k) mine.push_back({&estimates_[d], directions_[d].window});
-    fuseCameraEstimates(rig_.cameras[size_t(k)], mine, rays_[size_t(k)], out.cameras[size_t(k)], points_);
+  if (cameraOutputs_) {
+    out.cameras.resize(size_t(rig_.size()));
+    for (int k = 0; k < rig_.size(); ++k) fuseCamera(k, out.cameras[size_t(k)]);
+  } else {
+    out.cameras.clear();
   }
+  // The estimates go out as the views, and the caller's previous ones come back to be
+  // solved into: no copy, and a loop that reuses its RigResult allocates nothing.
+  out.views.swap(estimates_);
+  estimates_.resize(directions_.size());
   const auto end = std::chrono::steady_clock::now();
   out.totalMs = std::chrono::duration<double, std::milli>(end - start).count();
   out.fusionMs = std::chrono::duration<double, std::milli>(end - solvedAt).count();

@@ -320,6 +320,48 @@ TEST_CASE("a distant surface's estimates within the rig's parallax noise are ave
   CHECK(p.range(int(between.x()), int(between.y())) == doctest::Approx(2.0 / (1.0 / 20 + 1.0 / 25)).epsilon(1e-3));
 }
 
+TEST_CASE("a panorama of views (windows of the cameras) fuses as the whole cameras, and bad views are refused") {
+  const CameraRig rig = ring(4, 200);
+  std::vector<cs::DepthResult> results;
+  for (int k = 0; k < 4; ++k) results.push_back(sphereResult(rig, k, 3.0, 0.8f));
+  // Each camera as its left and right halves, as a rig's two directions from it solve them.
+  std::vector<cs::PanoramaView> views;
+  std::vector<cs::DepthResult> halves;
+  for (int k = 0; k < 4; ++k)
+    for (int x0 : {0, 100}) {
+      views.push_back({k, {x0, 0, 100, 200}});
+      cs::DepthResult h;
+      const cs::DepthResult& r = results[size_t(k)];
+      h.valid = cs::ImageU8(100, 200, 0);
+      h.depth.radial = h.confidence = cs::ImageF(100, 200, NAN);
+      for (int y = 0; y < 200; ++y)
+        for (int x = 0; x < 100; ++x) {
+          h.valid(x, y) = r.valid(x0 + x, y);
+          h.depth.radial(x, y) = r.depth.radial(x0 + x, y);
+          h.confidence(x, y) = r.confidence(x0 + x, y);
+        }
+      halves.push_back(std::move(h));
+    }
+  const cs::PanoramaFrame frame = cs::panoramaFrame(rig);
+  const cs::Panorama p = cs::PanoramaFusion(rig, frame, 128, views, {}).fuse(halves, {});
+  long long filled = 0, wrong = 0;
+  for (float v : p.range.data) {
+    filled += !std::isnan(v);
+    wrong += !std::isnan(v) && std::abs(v - 3.f) > 1e-3f;
+  }
+  CHECK(filled == (long long)p.range.size());
+  CHECK(wrong == 0);
+  CHECK(errorOf([&] {
+          cs::PanoramaFusion(rig, frame, 128, std::vector<cs::PanoramaView>{{4, {}}}, {});
+        }) == "PanoramaFusion: a view of camera 4 in a rig of 4 cameras");
+  CHECK(errorOf([&] {
+          cs::PanoramaFusion(rig, frame, 128, std::vector<cs::PanoramaView>{{1, {150, 0, 100, 200}}}, {});
+        }) == "PanoramaFusion: a view's window does not fit camera 1's image");
+  CHECK(errorOf([&] {
+          cs::PanoramaFusion(rig, frame, 128, views, {}).fuse(results, {});
+        }).find("fusePanorama: 4 results and 0 images for 8 views") == 0);
+}
+
 TEST_CASE("a camera's estimates are fused by confidence where they agree") {
   const CameraRig rig = ring(4, 200);
   cs::DepthResult a = sphereResult(rig, 0, 3.0, 0.9f), b = sphereResult(rig, 0, 3.0, 0.3f);

@@ -221,3 +221,55 @@ TEST_CASE("PanoramaFusion reused over frames, or from RigStereo's rays, fuses as
   CHECK_THROWS_WITH_AS(PanoramaFusion(rig, frame, 128, tooFew),
                        "PanoramaFusion: the rays given are not one per camera, each its camera's size", Error);
 }
+
+TEST_CASE(
+    "one way: each pair solved once, every camera of a ring solving once, and the views' panorama covers as much") {
+  const synth::SynthRig& synthetic = ring4();
+  const CameraRig& rig = synthetic.layout.rig;
+  const std::vector<PairInfo> pairs = choosePairs(rig);
+  const auto& [bothWays, both, frame] = solvedRing();
+  RigStereo oneWay(rig, pairs, shortSolve(rig), "cpu");
+  oneWay.setOneWay(true);
+  const std::vector<PanoramaView> views = oneWay.views();
+  REQUIRE(views.size() == pairs.size());
+  std::vector<int> solvesFrom(size_t(rig.size()), 0);
+  for (const PanoramaView& v : views) ++solvesFrom[size_t(v.camera)];
+  for (int n : solvesFrom) CHECK(n == 1);  // a ring of four, four pairs: one each
+  const RigResult r = oneWay.compute(synthetic.images);
+  REQUIRE(r.views.size() == views.size());
+  REQUIRE(r.solves.size() == views.size());
+  for (size_t d = 0; d < views.size(); ++d) {
+    CHECK(r.solves[d].reference == views[d].camera);
+    CHECK(r.views[d].valid.width == views[d].window.width);
+  }
+  // Both ways, the views' panorama is the cameras' (a camera pixel's estimates fused first or
+  // in the panorama); one way, it covers the sphere about as well from half the solves.
+  const auto covered = [](const Panorama& p) {
+    long long n = 0;
+    for (float v : p.range.data) n += !std::isnan(v);
+    return double(n) / double(p.range.size());
+  };
+  const Panorama fromCameras = fusePanorama(rig, both.cameras, synthetic.images, frame, 128);
+  const Panorama fromViews =
+      PanoramaFusion(rig, frame, 128, bothWays->views(), bothWays->rays()).fuse(both.views, synthetic.images);
+  const Panorama oneWayViews = PanoramaFusion(rig, frame, 128, views, oneWay.rays()).fuse(r.views, synthetic.images);
+  CHECK(covered(fromViews) == doctest::Approx(covered(fromCameras)).epsilon(0.01));
+  CHECK(covered(oneWayViews) > 0.95 * covered(fromCameras));
+  // Against the rendered truth: one estimate a point rather than two costs some accuracy, not
+  // the surface (the mean relative range error, capped at 1, as eval's abs-rel).
+  const auto absRel = [&](const Panorama& p) {
+    double sum = 0;
+    long long n = 0;
+    for (size_t i = 0; i < p.range.data.size(); ++i) {
+      const float gt = synthetic.panoramaRange.data[i], est = p.range.data[i];
+      if (!std::isfinite(gt) || !(gt > 0) || std::isnan(est)) continue;
+      sum += std::isfinite(est) ? std::min(1.0, std::abs(double(est) - gt) / gt) : 1.0, ++n;
+    }
+    return sum / double(std::max(1LL, n));
+  };
+  MESSAGE("abs-rel: both ways " << absRel(fromViews) << ", one way " << absRel(oneWayViews));
+  CHECK(absRel(oneWayViews) < 1.5 * absRel(fromViews) + 0.01);
+  // Without camera outputs, only the views come back.
+  oneWay.setCameraOutputs(false);
+  CHECK(oneWay.compute(synthetic.images).cameras.empty());
+}

@@ -96,6 +96,7 @@ std::unique_ptr<RigStereo> rigStereoFromArgs(const Args& args, const CameraRig& 
     throw UsageError("--cross-check expects a tolerance in [0, 1] (e.g. 0.1)");
   auto stereo = std::make_unique<RigStereo>(rig, pairs, params, backendFromArgs(args), !args.has("whole-images"));
   stereo->setCrossCheck(crossCheck);
+  stereo->setOneWay(args.has("one-way"));
   return stereo;
 }
 
@@ -151,8 +152,8 @@ int runRig(const Args& args, const std::string& outDir) {
 
   const auto fuseStart = std::chrono::steady_clock::now();
   const PanoramaFrame frame = panoramaFrame(rig);
-  const Panorama panorama = PanoramaFusion(rig, frame, width, stereo.rays(), stereo.backendName())
-                                .fuse(r.cameras, images, panoramaConfidence);
+  const Panorama panorama = PanoramaFusion(rig, frame, width, stereo.views(), stereo.rays(), stereo.backendName())
+                                .fuse(r.views, images, panoramaConfidence);
   const double panoramaMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fuseStart).count();
 
@@ -184,7 +185,7 @@ int runRigSequence(const Args& args, const std::string& outDir) {
   const std::unique_ptr<RigStereo> solver = rigStereoFromArgs(args, rig, pairs, params);
   RigStereo& stereo = *solver;
   const PanoramaFrame frame = panoramaFrame(rig);
-  PanoramaFusion fusion(rig, frame, panoramaWidth(args), stereo.rays(), stereo.backendName());
+  PanoramaFusion fusion(rig, frame, panoramaWidth(args), stereo.views(), stereo.rays(), stereo.backendName());
   const float panoramaConfidence = panoramaMinConfidence(args);
   std::printf("sequence: %s\n", sequence.summary().c_str());
   std::printf("backend: %s; settings: %s; %s\n", stereo.backendName().c_str(), describe(params).c_str(),
@@ -209,7 +210,7 @@ int runRigSequence(const Args& args, const std::string& outDir) {
     }
     try {
       stereo.next(images, r, f.hasPose ? &f.bodyPose : nullptr);
-      fusion.fuse(r.cameras, images, panorama, panoramaConfidence);
+      fusion.fuse(r.views, images, panorama, panoramaConfidence);
       writeRigFrame((std::filesystem::path(outDir) / name).string(), rig, r, images, panorama, frame, minConfidence);
     } catch (const Error& e) {
       if (tty) std::fputc('\n', stderr);
@@ -248,14 +249,15 @@ int benchRig(const Args& args) {
   RigStereo& stereo = *solver;
   const bool serial = args.has("serial");
   stereo.setConcurrentSolves(!serial);
-  stereo.setFlowOutputs(false);  // a panorama needs no disparity, warp, z or points
-  stereo.setPointOutputs(false);
-  PanoramaFusion fusion(rig, panoramaFrame(rig), panoramaWidth(args), stereo.rays(), stereo.backendName());
+  stereo.setFlowOutputs(false);  // a panorama needs only the solves' depth and confidence
+  stereo.setCameraOutputs(false);
+  PanoramaFusion fusion(rig, panoramaFrame(rig), panoramaWidth(args), stereo.views(), stereo.rays(),
+                        stereo.backendName());
   const float panoramaConfidence = panoramaMinConfidence(args);
   const int runs = args.getInt("runs", stereo.backendName() == "cpu" ? 1 : 20);
   std::printf("backend:  %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
   std::printf("input:    %d cameras, %s\n", rig.size(), describePairs(pairs).c_str());
-  std::printf("runs:     %d frames after 1 warm-up frame; %zu solves a frame, %s\n", runs, 2 * pairs.size(),
+  std::printf("runs:     %d frames after 1 warm-up frame; %zu solves a frame, %s\n", runs, stereo.views().size(),
               serial ? "one after the other (--serial)" : "concurrently");
   std::vector<double> solves, slowest, fusions, panoramas, totals;
   Progress progress("benchmark");
@@ -265,7 +267,7 @@ int benchRig(const Args& args) {
     const auto start = std::chrono::steady_clock::now();
     stereo.compute(images, r);
     const auto solved = std::chrono::steady_clock::now();
-    fusion.fuse(r.cameras, images, panorama, panoramaConfidence);
+    fusion.fuse(r.views, images, panorama, panoramaConfidence);
     const auto end = std::chrono::steady_clock::now();
     if (i == 0) continue;  // the warm-up: allocations, first-use compilation
     solves.push_back(std::chrono::duration<double, std::milli>(solved - start).count());
@@ -280,7 +282,7 @@ int benchRig(const Args& args) {
   progress.done();
   std::printf("frame:    median %.2f ms (%.1f fps), images in memory to the panorama in memory\n",
               summarize(totals).median, 1000.0 / summarize(totals).median);
-  std::printf("  solves and per-camera fusion: median %.2f ms (the slowest solve %.2f ms, the fusion %.2f ms)\n",
+  std::printf("  solves: median %.2f ms (the slowest %.2f ms; the host's part after them %.2f ms)\n",
               summarize(solves).median, summarize(slowest).median, summarize(fusions).median);
   std::printf("  panorama %dx%d (%s):%*s median %.2f ms\n", fusion.width(), fusion.width() / 2,
               fusion.backendName().c_str(), int(std::max<size_t>(1, 14 - fusion.backendName().size())), "",

@@ -184,8 +184,9 @@ int evalRig(const Args& args) {
   const RigResult r = stereo.compute(f.images);
   const auto start = std::chrono::steady_clock::now();
   const PanoramaFrame frame = panoramaFrame(f.rig);
-  const Panorama panorama = PanoramaFusion(f.rig, frame, f.panoramaRange.width, stereo.rays(), stereo.backendName())
-                                .fuse(r.cameras, f.images, panoramaConfidence);
+  const Panorama panorama =
+      PanoramaFusion(f.rig, frame, f.panoramaRange.width, stereo.views(), stereo.rays(), stereo.backendName())
+          .fuse(r.views, f.images, panoramaConfidence);
   const double panoramaMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
   std::string csv = "camera,tau1,tau3,density,pixels\n";

@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
     std::string dashO = "--o";
     for (int i = 2; i < argc; ++i) rest.push_back(!std::strcmp(argv[i], "-o") ? dashO.data() : argv[i]);
     // Options without a value; --sequence is one for synth only (run and bench take a source).
-    std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold", "compare", "blind", "serial", "whole-images"};
+    std::set<std::string> flags = {"quiet", "scale-intrinsics", "cold",         "compare",
+                                   "blind", "serial",           "whole-images", "one-way"};
     if (command == "synth") flags.insert("sequence");
     if (command == "log") flags.insert("time-read");
     if (command == "run") flags.insert("rig");

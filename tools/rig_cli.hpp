@@ -15,8 +15,8 @@ namespace cs::cli {
 
 // The options of every rig command (run, eval, bench) beside the solver's: one list, for
 // their checks.
-inline constexpr std::array<const char*, 5> kRigOptions = {"pairs", "partners", "panorama-min-confidence",
-                                                           "cross-check", "whole-images"};
+inline constexpr std::array<const char*, 6> kRigOptions = {"pairs",       "partners",     "panorama-min-confidence",
+                                                           "cross-check", "whole-images", "one-way"};
 
 // run --calib RIG IMG0 ... IMGN-1 -o OUTDIR.
 int runRig(const Args& args, const std::string& outDir);
@@ -38,7 +38,8 @@ std::vector<PairInfo> rigPairsFromArgs(const Args& args, const CameraRig& rig);
 Params rigParamsFromArgs(const Args& args, const CameraRig& rig);
 
 // A rig's solver as the options ask: --cross-check T (RigStereo::setCrossCheck) and
-// --whole-images (whole images rather than solve windows).
+// --whole-images (whole images rather than solve windows) and --one-way (each pair solved in
+// one direction).
 std::unique_ptr<RigStereo> rigStereoFromArgs(const Args& args, const CameraRig& rig, const std::vector<PairInfo>& pairs,
                                              const Params& params);
 // --panorama-min-confidence C (0 when absent): the panorama leaves out samples below C.

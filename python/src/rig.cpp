@@ -115,23 +115,25 @@ struct PanoramaCache {
   std::unique_ptr<PanoramaFusion> fusion;
   Eigen::Vector3d centre = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
 
-  Panorama fuse(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::vector<DepthResult>& cameras,
+  std::vector<PanoramaView> views;  // the RigStereo's, set when it is made
+
+  Panorama fuse(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::vector<DepthResult>& estimates,
                 const std::vector<ImageF>& images, float minConfidence) {
     const std::lock_guard<std::mutex> lock(busy);
     if (!fusion || width != fusion->width() || frame.centre != centre) {
       fusion.reset();  // a width the fusion refuses leaves no stale one behind
-      fusion = std::make_unique<PanoramaFusion>(rig, frame, width, backend);
+      fusion = std::make_unique<PanoramaFusion>(rig, frame, width, views, std::vector<CameraRays>{}, backend);
       centre = frame.centre;
     }
-    return fusion->fuse(cameras, images, minConfidence);
+    return fusion->fuse(estimates, images, minConfidence);
   }
 };
 
-// What the panorama is fused from: the per-camera results and images as the library has them
-// (Result's arrays own moved copies; these stay for any number of panorama() calls).
+// What the panorama is fused from: each solve's estimate on its window (RigResult::views, as
+// the CLI fuses them) and the images; these stay for any number of panorama() calls.
 struct RigFusionInput {
   CameraRig rig;
-  std::vector<DepthResult> cameras;
+  std::vector<DepthResult> views;
   std::vector<ImageF> images;
   std::shared_ptr<PanoramaCache> cache;
 };
@@ -149,7 +151,7 @@ struct PyRigResult {
     Panorama p;
     {
       pb::gil_scoped_release nogil;  // a forward projection of every camera's pixels
-      p = input->cache->fuse(input->rig, frame, width, input->cameras, input->images, minConfidence);
+      p = input->cache->fuse(input->rig, frame, width, input->views, input->images, minConfidence);
     }
     return {floatArray(std::move(p.range)), floatArray(std::move(p.grey)), floatArray(std::move(p.confidence)), width,
             vectorArray(frame.centre)};
@@ -180,7 +182,7 @@ bool setsFieldOfView(std::string key) {
 class PyRigStereo {
  public:
   PyRigStereo(const CameraRig& rig, const std::string& presetName, const std::string& backend, pb::handle pairs,
-              int partners, double crossCheck, pb::kwargs kwargs)
+              int partners, double crossCheck, bool oneWay, pb::kwargs kwargs)
       : rig_(rig) {
     std::string backendSpec = backend;
     pb::dict overrides;
@@ -200,8 +202,10 @@ class PyRigStereo {
     pb::gil_scoped_release nogil;  // one Stereo per direction of each pair: backends set up
     stereo_ = std::make_unique<RigStereo>(rig_, pairs_, params_, backendSpec);
     stereo_->setCrossCheck(crossCheck);
+    stereo_->setOneWay(oneWay);
     crossCheck_ = crossCheck;
     panoramas_->backend = stereo_->backendName();
+    panoramas_->views = stereo_->views();
   }
 
   PyRigResult compute(pb::handle imagesObj) {
@@ -238,7 +242,8 @@ class PyRigStereo {
     PyRigResult out;
     out.totalMs = r.totalMs;
     for (const RigResult::Solve& s : r.solves) out.solves.append(solveDict(s));
-    auto input = std::make_shared<RigFusionInput>(RigFusionInput{rig_, r.cameras, std::move(images), panoramas_});
+    auto input =
+        std::make_shared<RigFusionInput>(RigFusionInput{rig_, std::move(r.views), std::move(images), panoramas_});
     for (DepthResult& camera : r.cameras) out.cameras.append(pb::cast(resultFromDepth(std::move(camera))));
     out.input = std::move(input);
     return out;
@@ -441,7 +446,7 @@ void bindRigs(pb::module_& m) {
       .def_readonly("total_ms", &PyRigResult::totalMs, "The solves and the per-camera fusion, milliseconds.")
       .def("panorama", &PyRigResult::panorama, pb::arg("width") = 2048, pb::arg("centre") = pb::none(),
            pb::arg("min_confidence") = 0.0f,
-           R"doc(Fuse the cameras' depths into an equirectangular Panorama, width x width/2.
+           R"doc(Fuse the solves' depths into an equirectangular Panorama, width x width/2.
 
 The same fusion as `curvestereo run --calib rig.yaml ...`'s panorama_range.exr (width:
 --panorama-width, even, 4 to 32768; min_confidence: --panorama-min-confidence, samples
@@ -455,15 +460,19 @@ same width and centre.)doc");
 each camera's estimates fused into its depth; panoramas from the RigResult.
 
 RigStereo(rig, preset="realtime", backend="auto", *, pairs=None, partners=2,
-cross_check=0.0, **params). rig: a CameraRig (load_rig). pairs: None (each camera's
-`partners` best partners, as rig.pairs()), "0-1,1-2", or [(0, 1), (1, 2)]. cross_check:
-a tolerance in [0, 1] for the round trip between a pair's two directions (0: off), as
-the CLI's --cross-check. params: as Stereo's; unless max_fov is given, the field of view
+cross_check=0.0, one_way=False, **params). rig: a CameraRig (load_rig). pairs: None (each
+camera's `partners` best partners, as rig.pairs()), "0-1,1-2", or [(0, 1), (1, 2)].
+cross_check: a tolerance in [0, 1] for the round trip between a pair's two directions (0:
+off), as the CLI's --cross-check. one_way: each pair solved in one direction only, as
+--one-way: half the solves for the panorama, each camera's own depth only where its pairs
+solve from it. params: as Stereo's; unless max_fov is given, the field of view
 widens to the widest lens, as the CLI does. Raises curvestereo.Error for a bad preset,
 parameter, pair or backend.)doc")
-      .def(pb::init<const CameraRig&, const std::string&, const std::string&, pb::handle, int, double, pb::kwargs>(),
+      .def(pb::init<const CameraRig&, const std::string&, const std::string&, pb::handle, int, double, bool,
+                    pb::kwargs>(),
            pb::arg("rig"), pb::arg("preset") = "realtime", pb::arg("backend") = "auto", pb::kw_only(),
-           pb::arg("pairs") = pb::none(), pb::arg("partners") = 2, pb::arg("cross_check") = 0.0)
+           pb::arg("pairs") = pb::none(), pb::arg("partners") = 2, pb::arg("cross_check") = 0.0,
+           pb::arg("one_way") = false)
       .def("compute", &PyRigStereo::compute, pb::arg("images"),
            "Solve one frame: images is a list with one 2-D image per camera, in order (uint8, uint16 or float32 "
            "in [0, 1], each at its camera's size; colour is converted as read_image does). Returns a RigResult. "

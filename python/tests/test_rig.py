@@ -198,3 +198,20 @@ def test_rig_sequence_frames_feed_next(ring4, tmp_path):
     with pytest.raises(cs.Error, match="cam3/data.csv"):
         shutil.rmtree(tmp_path / "mav0" / "cam3")
         cs.RigSequence(tmp_path, rig)
+
+
+def test_one_way_solves_each_pair_once_as_the_cli(cli, ring4, solved):
+    rig, both, images, _ = solved
+    stereo = cs.RigStereo(rig, preset="fast", backend="cpu", one_way=True)
+    r = stereo.compute(images)
+    assert len(r.solves) == len(stereo.pairs) == len(both.pairs)
+    solved_pairs = {frozenset((s["reference"], s["other"])) for s in r.solves}
+    assert solved_pairs == {frozenset((p["i"], p["j"])) for p in stereo.pairs}
+    # A camera keeps a depth only where its pairs solve from it: on a ring, its one window.
+    for k, camera in enumerate(r.cameras):
+        share = np.isfinite(camera.depth).mean()
+        assert 0.0 < share < 0.8, (k, share)
+    out = ring4 / "out_one_way"
+    run_cli(cli, "run", "--calib", ring4 / "camchain.yaml", *[ring4 / f"cam{k}.png" for k in range(4)], "-o", out,
+            *SOLVE, "--panorama-width", PANORAMA, "--one-way")
+    assert same_bits(r.panorama(width=PANORAMA).range, cs.read_image(out / "panorama_range.exr"))

@@ -95,6 +95,13 @@ struct Panorama {
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
                       const PanoramaFrame& frame, int width, float minConfidence = 0.f);
 
+// What one estimate splatted into the panorama covers: `window` of camera `camera`'s image
+// (empty: the whole image). RigStereo's directions are such views (RigStereo::views).
+struct PanoramaView {
+  int camera = 0;
+  ImageWindow window;
+};
+
 // fusePanorama for a stream of frames, on a backend (the splats and their three passes are
 // kernels: backend.hpp panoramaPlace, panoramaSplat, panoramaResolve): each camera's rays
 // turned and uploaded once, at construction, and the backend's buffers kept from frame to
@@ -111,12 +118,22 @@ class PanoramaFusion {
   // its camera's size.
   PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::vector<CameraRays>& rays,
                  const std::string& backend = "cpu");
+  // Estimates of views rather than whole cameras (several may be of one camera: a rig's
+  // pair directions, each on its window), splatted as they are: the panorama fuses them by
+  // confidence and visibility as it fuses cameras, so a rig need not fuse each camera first.
+  // rays: per camera as above, or empty (computed here). Throws cs::Error for no views, or a
+  // view whose camera is not the rig's or whose window does not fit its image.
+  PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame, int width, const std::vector<PanoramaView>& views,
+                 const std::vector<CameraRays>& rays, const std::string& backend = "cpu");
   ~PanoramaFusion();
   PanoramaFusion(const PanoramaFusion&) = delete;
   PanoramaFusion& operator=(const PanoramaFusion&) = delete;
   Panorama fuse(const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images, float minConfidence = 0.f);
   // The same into `out`, its images reused when they are the panorama's size.
   void fuse(const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images, Panorama& out,
+            float minConfidence = 0.f);
+  // One estimate per view (each its window's size) and the images per camera (or none).
+  void fuse(const std::vector<const DepthResult*>& estimates, const std::vector<ImageF>& images, Panorama& out,
             float minConfidence = 0.f);
   int width() const { return width_; }
   std::string backendName() const;

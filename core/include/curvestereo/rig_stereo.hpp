@@ -27,7 +27,11 @@ class Stereo;
 Params rigParams(const CameraRig& rig, Params params);
 
 struct RigResult {
-  std::vector<DepthResult> cameras;  // per camera, radial depth from that camera
+  std::vector<DepthResult> cameras;  // per camera, radial depth from that camera (setCameraOutputs)
+  // Per solve (as `solves`), its estimate on its window of the reference's image, after the
+  // cross-check: the views a PanoramaFusion over RigStereo::views() takes. Each frame hands
+  // these buffers back and forth with the solver (swapped, not copied).
+  std::vector<DepthResult> views;
   struct Solve {
     int reference = 0, other = 0;  // the pair's cameras: depth for `reference`
     ImageWindow window;            // the part of the reference's image solved (setSolveWindows)
@@ -42,10 +46,10 @@ struct RigResult {
 
 class RigStereo {
  public:
-  // Each pair is solved both ways (reference i against j, and j against i), so each camera
-  // of a pair gets a depth from it, each on the window of the reference's image that the
-  // other camera sees (setSolveWindows). Throws cs::Error as Stereo's constructor does, or
-  // when a camera of the rig is in no pair.
+  // Each pair is solved both ways (reference i against j, and j against i; setOneWay), so
+  // each camera of a pair gets a depth from it, each on the window of the reference's image
+  // that the other camera sees (setSolveWindows). Throws cs::Error as Stereo's constructor
+  // does, or when a camera of the rig is in no pair.
   // solveWindows: as setSolveWindows, from the start.
   RigStereo(const CameraRig& rig, const std::vector<PairInfo>& pairs, const Params& params = preset("realtime"),
             const std::string& backend = "auto", bool solveWindows = true);
@@ -84,6 +88,19 @@ class RigStereo {
   // it builds the directions' solvers again (and starts a new sequence).
   void setSolveWindows(bool on);
   static constexpr int kWindowMargin = 16;
+  // Whether each pair is solved in one direction only (default: off, both). A point that two
+  // cameras see then has one estimate rather than two: half the solves, for a panorama that
+  // needs each point once, while each camera's own result covers only what its pairs solve
+  // from it (a camera may have none: all invalid). The direction of each pair is the one
+  // that keeps the solves shared most evenly among the cameras (on a ring, each camera
+  // solves against its next). Changing it builds the directions' solvers again.
+  void setOneWay(bool on);
+  // Whether compute() and next() fuse each camera's result (RigResult::cameras; default:
+  // on). Off, only RigResult::views: a panorama fused from the views needs no more.
+  void setCameraOutputs(bool on);
+  // Each solve as a panorama view (its reference camera and window), in RigResult::views'
+  // order: PanoramaFusion(rig, frame, width, views(), rays()) fuses RigResult::views.
+  std::vector<PanoramaView> views() const;
   // Whether the directions solve concurrently, one thread each (default: on). The results
   // are the same either way; off, they run one after the other on the calling thread.
   void setConcurrentSolves(bool on);
@@ -106,6 +123,7 @@ class RigStereo {
   template <class Solve>
   void solveAll(const std::vector<ImageF>& images, RigResult& out, Solve&& solve);
   void applyOutputs();
+  void fuseCamera(int k, DepthResult& out) const;
   template <class Solve>
   void solveDirections(Solve& solve);  // into estimates_
 
@@ -118,7 +136,7 @@ class RigStereo {
   std::vector<CameraRays> rays_;        // per camera, for the fusion
   std::vector<DepthResult> estimates_;  // per direction, reused frame after frame
   double crossCheck_ = 0;
-  bool concurrent_ = true, flow_ = true, points_ = true;
+  bool concurrent_ = true, flow_ = true, points_ = true, oneWay_ = false, cameraOutputs_ = true;
 };
 
 }  // namespace cs
