@@ -1,5 +1,6 @@
 // curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N]
-//                         [--cross-check T] [--panorama-min-confidence C] [--whole-images] [solver options]
+//                         [--cross-check T] [--panorama-min-confidence C] [--whole-images] [--one-way]
+//                         [solver options]
 // A rig folder (../shared/data/rigs layout): each camera's tau against its depth<k>.exr, in
 // the pixel terms of its pairs; the panorama's range error where the truth is finite, as a
 // relative error and as tau in the panorama's pixel terms (parallaxErrorPx); and the

@@ -71,6 +71,9 @@ a rig of N cameras (three images or more, or --rig; docs/guide.md "run on a rig"
   --whole-images         solve each pair direction on the whole reference image, not only
                          the window its partner sees (slower; the depth differs only where
                          the pyramid's levels meet the window's edge: a check)
+  --one-way              solve each pair in one direction only: half the solves for the
+                         panorama, a little less accurate; each camera's outputs cover only
+                         the windows solved from it
 sequences:
   --sequence SRC         an ASL/EuRoC folder (mav0/cam0, mav0/cam1; its poses_cam0.csv and
                          camchain.yaml are used) or "LEFT,RIGHT" folders or globs paired by
@@ -124,7 +127,8 @@ into an MCAP log, each message stamped with its frame's timestamp (ns).
        curvestereo eval PAIRDIR... --sweep warps=A..B|dumax=A..B --csv FILE [--warps-list 5,10,20] [--step X]
        curvestereo eval --sequence DIR... [--cold | --compare] [--blind] [--frames N] [--csv FILE] [--md FILE]
        curvestereo eval RIGDIR [--csv FILE] [--maps DIR] [--pairs I-J,... | --partners N]
-                         [--cross-check T] [--panorama-min-confidence C] [--whole-images] [solver options]
+                         [--cross-check T] [--panorama-min-confidence C] [--whole-images] [--one-way]
+                         [solver options]
 
 A PAIRDIR holds left.png, right.png, camchain.yaml and depth_left.exr (optional
 depth_right.exr for the non-occluded scores), as `curvestereo synth` writes it.
@@ -172,7 +176,7 @@ sequences (synth --sequence's layout, with ground truth):
 Times frames after one warm-up frame and prints the median, min and max per frame and per
 stage, with the device, the settings and the frame's buffer memory. With one image per
 camera of a rig (three or more), a frame is every pair solved and the panorama fused
-(--pairs, --partners, --panorama-width, --cross-check, --whole-images as for run).
+(--pairs, --partners, --panorama-width, --cross-check, --whole-images, --one-way as for run).
 
   --calib CALIB LEFT RIGHT   a calibrated pair (default: a rendered 800x800 pair)
   --size WxH             the rendered pair's size (default 800x800)
