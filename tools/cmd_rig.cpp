@@ -259,7 +259,7 @@ int benchRig(const Args& args) {
   std::printf("input:    %d cameras, %s\n", rig.size(), describePairs(pairs).c_str());
   std::printf("runs:     %d frames after 1 warm-up frame; %zu solves a frame, %s\n", runs, stereo.views().size(),
               serial ? "one after the other (--serial)" : "concurrently");
-  std::vector<double> solves, slowest, fusions, panoramas, totals;
+  std::vector<double> solves, slowest, panoramas, totals;
   Progress progress("benchmark");
   RigResult r;  // reused, as a real-time loop would
   Panorama panorama;
@@ -274,7 +274,6 @@ int benchRig(const Args& args) {
     double longest = 0;
     for (const RigResult::Solve& solve : r.solves) longest = std::max(longest, solve.ms);
     slowest.push_back(longest);
-    fusions.push_back(r.fusionMs);
     panoramas.push_back(std::chrono::duration<double, std::milli>(end - solved).count());
     totals.push_back(std::chrono::duration<double, std::milli>(end - start).count());
     progress(double(i) / runs);
@@ -282,8 +281,8 @@ int benchRig(const Args& args) {
   progress.done();
   std::printf("frame:    median %.2f ms (%.1f fps), images in memory to the panorama in memory\n",
               summarize(totals).median, 1000.0 / summarize(totals).median);
-  std::printf("  solves: median %.2f ms (the slowest %.2f ms; the host's part after them %.2f ms)\n",
-              summarize(solves).median, summarize(slowest).median, summarize(fusions).median);
+  std::printf("  solves:   median %.2f ms (the slowest %.2f ms)\n", summarize(solves).median,
+              summarize(slowest).median);
   std::printf("  panorama %dx%d (%s):%*s median %.2f ms\n", fusion.width(), fusion.width() / 2,
               fusion.backendName().c_str(), int(std::max<size_t>(1, 14 - fusion.backendName().size())), "",
               summarize(panoramas).median);
