@@ -188,25 +188,40 @@ void RigStereo::solveDirections(Solve& solve) {
 }
 
 // Camera k's result from the directions that solve from it; all invalid where there are none
-// (one way: a camera may be no pair's reference).
+// (one way: a camera may be no pair's reference). One way, the pixels without an estimate of
+// their own are completed from the partners that solved toward it.
 void RigStereo::fuseCamera(int k, DepthResult& out) const {
   std::vector<PlacedEstimate> mine;
   for (size_t d = 0; d < directions_.size(); ++d)
     if (directions_[d].reference == k) mine.push_back({&estimates_[d], directions_[d].window});
   const Camera& cam = rig_.cameras[size_t(k)];
-  if (!mine.empty()) return fuseCameraEstimates(cam, mine, rays_[size_t(k)], out, points_);
+  if (!mine.empty())
+    fuseCameraEstimates(cam, mine, rays_[size_t(k)], out, points_);
+  else
+    invalidCamera(cam, out);
+  if (!oneWay_) return;
+  // Open: no estimate of its own, outside its windows or inside them where its partner saw
+  // nothing (a window is a bounding box).
+  std::vector<uint8_t> open(out.valid.data.size());
+  for (size_t p = 0; p < open.size(); ++p) open[p] = out.valid.data[p] == 0;
+  for (size_t d = 0; d < directions_.size(); ++d)
+    if (directions_[d].other == k) {
+      const int from = directions_[d].reference;
+      completeFromPartner(pairRig(rig_, from, k), {&estimates_[d], directions_[d].window}, rays_[size_t(from)],
+                          rays_[size_t(k)], open, out);
+    }
+}
+
+// A camera with no estimate: every output it carries NaN (valid 0).
+void RigStereo::invalidCamera(const Camera& cam, DepthResult& out) const {
   constexpr float nan = std::numeric_limits<float>::quiet_NaN();
   out = DepthResult();
   out.valid = ImageU8(cam.width, cam.height, 0);
   out.depth.radial = out.confidence = ImageF(cam.width, cam.height, nan);
-  if (points_) {
-    out.depth.z = ImageF(cam.width, cam.height, nan);
-    out.depth.points = Image<Point3f>(cam.width, cam.height, {nan, nan, nan});
-  }
-  if (flow_) {
-    out.disparity = ImageF(cam.width, cam.height, nan);
-    out.warp = FlowImage(cam.width, cam.height, {nan, nan});
-  }
+  out.depth.z = points_ ? ImageF(cam.width, cam.height, nan) : ImageF();
+  out.depth.points = points_ ? Image<Point3f>(cam.width, cam.height, {nan, nan, nan}) : Image<Point3f>();
+  out.disparity = flow_ ? ImageF(cam.width, cam.height, nan) : ImageF();
+  out.warp = flow_ ? FlowImage(cam.width, cam.height, {nan, nan}) : FlowImage();
 }
 
 // Every direction through `solve`, then the cross-check and the per-camera fusion.

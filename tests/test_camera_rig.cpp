@@ -362,6 +362,40 @@ TEST_CASE("a panorama of views (windows of the cameras) fuses as the whole camer
         }).find("fusePanorama: 4 results and 0 images for 8 views") == 0);
 }
 
+TEST_CASE("a camera's open pixels are completed from a partner's estimate carried into it") {
+  const CameraRig rig = ring(4, 200);
+  const cs::DepthResult truth0 = sphereResult(rig, 0, 3.0, 0.8f), partner = sphereResult(rig, 1, 3.0, 0.6f);
+  cs::DepthResult out = sphereResult(rig, 0, 3.0, 0.8f);
+  std::vector<uint8_t> open(200 * 200, 0);
+  for (int y = 0; y < 200; ++y)
+    for (int x = 100; x < 200; ++x) {  // the right half, which camera 1 (to the right) sees
+      open[size_t(y * 200 + x)] = 1;
+      out.valid(x, y) = 0;
+      out.depth.radial(x, y) = out.confidence(x, y) = NAN;
+    }
+  const cs::Rig pair = cs::pairRig(rig, 1, 0);
+  const long long written = cs::completeFromPartner(pair, {&partner, {}}, cs::cameraRays(rig.cameras[1]),
+                                                    cs::cameraRays(rig.cameras[0]), open, out);
+  long long right = 0, off = 0, leftChanged = 0;
+  for (int y = 0; y < 200; ++y)
+    for (int x = 0; x < 200; ++x) {
+      if (x < 100) {
+        leftChanged += out.depth.radial(x, y) != truth0.depth.radial(x, y) && truth0.valid(x, y);
+        continue;
+      }
+      if (!out.valid(x, y)) continue;
+      ++right;
+      // The point's own range from camera 0, written to the 2 x 2 pixels about where it
+      // lands: within the range's change over a pixel of the sphere.
+      off += std::abs(out.depth.radial(x, y) - truth0.depth.radial(x, y)) > 0.01f * truth0.depth.radial(x, y) ||
+             out.confidence(x, y) != 0.6f || !std::isnan(out.disparity(x, y));
+    }
+  CHECK(written == right);
+  CHECK(right > 5000);  // most of the right half's image circle
+  CHECK(off == 0);
+  CHECK(leftChanged == 0);
+}
+
 TEST_CASE("a camera's estimates are fused by confidence where they agree") {
   const CameraRig rig = ring(4, 200);
   cs::DepthResult a = sphereResult(rig, 0, 3.0, 0.9f), b = sphereResult(rig, 0, 3.0, 0.3f);

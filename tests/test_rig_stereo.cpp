@@ -269,6 +269,13 @@ TEST_CASE(
   };
   MESSAGE("abs-rel: both ways " << absRel(fromViews) << ", one way " << absRel(oneWayViews));
   CHECK(absRel(oneWayViews) < 1.5 * absRel(fromViews) + 0.01);
+  // Each camera's own window, and beyond it its partner's estimate carried into it.
+  for (int k = 0; k < rig.size(); ++k) {
+    long long one = 0, two = 0;
+    for (uint8_t v : r.cameras[size_t(k)].valid.data) one += v;
+    for (uint8_t v : both.cameras[size_t(k)].valid.data) two += v;
+    CHECK(one > 0.85 * double(two));
+  }
   // Without camera outputs, only the views come back.
   oneWay.setCameraOutputs(false);
   CHECK(oneWay.compute(synthetic.images).cameras.empty());

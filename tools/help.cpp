@@ -71,9 +71,9 @@ a rig of N cameras (three images or more, or --rig; docs/guide.md "run on a rig"
   --whole-images         solve each pair direction on the whole reference image, not only
                          the window its partner sees (slower; the depth differs only where
                          the pyramid's levels meet the window's edge: a check)
-  --one-way              solve each pair in one direction only: half the solves for the
-                         panorama, a little less accurate; each camera's outputs cover only
-                         the windows solved from it
+  --one-way              solve each pair in one direction only: half the solves, a little
+                         less accurate; each camera's depth beyond its own solve is its
+                         partner's carried into it (no disparity or flow there)
 sequences:
   --sequence SRC         an ASL/EuRoC folder (mav0/cam0, mav0/cam1; its poses_cam0.csv and
                          camchain.yaml are used) or "LEFT,RIGHT" folders or globs paired by

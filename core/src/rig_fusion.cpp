@@ -179,6 +179,54 @@ void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& e
   });
 }
 
+long long completeFromPartner(const Rig& pair, const PlacedEstimate& from, const CameraRays& raysI,
+                              const CameraRays& raysJ, const std::vector<uint8_t>& open, DepthResult& out) {
+  const Camera& j = pair.cam1;
+  const ImageWindow w = from.window.empty() ? ImageWindow{0, 0, pair.cam0.width, pair.cam0.height} : from.window;
+  checkFusionInput(out, j, false, "completeFromPartner");
+  checkFusionInput(*from.result, pair.cam0.cropped(w.x0, w.y0, w.width, w.height), false, "completeFromPartner");
+  if (!sameSize(raysI, pair.cam0) || !sameSize(raysJ, j) || open.size() != size_t(j.width) * size_t(j.height))
+    throw Error("completeFromPartner: the rays or the open pixels are not their camera's size");
+  const BuiltCamera built(j);
+  const bool withPoints = sameSize(out.depth.z, j) && sameSize(out.depth.points, j);
+  const bool withFlow = sameSize(out.disparity, j) && sameSize(out.warp, j);
+  std::vector<float> nearest(open.size(), INFINITY);  // range written so far, per pixel of j
+  std::vector<uint8_t> written(open.size(), 0);
+  long long count = 0;
+  for (int v = 0; v < w.height; ++v)
+    for (int u = 0; u < w.width; ++u) {
+      const size_t at = size_t(v) * size_t(w.width) + size_t(u);
+      const float depth = from.result->depth.radial.data[at];
+      const Eigen::Vector3d ray = raysI(w.x0 + u, w.y0 + v).cast<double>();
+      if (!from.result->valid.data[at] || std::isnan(depth) || !ray.allFinite()) continue;
+      const bool finite = std::isfinite(depth);
+      const Eigen::Vector3d X =
+          finite ? Eigen::Vector3d(pair.R * (double(depth) * ray) + pair.t) : Eigen::Vector3d(pair.R * ray);
+      Vec2<double> px;
+      if (!built.project(X, px) || !built.inImage(px)) continue;
+      const float range = finite ? float(X.norm()) : INFINITY;
+      const int x0 = int(std::floor(px.x())), y0 = int(std::floor(px.y()));
+      for (int y = y0; y <= y0 + 1; ++y)
+        for (int x = x0; x <= x0 + 1; ++x) {
+          if (x < 0 || y < 0 || x >= j.width || y >= j.height) continue;
+          const size_t p = size_t(y) * size_t(j.width) + size_t(x);
+          if (!open[p] || (written[p] && !(range < nearest[p]))) continue;
+          count += !written[p];
+          written[p] = 1, nearest[p] = range;
+          out.valid.data[p] = 1;
+          out.depth.radial.data[p] = range;
+          out.confidence.data[p] = from.result->confidence.data[at];
+          if (withFlow) out.disparity.data[p] = kNaNf, out.warp.data[p] = {kNaNf, kNaNf};
+          if (!withPoints) continue;
+          const Eigen::Vector3f& r = raysJ.data[p];
+          out.depth.z.data[p] = finite ? range * r.z() : INFINITY;
+          out.depth.points.data[p] =
+              finite ? Point3f{range * r.x(), range * r.y(), range * r.z()} : Point3f{kNaNf, kNaNf, kNaNf};
+        }
+    }
+  return count;
+}
+
 namespace {
 
 // Inverse ranges within tolerance of the larger, or within the slack that a fraction of a

@@ -42,6 +42,19 @@ struct PlacedEstimate {
 void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& estimates, const CameraRays& rays,
                          DepthResult& out, bool withPoints = true);
 
+// A camera's pixels that no estimate of its own reaches, completed from a partner's: each
+// valid pixel of `from` (camera i's estimate on its window; pair = pairRig(rig, i, j), j the
+// camera completed, with raysI camera i's cameraRays) is carried at its depth into camera j
+// and written over the 2 x 2 pixels around where it lands, where `open` (one per pixel of
+// camera j) is set and no nearer point landed: a z-buffer. The pixel takes the point's range
+// from camera j, and z and point along its own ray (raysJ, camera j's; when `out` has them),
+// and the estimate's confidence;
+// disparity and warp, which belong to the partner's pair, are NaN. Points at infinity land
+// as their direction, at +inf. `out` must hold camera j's valid, radial depth and confidence
+// (cs::Error otherwise). Returns how many pixels it wrote.
+long long completeFromPartner(const Rig& pair, const PlacedEstimate& from, const CameraRays& raysI,
+                              const CameraRays& raysJ, const std::vector<uint8_t>& open, DepthResult& out);
+
 // The round trip between a pair's two directions, on the host, at no solve's cost: each pixel
 // of `forward` (camera i's depth from the pair with j; pair = pairRig(rig, i, j)) is carried
 // at its depth into camera j and compared with `backward` (camera j's depth from i) at the

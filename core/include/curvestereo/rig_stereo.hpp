@@ -90,10 +90,11 @@ class RigStereo {
   static constexpr int kWindowMargin = 16;
   // Whether each pair is solved in one direction only (default: off, both). A point that two
   // cameras see then has one estimate rather than two: half the solves, for a panorama that
-  // needs each point once, while each camera's own result covers only what its pairs solve
-  // from it (a camera may have none: all invalid). The direction of each pair is the one
-  // that keeps the solves shared most evenly among the cameras (on a ring, each camera
-  // solves against its next). Changing it builds the directions' solvers again.
+  // needs each point once. Each camera's own result is its solves' where it has them, and
+  // elsewhere its partners' carried into it (completeFromPartner: depth, z, points and
+  // confidence; no disparity or warp there). The direction of each pair is the one that
+  // keeps the solves shared most evenly among the cameras (on a ring, each camera solves
+  // against its next). Changing it builds the directions' solvers again.
   void setOneWay(bool on);
   // Whether compute() and next() fuse each camera's result (RigResult::cameras; default:
   // on). Off, only RigResult::views: a panorama fused from the views needs no more.
@@ -124,6 +125,7 @@ class RigStereo {
   void solveAll(const std::vector<ImageF>& images, RigResult& out, Solve&& solve);
   void applyOutputs();
   void fuseCamera(int k, DepthResult& out) const;
+  void invalidCamera(const Camera& cam, DepthResult& out) const;
   template <class Solve>
   void solveDirections(Solve& solve);  // into estimates_
 
