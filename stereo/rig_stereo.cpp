@@ -12,6 +12,13 @@
 
 namespace cs {
 
+namespace {
+
+constexpr const char* kOneWayCrossCheck =
+    "the cross-check compares a pair's two directions: one way (--one-way) solves only one";
+
+}  // namespace
+
 Params rigParams(const CameraRig& rig, Params params) {
   double widest = 0;
   for (const Camera& cam : rig.cameras) widest = std::max(widest, viewHalfAngle(cam));
@@ -60,6 +67,7 @@ void RigStereo::buildDirections() {
 
 void RigStereo::setOneWay(bool on) {
   if (on == oneWay_) return;
+  if (on && crossCheck_ > 0) throw Error(kOneWayCrossCheck);
   oneWay_ = on;
   buildDirections();
 }
@@ -120,6 +128,7 @@ Rig RigStereo::windowPair(size_t d, size_t back) const {
 
 void RigStereo::setCrossCheck(double tolerance) {
   if (!(tolerance >= 0 && tolerance <= 1)) throw Error("cross-check tolerance must be in [0, 1]");
+  if (tolerance > 0 && oneWay_) throw Error(kOneWayCrossCheck);
   crossCheck_ = tolerance;
 }
 

@@ -276,6 +276,12 @@ TEST_CASE(
     for (uint8_t v : both.cameras[size_t(k)].valid.data) two += v;
     CHECK(one > 0.85 * double(two));
   }
+  // The cross-check needs both directions: one way refuses it, in either order.
+  const std::string refused = "the cross-check compares a pair's two directions: one way (--one-way) solves only one";
+  CHECK(test::errorOf([&] { oneWay.setCrossCheck(0.1); }) == refused);
+  RigStereo checked(rig, pairs, shortSolve(rig), "cpu");
+  checked.setCrossCheck(0.1);
+  CHECK(test::errorOf([&] { checked.setOneWay(true); }) == refused);
   // Without camera outputs, only the views come back.
   oneWay.setCameraOutputs(false);
   CHECK(oneWay.compute(synthetic.images).cameras.empty());

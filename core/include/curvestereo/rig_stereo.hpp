@@ -94,7 +94,9 @@ class RigStereo {
   // elsewhere its partners' carried into it (completeFromPartner: depth, z, points and
   // confidence; no disparity or warp there). The direction of each pair is the one that
   // keeps the solves shared most evenly among the cameras (on a ring, each camera solves
-  // against its next). Changing it builds the directions' solvers again.
+  // against its next). Changing it builds the directions' solvers again. Throws cs::Error
+  // where a cross-check is set (setCrossCheck needs both directions), as setCrossCheck does
+  // one way.
   void setOneWay(bool on);
   // Whether compute() and next() fuse each camera's result (RigResult::cameras; default:
   // on). Off, only RigResult::views: a panorama fused from the views needs no more.
