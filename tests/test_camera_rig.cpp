@@ -264,6 +264,17 @@ cs::DepthResult sphereResult(const CameraRig& rig, int k, double radius, float c
   return r;
 }
 
+// Every pixel of the panorama has a range, and it is the sphere's radius.
+void checkWholeSphere(const cs::Panorama& p, float radius) {
+  long long filled = 0, wrong = 0;
+  for (float v : p.range.data) {
+    filled += !std::isnan(v);
+    wrong += !std::isnan(v) && std::abs(v - radius) > 1e-3f;
+  }
+  CHECK(filled == (long long)p.range.size());
+  CHECK(wrong == 0);
+}
+
 }  // namespace
 
 TEST_CASE("the panorama of exact depths inside a sphere is the sphere's radius, with the nearest surface visible") {
@@ -273,15 +284,9 @@ TEST_CASE("the panorama of exact depths inside a sphere is the sphere's radius, 
   const cs::PanoramaFrame frame = cs::panoramaFrame(rig);
   const int width = 128;
   cs::Panorama p = cs::fusePanorama(rig, results, {}, frame, width);
-  long long filled = 0, wrong = 0;
-  for (float v : p.range.data) {
-    filled += !std::isnan(v);
-    wrong += !std::isnan(v) && std::abs(v - 3.f) > 1e-3f;
-  }
   // Four 200-degree lenses see the whole sphere, the poles included: there a camera pixel
   // spans many panorama columns, and its footprint must too.
-  CHECK(filled == (long long)p.range.size());
-  CHECK(wrong == 0);
+  checkWholeSphere(p, 3.f);
 
   // Camera 1 sees a farther surface (a wrong, confident estimate) and a nearer one of low
   // confidence: the nearest confident surface wins where they overlap, then the mean of
@@ -343,14 +348,7 @@ TEST_CASE("a panorama of views (windows of the cameras) fuses as the whole camer
       halves.push_back(std::move(h));
     }
   const cs::PanoramaFrame frame = cs::panoramaFrame(rig);
-  const cs::Panorama p = cs::PanoramaFusion(rig, frame, 128, views, {}).fuse(halves, {});
-  long long filled = 0, wrong = 0;
-  for (float v : p.range.data) {
-    filled += !std::isnan(v);
-    wrong += !std::isnan(v) && std::abs(v - 3.f) > 1e-3f;
-  }
-  CHECK(filled == (long long)p.range.size());
-  CHECK(wrong == 0);
+  checkWholeSphere(cs::PanoramaFusion(rig, frame, 128, views, {}).fuse(halves, {}), 3.f);
   CHECK(errorOf([&] {
           cs::PanoramaFusion(rig, frame, 128, std::vector<cs::PanoramaView>{{4, {}}}, {});
         }) == "PanoramaFusion: a view of camera 4 in a rig of 4 cameras");
