@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
+#include <mutex>
 
 #include "curvestereo/backend.hpp"
 #include "curvestereo/fusion_checks.hpp"
@@ -27,6 +28,8 @@ struct PanoramaFusion::State {
   Buffer accum, range, grey, confidence;
   std::vector<float> radial, image;  // a view's radial depth (NaN where it is not valid) and grey level
   float parallaxSlack = 0.f;         // panoramaParallaxSlack of the rig
+  std::vector<uint8_t> placed;       // per view, this frame: 0 not yet, 1 placed, 2 with its grey
+  std::mutex busy;                   // placeView from several threads, one at a time
 };
 
 namespace {
@@ -105,6 +108,7 @@ PanoramaFusion::PanoramaFusion(const CameraRig& rig, const PanoramaFrame& frame,
     b.upload(c.rays, turned.data());
     s.cameras.push_back(c);
   }
+  s.placed.assign(s.views.size(), 0);
   s.accum = b.create(width, width / 2, kPanoramaChannels);
   b.fill(s.accum, 0.f);  // panoramaSplat's starting state; panoramaResolve leaves it so
   s.range = b.create(width, width / 2, 1);
@@ -138,47 +142,59 @@ void PanoramaFusion::fuse(const std::vector<const DepthResult*>& estimates, cons
                 " images for " + std::to_string(s.views.size()) + " views of a rig of " + std::to_string(rig_.size()) +
                 " cameras");
   for (size_t v = 0; v < s.views.size(); ++v) {
-    const ImageWindow& w = s.views[v].window;
-    const Camera& cam = rig_.cameras[size_t(s.views[v].camera)];
-    checkFusionInput(*estimates[v], cam.cropped(w.x0, w.y0, w.width, w.height), false, "fusePanorama");
+    const int camera = s.views[v].camera;
+    placeView(v, *estimates[v], images.empty() || images[size_t(camera)].empty() ? nullptr : &images[size_t(camera)]);
   }
-  for (int k = 0; k < int(images.size()); ++k)
-    if (!images[size_t(k)].empty() && !sameSize(images[size_t(k)], rig_.cameras[size_t(k)]))
-      throw Error("fusePanorama: image " + std::to_string(k) + " is not its camera's size");
+  finish(out, minConfidence);
+}
+
+void PanoramaFusion::placeView(size_t v, const DepthResult& r, const ImageF* image) {
+  State& s = *state_;
+  if (v >= s.views.size())
+    throw Error("PanoramaFusion: view " + std::to_string(v) + " of " + std::to_string(s.views.size()));
+  const ImageWindow& w = s.views[v].window;
+  const Camera& cam = rig_.cameras[size_t(s.views[v].camera)];
+  checkFusionInput(r, cam.cropped(w.x0, w.y0, w.width, w.height), false, "fusePanorama");
+  if (image && !image->empty() && !sameSize(*image, cam))
+    throw Error("fusePanorama: image " + std::to_string(s.views[v].camera) + " is not its camera's size");
+  if (image && image->empty()) image = nullptr;
+  const std::lock_guard<std::mutex> lock(s.busy);
+  Backend& b = *s.backend;
+  PanoramaCamera& c = s.cameras[v];
+  const bool whole = image && w.width == image->width && w.height == image->height;
+  const ImageF* window = whole ? nullptr : image;  // a whole image is uploaded as it is: no copy
+  s.radial.resize(r.depth.radial.data.size());
+  if (window) s.image.resize(r.depth.radial.data.size());
+  detail::parallelFor(w.height, [&](int y) {
+    for (size_t i = size_t(y) * size_t(w.width); i < size_t(y + 1) * size_t(w.width); ++i)
+      s.radial[i] = r.valid.data[i] ? r.depth.radial.data[i] : std::numeric_limits<float>::quiet_NaN();
+    if (window) {
+      const float* row = &window->data[size_t(w.y0 + y) * size_t(window->width) + size_t(w.x0)];
+      std::copy(row, row + w.width, &s.image[size_t(y) * size_t(w.width)]);
+    }
+  });
+  b.upload(c.radial, s.radial.data());
+  b.upload(c.confidence, r.confidence.data.data());
+  if (image) b.upload(c.grey, whole ? image->data.data() : s.image.data());
+  b.panoramaPlace(c.place, c.radial, c.rays,
+                  PanoramaParams{width_, {c.centre[0], c.centre[1], c.centre[2]}, 0.f, 0, s.parallaxSlack});
+  s.placed[v] = image ? 2 : 1;
+}
+
+void PanoramaFusion::finish(Panorama& out, float minConfidence) {
+  State& s = *state_;
+  const std::lock_guard<std::mutex> lock(s.busy);
+  for (size_t v = 0; v < s.views.size(); ++v)
+    if (!s.placed[v]) throw Error("PanoramaFusion: view " + std::to_string(v) + " was not placed for this frame");
   Backend& b = *s.backend;
   const Buffer none{};
-  for (size_t v = 0; v < s.views.size(); ++v) {
-    const DepthResult& r = *estimates[v];
-    const ImageWindow& w = s.views[v].window;
-    const ImageF* image =
-        images.empty() || images[size_t(s.views[v].camera)].empty() ? nullptr : &images[size_t(s.views[v].camera)];
-    PanoramaCamera& c = s.cameras[v];
-    const bool whole = image && w.width == image->width && w.height == image->height;
-    if (whole) image = nullptr;  // uploaded as it is, below: no copy
-    s.radial.resize(r.depth.radial.data.size());
-    if (image) s.image.resize(r.depth.radial.data.size());
-    detail::parallelFor(w.height, [&](int y) {
-      for (size_t i = size_t(y) * size_t(w.width); i < size_t(y + 1) * size_t(w.width); ++i)
-        s.radial[i] = r.valid.data[i] ? r.depth.radial.data[i] : std::numeric_limits<float>::quiet_NaN();
-      if (image) {
-        const float* row = &image->data[size_t(w.y0 + y) * size_t(image->width) + size_t(w.x0)];
-        std::copy(row, row + w.width, &s.image[size_t(y) * size_t(w.width)]);
-      }
-    });
-    b.upload(c.radial, s.radial.data());
-    b.upload(c.confidence, r.confidence.data.data());
-    if (image) b.upload(c.grey, s.image.data());
-    if (whole) b.upload(c.grey, images[size_t(s.views[v].camera)].data.data());
-    b.panoramaPlace(c.place, c.radial, c.rays,
-                    PanoramaParams{width_, {c.centre[0], c.centre[1], c.centre[2]}, 0.f, 0, s.parallaxSlack});
-  }
   for (int pass = kPanoramaBest; pass <= kPanoramaSums; ++pass)
     for (size_t v = 0; v < s.views.size(); ++v) {
       const PanoramaCamera& c = s.cameras[v];
-      const bool grey = !images.empty() && !images[size_t(s.views[v].camera)].empty();
-      b.panoramaSplat(s.accum, c.place, c.confidence, grey ? c.grey : none,
+      b.panoramaSplat(s.accum, c.place, c.confidence, s.placed[v] == 2 ? c.grey : none,
                       PanoramaParams{width_, {0.f, 0.f, 0.f}, minConfidence, pass, s.parallaxSlack});
     }
+  std::fill(s.placed.begin(), s.placed.end(), uint8_t(0));
   b.panoramaResolve(s.range, s.grey, s.confidence, s.accum);
   for (ImageF* image : {&out.range, &out.grey, &out.confidence})
     if (image->width != width_ || image->height != width_ / 2) *image = ImageF(width_, width_ / 2);

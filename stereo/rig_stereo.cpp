@@ -63,6 +63,7 @@ void RigStereo::buildDirections() {
   }
   estimates_.assign(directions_.size(), DepthResult());
   applyOutputs();
+  if (panorama_) setPanorama(panoramaWidth_, panoramaFrame_, panoramaMinConfidence_);  // new views
 }
 
 void RigStereo::setOneWay(bool on) {
@@ -73,6 +74,15 @@ void RigStereo::setOneWay(bool on) {
 }
 
 void RigStereo::setCameraOutputs(bool on) { cameraOutputs_ = on; }
+
+void RigStereo::setPanorama(int width, const PanoramaFrame& frame, float minConfidence) {
+  if (!(minConfidence >= 0.f && minConfidence <= 1.f)) throw Error("panorama min confidence must be in [0, 1]");
+  panorama_.reset();
+  panoramaWidth_ = width;
+  panoramaFrame_ = frame;
+  panoramaMinConfidence_ = minConfidence;
+  if (width > 0) panorama_ = std::make_unique<PanoramaFusion>(rig_, frame, width, views(), rays_, backendName());
+}
 
 std::vector<PanoramaView> RigStereo::views() const {
   std::vector<PanoramaView> out;
@@ -175,11 +185,15 @@ void RigStereo::resetSequence() {
 // 848x800 solve leaves most of a large GPU idle between its small kernels. The first error
 // (in direction order) is rethrown once all have finished.
 template <class Solve>
-void RigStereo::solveDirections(Solve& solve) {
+void RigStereo::solveDirections(Solve& solve, const std::vector<ImageF>& images) {
   std::vector<std::exception_ptr> errors(directions_.size());
+  // Without a cross-check to change them after, each estimate goes into the panorama as its
+  // solve ends: its upload and placing overlap the solves still running.
+  const bool placeEarly = panorama_ && crossCheck_ == 0;
   auto run = [&](size_t d) {
     try {
       solve(directions_[d], estimates_[d]);
+      if (placeEarly) panorama_->placeView(d, estimates_[d], &images[size_t(directions_[d].reference)]);
     } catch (...) {
       errors[d] = std::current_exception();
     }
@@ -248,7 +262,7 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
                   std::to_string(cam.height));
   }
   const auto start = std::chrono::steady_clock::now();
-  solveDirections(solve);  // into estimates_, reused: a frame allocates nothing
+  solveDirections(solve, images);  // into estimates_, reused: a frame allocates nothing
   const auto solvedAt = std::chrono::steady_clock::now();
   out.solves.clear();
   for (size_t d = 0; d < directions_.size(); ++d) {
@@ -264,6 +278,18 @@ void RigStereo::solveAll(const std::vector<ImageF>& images, RigResult& out, Solv
         if (directions_[back].reference == directions_[d].other && directions_[back].other == directions_[d].reference)
           out.solves[d].crossCheckInvalidated =
               crossCheck(windowPair(d, back), estimates_[d], solved[back], crossCheck_);
+  }
+  if (panorama_) {
+    const auto panoramaStart = std::chrono::steady_clock::now();
+    if (crossCheck_ > 0)
+      for (size_t d = 0; d < directions_.size(); ++d)
+        panorama_->placeView(d, estimates_[d], &images[size_t(directions_[d].reference)]);
+    panorama_->finish(out.panorama, panoramaMinConfidence_);
+    out.panoramaMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - panoramaStart).count();
+  } else {
+    out.panorama = Panorama();
+    out.panoramaMs = 0;
   }
   if (cameraOutputs_) {
     out.cameras.resize(size_t(rig_.size()));

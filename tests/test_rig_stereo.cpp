@@ -286,3 +286,29 @@ TEST_CASE(
   oneWay.setCameraOutputs(false);
   CHECK(oneWay.compute(synthetic.images).cameras.empty());
 }
+
+TEST_CASE("RigStereo's own panorama, each view placed as its solve ends, is PanoramaFusion's over the views") {
+  const synth::SynthRig& synthetic = ring4();
+  const CameraRig& rig = synthetic.layout.rig;
+  const PanoramaFrame frame = panoramaFrame(rig);
+  for (double crossCheck : {0.0, 0.1}) {
+    CAPTURE(crossCheck);
+    RigStereo stereo(rig, choosePairs(rig), shortSolve(rig), "cpu");
+    stereo.setCrossCheck(crossCheck);
+    stereo.setPanorama(128, frame, 0.1f);
+    RigResult r;
+    for (int frameIndex = 0; frameIndex < 2; ++frameIndex) {  // the fusion's state reused
+      stereo.compute(synthetic.images, r);
+      const Panorama expected =
+          PanoramaFusion(rig, frame, 128, stereo.views(), stereo.rays()).fuse(r.views, synthetic.images, 0.1f);
+      CHECK(test::sameBits(r.panorama.range, expected.range));
+      CHECK(test::sameBits(r.panorama.confidence, expected.confidence));
+      CHECK(test::sameBits(r.panorama.grey, expected.grey));
+      CHECK(r.panoramaMs > 0);
+    }
+  }
+  RigStereo stereo(rig, choosePairs(rig), shortSolve(rig), "cpu");
+  CHECK(stereo.compute(synthetic.images).panorama.range.empty());  // none unless asked for
+  CHECK(test::errorOf([&] { stereo.setPanorama(127, frame); }) ==
+        "panorama width must be even and 4 to 32768 px, got 127");
+}

@@ -142,6 +142,8 @@ int runRig(const Args& args, const std::string& outDir) {
   RigStereo& stereo = *solver;
   std::printf("backend: %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
   std::printf("pairs: %s\n", describePairs(pairs).c_str());
+  const PanoramaFrame frame = panoramaFrame(rig);
+  stereo.setPanorama(width, frame, panoramaConfidence);
   const RigResult r = stereo.compute(images);
   for (const RigResult::Solve& s : r.solves)
     std::printf("  cam%d from cam%d: %.1f ms, %dx%d px at (%d, %d)%s\n", s.reference, s.other, s.ms, s.window.width,
@@ -150,19 +152,13 @@ int runRig(const Args& args, const std::string& outDir) {
                     ? (", cross-check took " + std::to_string(s.crossCheckInvalidated) + " px").c_str()
                     : "");
 
-  const auto fuseStart = std::chrono::steady_clock::now();
-  const PanoramaFrame frame = panoramaFrame(rig);
-  const Panorama panorama = PanoramaFusion(rig, frame, width, stereo.views(), stereo.rays(), stereo.backendName())
-                                .fuse(r.views, images, panoramaConfidence);
-  const double panoramaMs =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - fuseStart).count();
-
-  writeRigFrame(outDir, rig, r, images, panorama, frame, minConfidence);
+  writeRigFrame(outDir, rig, r, images, r.panorama, frame, minConfidence);
   for (int k = 0; k < rig.size(); ++k)
     std::printf("cam%d: %.1f %% of the image has a depth\n", k, 100.0 * validShare(r.cameras[size_t(k)]));
   std::printf(
-      "total %.1f ms (pairs and per-camera fusion) + %.1f ms panorama %dx%d (%s, with its setup); outputs in %s\n",
-      r.totalMs, panoramaMs, width, width / 2, stereo.backendName().c_str(), outDir.c_str());
+      "total %.1f ms: the pairs, the panorama %dx%d (%s; %.1f ms after the solves) and the per-camera "
+      "fusion; outputs in %s\n",
+      r.totalMs, width, width / 2, stereo.backendName().c_str(), r.panoramaMs, outDir.c_str());
   return 0;
 }
 
@@ -185,8 +181,7 @@ int runRigSequence(const Args& args, const std::string& outDir) {
   const std::unique_ptr<RigStereo> solver = rigStereoFromArgs(args, rig, pairs, params);
   RigStereo& stereo = *solver;
   const PanoramaFrame frame = panoramaFrame(rig);
-  PanoramaFusion fusion(rig, frame, panoramaWidth(args), stereo.views(), stereo.rays(), stereo.backendName());
-  const float panoramaConfidence = panoramaMinConfidence(args);
+  stereo.setPanorama(panoramaWidth(args), frame, panoramaMinConfidence(args));
   std::printf("sequence: %s\n", sequence.summary().c_str());
   std::printf("backend: %s; settings: %s; %s\n", stereo.backendName().c_str(), describe(params).c_str(),
               cold ? "cold: every frame solved alone" : "warm start and temporal filter");
@@ -197,7 +192,6 @@ int runRigSequence(const Args& args, const std::string& outDir) {
   double solveMs = 0;
   std::vector<ImageF> images;
   RigResult r;
-  Panorama panorama;
   for (size_t i = first; i < end; ++i) {
     const RigSequenceFrame& f = sequence.frames()[i];
     const std::string name = std::to_string(f.timestampNs);
@@ -210,8 +204,7 @@ int runRigSequence(const Args& args, const std::string& outDir) {
     }
     try {
       stereo.next(images, r, f.hasPose ? &f.bodyPose : nullptr);
-      fusion.fuse(r.views, images, panorama, panoramaConfidence);
-      writeRigFrame((std::filesystem::path(outDir) / name).string(), rig, r, images, panorama, frame, minConfidence);
+      writeRigFrame((std::filesystem::path(outDir) / name).string(), rig, r, images, r.panorama, frame, minConfidence);
     } catch (const Error& e) {
       if (tty) std::fputc('\n', stderr);
       throw Error("frame " + std::to_string(i) + " (t " + name + " ns): " + e.what() + written);
@@ -251,9 +244,8 @@ int benchRig(const Args& args) {
   stereo.setConcurrentSolves(!serial);
   stereo.setFlowOutputs(false);  // a panorama needs only the solves' depth and confidence
   stereo.setCameraOutputs(false);
-  PanoramaFusion fusion(rig, panoramaFrame(rig), panoramaWidth(args), stereo.views(), stereo.rays(),
-                        stereo.backendName());
-  const float panoramaConfidence = panoramaMinConfidence(args);
+  const int width = panoramaWidth(args);
+  stereo.setPanorama(width, panoramaFrame(rig), panoramaMinConfidence(args));
   const int runs = args.getInt("runs", stereo.backendName() == "cpu" ? 1 : 20);
   std::printf("backend:  %s; settings: %s\n", stereo.backendName().c_str(), describe(params).c_str());
   std::printf("input:    %d cameras, %s\n", rig.size(), describePairs(pairs).c_str());
@@ -262,30 +254,26 @@ int benchRig(const Args& args) {
   std::vector<double> solves, slowest, panoramas, totals;
   Progress progress("benchmark");
   RigResult r;  // reused, as a real-time loop would
-  Panorama panorama;
   for (int i = 0; i <= runs; ++i) {
     const auto start = std::chrono::steady_clock::now();
     stereo.compute(images, r);
-    const auto solved = std::chrono::steady_clock::now();
-    fusion.fuse(r.views, images, panorama, panoramaConfidence);
     const auto end = std::chrono::steady_clock::now();
     if (i == 0) continue;  // the warm-up: allocations, first-use compilation
-    solves.push_back(std::chrono::duration<double, std::milli>(solved - start).count());
+    solves.push_back(r.totalMs - r.fusionMs);
     double longest = 0;
     for (const RigResult::Solve& solve : r.solves) longest = std::max(longest, solve.ms);
     slowest.push_back(longest);
-    panoramas.push_back(std::chrono::duration<double, std::milli>(end - solved).count());
+    panoramas.push_back(r.panoramaMs);
     totals.push_back(std::chrono::duration<double, std::milli>(end - start).count());
     progress(double(i) / runs);
   }
   progress.done();
   std::printf("frame:    median %.2f ms (%.1f fps), images in memory to the panorama in memory\n",
               summarize(totals).median, 1000.0 / summarize(totals).median);
-  std::printf("  solves:   median %.2f ms (the slowest %.2f ms)\n", summarize(solves).median,
-              summarize(slowest).median);
-  std::printf("  panorama %dx%d (%s):%*s median %.2f ms\n", fusion.width(), fusion.width() / 2,
-              fusion.backendName().c_str(), int(std::max<size_t>(1, 14 - fusion.backendName().size())), "",
-              summarize(panoramas).median);
+  std::printf("  solves:   median %.2f ms (the slowest %.2f ms), each placing its view in the panorama as it ends\n",
+              summarize(solves).median, summarize(slowest).median);
+  std::printf("  panorama %dx%d (%s) after the solves: median %.2f ms\n", width, width / 2,
+              stereo.backendName().c_str(), summarize(panoramas).median);
   return 0;
 }
 

@@ -148,6 +148,13 @@ class PanoramaFusion {
   // One estimate per view (each its window's size) and the images per camera (or none).
   void fuse(const std::vector<const DepthResult*>& estimates, const std::vector<ImageF>& images, Panorama& out,
             float minConfidence = 0.f);
+  // fuse() in two steps, for a caller whose estimates arrive one by one (RigStereo places
+  // each solve's view as it finishes, while the others still solve): every view placed once,
+  // in any order, from any thread (one at a time: it locks), then finish(). image: the
+  // view's camera's whole image, or none. Throws cs::Error as fuse() does, and from finish()
+  // when a view was not placed since the last finish().
+  void placeView(size_t view, const DepthResult& estimate, const ImageF* image);
+  void finish(Panorama& out, float minConfidence = 0.f);
   int width() const { return width_; }
   std::string backendName() const;
 

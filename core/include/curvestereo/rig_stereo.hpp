@@ -32,6 +32,8 @@ struct RigResult {
   // cross-check: the views a PanoramaFusion over RigStereo::views() takes. Each frame hands
   // these buffers back and forth with the solver (swapped, not copied).
   std::vector<DepthResult> views;
+  Panorama panorama;      // RigStereo::setPanorama; empty without it
+  double panoramaMs = 0;  // of totalMs, the panorama's part after the solves
   struct Solve {
     int reference = 0, other = 0;  // the pair's cameras: depth for `reference`
     ImageWindow window;            // the part of the reference's image solved (setSolveWindows)
@@ -40,8 +42,8 @@ struct RigResult {
     bool warm = false, redone = false;    // next(): as the direction's DepthResult says
   };
   std::vector<Solve> solves;
-  double totalMs = 0;   // the solves and the fusion
-  double fusionMs = 0;  // of which the cross-check and the per-camera fusion (host)
+  double totalMs = 0;   // the solves, the panorama and the per-camera fusion
+  double fusionMs = 0;  // of which what follows the solves: the cross-check, the panorama's rest, the fusion
 };
 
 class RigStereo {
@@ -104,6 +106,12 @@ class RigStereo {
   // Each solve as a panorama view (its reference camera and window), in RigResult::views'
   // order: PanoramaFusion(rig, frame, width, views(), rays()) fuses RigResult::views.
   std::vector<PanoramaView> views() const;
+  // With a width > 0, compute() and next() also fuse the panorama (RigResult::panorama): a
+  // PanoramaFusion over views() on the solves' backend, each solve's view placed as soon as
+  // it ends (with a cross-check, after it), so that its upload and placing overlap the
+  // solves still running. minConfidence: as PanoramaFusion::fuse's. 0 (default): no
+  // panorama. Throws cs::Error as PanoramaFusion's constructor does.
+  void setPanorama(int width, const PanoramaFrame& frame, float minConfidence = 0.f);
   // Whether the directions solve concurrently, one thread each (default: on). The results
   // are the same either way; off, they run one after the other on the calling thread.
   void setConcurrentSolves(bool on);
@@ -129,7 +137,7 @@ class RigStereo {
   void fuseCamera(int k, DepthResult& out) const;
   void invalidCamera(const Camera& cam, DepthResult& out) const;
   template <class Solve>
-  void solveDirections(Solve& solve);  // into estimates_
+  void solveDirections(Solve& solve, const std::vector<ImageF>& images);  // into estimates_
 
   CameraRig rig_;
   std::vector<PairInfo> pairs_;
@@ -141,6 +149,10 @@ class RigStereo {
   std::vector<DepthResult> estimates_;  // per direction, reused frame after frame
   double crossCheck_ = 0;
   bool concurrent_ = true, flow_ = true, points_ = true, oneWay_ = false, cameraOutputs_ = true;
+  std::unique_ptr<PanoramaFusion> panorama_;  // setPanorama
+  int panoramaWidth_ = 0;
+  PanoramaFrame panoramaFrame_;
+  float panoramaMinConfidence_ = 0.f;
 };
 
 }  // namespace cs
