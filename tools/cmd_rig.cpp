@@ -270,8 +270,9 @@ int benchRig(const Args& args) {
   progress.done();
   std::printf("frame:    median %.2f ms (%.1f fps), images in memory to the panorama in memory\n",
               summarize(totals).median, 1000.0 / summarize(totals).median);
-  std::printf("  solves:   median %.2f ms (the slowest %.2f ms), each placing its view in the panorama as it ends\n",
-              summarize(solves).median, summarize(slowest).median);
+  std::printf("  solves:   median %.2f ms (the slowest %.2f ms)%s\n", summarize(solves).median,
+              summarize(slowest).median,
+              args.getDouble("cross-check", 0.0) > 0 ? "" : ", each placing its view in the panorama as it ends");
   std::printf("  panorama %dx%d (%s) after the solves: median %.2f ms\n", width, width / 2,
               stereo.backendName().c_str(), summarize(panoramas).median);
   return 0;
