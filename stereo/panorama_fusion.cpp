@@ -47,7 +47,7 @@ ImageWindow viewWindow(const CameraRig& rig, const PanoramaView& v) {
     throw Error("PanoramaFusion: a view of camera " + std::to_string(v.camera) + " in a rig of " +
                 std::to_string(rig.size()) + " cameras");
   const Camera& cam = rig.cameras[size_t(v.camera)];
-  const ImageWindow w = v.window.empty() ? ImageWindow{0, 0, cam.width, cam.height} : v.window;
+  const ImageWindow w = v.window.orWhole(cam);
   if (w.x0 < 0 || w.y0 < 0 || w.x0 + w.width > cam.width || w.y0 + w.height > cam.height)
     throw Error("PanoramaFusion: a view's window does not fit camera " + std::to_string(v.camera) + "'s image");
   return w;

@@ -69,6 +69,12 @@ DepthResult fuseCameraEstimates(const Camera& cam, const std::vector<const Depth
 
 namespace {
 
+// The point a pixel of the pair's camera 0 sees (its unit ray at `depth`) in camera 1's
+// frame; a point at infinity is its direction, and stays at infinity there.
+Eigen::Vector3d carriedInto(const Rig& pair, double depth, const Eigen::Vector3d& ray) {
+  return std::isfinite(depth) ? Eigen::Vector3d(pair.R * (depth * ray) + pair.t) : Eigen::Vector3d(pair.R * ray);
+}
+
 template <class T>
 void sizeFor(Image<T>& image, const Camera& cam) {
   if (!sameSize(image, cam)) image = Image<T>(cam.width, cam.height);
@@ -147,7 +153,7 @@ void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& e
   std::vector<PlacedEstimate> placed = estimates;
   bool withFlow = true;
   for (PlacedEstimate& e : placed) {
-    if (e.window.empty()) e.window = {0, 0, cam.width, cam.height};
+    e.window = e.window.orWhole(cam);
     const Camera part = cam.cropped(e.window.x0, e.window.y0, e.window.width, e.window.height);
     checkFusionInput(*e.result, part, false, "fuseCameraEstimates");
     withFlow = withFlow && sameSize(e.result->disparity, part) && sameSize(e.result->warp, part);
@@ -182,7 +188,7 @@ void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& e
 long long completeFromPartner(const Rig& pair, const PlacedEstimate& from, const CameraRays& raysI,
                               const CameraRays& raysJ, const std::vector<uint8_t>& open, DepthResult& out) {
   const Camera& j = pair.cam1;
-  const ImageWindow w = from.window.empty() ? ImageWindow{0, 0, pair.cam0.width, pair.cam0.height} : from.window;
+  const ImageWindow w = from.window.orWhole(pair.cam0);
   checkFusionInput(out, j, false, "completeFromPartner");
   checkFusionInput(*from.result, pair.cam0.cropped(w.x0, w.y0, w.width, w.height), false, "completeFromPartner");
   if (!sameSize(raysI, pair.cam0) || !sameSize(raysJ, j) || open.size() != size_t(j.width) * size_t(j.height))
@@ -200,8 +206,7 @@ long long completeFromPartner(const Rig& pair, const PlacedEstimate& from, const
       const Eigen::Vector3d ray = raysI(w.x0 + u, w.y0 + v).cast<double>();
       if (!from.result->valid.data[at] || std::isnan(depth) || !ray.allFinite()) continue;
       const bool finite = std::isfinite(depth);
-      const Eigen::Vector3d X =
-          finite ? Eigen::Vector3d(pair.R * (double(depth) * ray) + pair.t) : Eigen::Vector3d(pair.R * ray);
+      const Eigen::Vector3d X = carriedInto(pair, depth, ray);
       Vec2<double> px;
       if (!built.project(X, px) || !built.inImage(px)) continue;
       const float range = finite ? float(X.norm()) : INFINITY;
@@ -249,9 +254,7 @@ long long crossCheck(const Rig& pair, DepthResult& forward, const DepthResult& b
       const double depth = forward.depth.radial(x, y);
       const Eigen::Vector3d ray = rays(x, y).cast<double>();
       if (!forward.valid(x, y) || !ray.allFinite()) continue;
-      // A point at infinity is its direction; in camera j it is at infinity too.
-      const Eigen::Vector3d inOther =
-          std::isfinite(depth) ? Eigen::Vector3d(pair.R * (depth * ray) + pair.t) : Eigen::Vector3d(pair.R * ray);
+      const Eigen::Vector3d inOther = carriedInto(pair, depth, ray);
       Vec2<double> px;
       if (!other.project(inOther, px) || !other.inImage(px)) continue;
       const int u = int(std::lround(px.x())), v = int(std::lround(px.y()));

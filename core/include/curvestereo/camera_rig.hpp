@@ -37,6 +37,8 @@ Rig pairRig(const CameraRig& rig, int i, int j);
 struct ImageWindow {
   int x0 = 0, y0 = 0, width = 0, height = 0;
   bool empty() const { return width <= 0 || height <= 0; }
+  // This window, or the whole image of `cam` where it is empty (the callers' "no window").
+  ImageWindow orWhole(const Camera& cam) const { return empty() ? ImageWindow{0, 0, cam.width, cam.height} : *this; }
 };
 // The part of camera 0's image that a pair can solve: the bounding box of the pixels the
 // fields keep (computeFields' mask: in the field of view, seen by camera 1, off the
