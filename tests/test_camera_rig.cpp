@@ -392,6 +392,16 @@ TEST_CASE("a camera's open pixels are completed from a partner's estimate carrie
   CHECK(right > 5000);  // most of the right half's image circle
   CHECK(off == 0);
   CHECK(leftChanged == 0);
+  // A second partner's farther surface leaves every nearer point of the first where it was:
+  // out is the z-buffer across calls.
+  const cs::DepthResult farther = sphereResult(rig, 1, 6.0, 0.6f);
+  const cs::DepthResult first = out;
+  cs::completeFromPartner(pair, {&farther, {}}, cs::cameraRays(rig.cameras[1]), cs::cameraRays(rig.cameras[0]), open,
+                          out);
+  long long moved = 0;
+  for (size_t p = 0; p < out.valid.data.size(); ++p)
+    moved += first.valid.data[p] && out.depth.radial.data[p] != first.depth.radial.data[p];
+  CHECK(moved == 0);
 }
 
 TEST_CASE("a camera's estimates are fused by confidence where they agree") {

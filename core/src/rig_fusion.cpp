@@ -196,8 +196,6 @@ long long completeFromPartner(const Rig& pair, const PlacedEstimate& from, const
   const BuiltCamera built(j);
   const bool withPoints = sameSize(out.depth.z, j) && sameSize(out.depth.points, j);
   const bool withFlow = sameSize(out.disparity, j) && sameSize(out.warp, j);
-  std::vector<float> nearest(open.size(), INFINITY);  // range written so far, per pixel of j
-  std::vector<uint8_t> written(open.size(), 0);
   long long count = 0;
   for (int v = 0; v < w.height; ++v)
     for (int u = 0; u < w.width; ++u) {
@@ -215,9 +213,9 @@ long long completeFromPartner(const Rig& pair, const PlacedEstimate& from, const
         for (int x = x0; x <= x0 + 1; ++x) {
           if (x < 0 || y < 0 || x >= j.width || y >= j.height) continue;
           const size_t p = size_t(y) * size_t(j.width) + size_t(x);
-          if (!open[p] || (written[p] && !(range < nearest[p]))) continue;
-          count += !written[p];
-          written[p] = 1, nearest[p] = range;
+          // out itself is the z-buffer: what an earlier point, or an earlier partner, left there.
+          if (!open[p] || (out.valid.data[p] && !(range < out.depth.radial.data[p]))) continue;
+          count += !out.valid.data[p];
           out.valid.data[p] = 1;
           out.depth.radial.data[p] = range;
           out.confidence.data[p] = from.result->confidence.data[at];

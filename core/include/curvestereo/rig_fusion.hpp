@@ -46,12 +46,13 @@ void fuseCameraEstimates(const Camera& cam, const std::vector<PlacedEstimate>& e
 // valid pixel of `from` (camera i's estimate on its window; pair = pairRig(rig, i, j), j the
 // camera completed, with raysI camera i's cameraRays) is carried at its depth into camera j
 // and written over the 2 x 2 pixels around where it lands, where `open` (one per pixel of
-// camera j) is set and no nearer point landed: a z-buffer. The pixel takes the point's range
-// from camera j, and z and point along its own ray (raysJ, camera j's; when `out` has them),
-// and the estimate's confidence;
-// disparity and warp, which belong to the partner's pair, are NaN. Points at infinity land
-// as their direction, at +inf. `out` must hold camera j's valid, radial depth and confidence
-// (cs::Error otherwise). Returns how many pixels it wrote.
+// camera j) is set and `out` holds no nearer depth: `out` is the z-buffer, so that several
+// partners, called in turn, leave the nearest of all their points. The pixel takes the
+// point's range from camera j, z and point along its own ray (raysJ, camera j's; when `out`
+// has them) and the estimate's confidence; disparity and warp, which belong to the
+// partner's pair, are NaN. Points at infinity land as their direction, at +inf. `out` must
+// hold camera j's valid, radial depth and confidence (cs::Error otherwise). Returns how many
+// pixels became valid.
 long long completeFromPartner(const Rig& pair, const PlacedEstimate& from, const CameraRays& raysI,
                               const CameraRays& raysJ, const std::vector<uint8_t>& open, DepthResult& out);
 
