@@ -102,10 +102,11 @@ struct Panorama {
 // panorama, each pixel as a footprint the size of its neighbours' spacing there. Per
 // panorama pixel, samples below half the best confidence there are dropped; of the rest, the
 // nearest range and those on its surface (within kAgreement of its inverse range, plus
-// panoramaParallaxSlack: a z-buffer) are averaged, weighted by confidence. Samples below minConfidence are left out
-// altogether (a panorama with fewer holes, or fewer errors: the choice is the caller's). width: even, 4 to 32768.
-// Throws cs::Error when a result lacks its valid mask, radial depth or confidence at its camera's size, or an image
-// (optional: none gives NaN grey) is not that size. Runs on the CPU backend; PanoramaFusion chooses.
+// panoramaParallaxSlack: a z-buffer) are averaged, weighted by confidence. Samples below
+// minConfidence are left out altogether (a panorama with fewer holes, or fewer errors: the
+// choice is the caller's). width: even, 4 to 32768. Throws cs::Error when a result lacks its
+// valid mask, radial depth or confidence at its camera's size, or an image (optional: none
+// gives NaN grey) is not that size. Runs on the CPU backend; PanoramaFusion chooses.
 Panorama fusePanorama(const CameraRig& rig, const std::vector<DepthResult>& cameras, const std::vector<ImageF>& images,
                       const PanoramaFrame& frame, int width, float minConfidence = 0.f);
 
