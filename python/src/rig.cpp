@@ -466,8 +466,8 @@ cross_check: a tolerance in [0, 1] for the round trip between a pair's two direc
 off), as the CLI's --cross-check. one_way: each pair solved in one direction only, as
 --one-way: half the solves, a little less accurate; beyond its own solve each camera's depth
 is its partner's carried into it (no disparity or flow there). params: as Stereo's; unless
-max_fov is given, the field of view widens to the widest lens, as the CLI does. Raises curvestereo.Error for a bad preset,
-parameter, pair or backend.)doc")
+max_fov is given, the field of view widens to the widest lens, as the CLI does. Raises
+curvestereo.Error for a bad preset, parameter, pair or backend.)doc")
       .def(pb::init<const CameraRig&, const std::string&, const std::string&, pb::handle, int, double, bool,
                     pb::kwargs>(),
            pb::arg("rig"), pb::arg("preset") = "realtime", pb::arg("backend") = "auto", pb::kw_only(),
